@@ -1,0 +1,89 @@
+// Superpixel-grid (SG) segmentation, paper Sec. III-B: SLIC-style k-means on
+// (x, y, intensity) seeded on a regular grid, where superpixel k keeps the
+// identity of grid cell k so that two images can be compared cell by cell.
+#pragma once
+
+#include <cstdint>
+#include <vector>
+
+#include "lsgd/image.h"
+
+namespace lsgd {
+
+struct SegmentationOptions {
+  // S_p, the segmentation scale in pixels, in [2, 4096]. The grid has
+  // H / (2 S_p) + 1 rows and W / (2 S_p) + 1 columns (see grid_size()).
+  int superpixel_size = 40;
+  // k-means iterations (assign + update), in [1, 100].
+  int iterations = 10;
+  // Divides the squared intensity difference in the fuse distance
+  // F_d^2 = d_i^2 / intensity_scale + d_e^2 / distance_scale; in (0, 1e6].
+  double intensity_scale = 20.0;
+  // Divides the squared pixel distance (pixels^2) in the fuse distance; in (0, 1e6].
+  double distance_scale = 1.0;
+
+  // Throws InvalidArgument naming the first invalid field.
+  void check() const;
+};
+
+struct GridSize {
+  int rows = 0;
+  int cols = 0;
+  int cells() const { return rows * cols; }
+  bool operator==(const GridSize& o) const { return rows == o.rows && cols == o.cols; }
+  bool operator!=(const GridSize& o) const { return !(*this == o); }
+};
+
+// Grid of initial centres for an image of width x height pixels and scale S_p,
+// as in the reference implementation: rows = height / (2 S_p) + 1 and
+// cols = width / (2 S_p) + 1 (integer division), i.e. cells about 2 S_p wide,
+// never fewer than one. KITTI 1241x376 with S_p = 40 gives 5 x 16 = 80 cells.
+// Throws InvalidArgument for non-positive sizes or S_p.
+GridSize grid_size(int width, int height, int superpixel_size);
+
+// One superpixel centre: mean position (pixels) and mean intensity of its
+// pixels, and how many pixels it holds.
+struct Centre {
+  float x = 0;
+  float y = 0;
+  float intensity = 0;
+  std::int32_t pixels = 0;
+};
+
+struct Segmentation {
+  GridSize grid;
+  int width = 0;
+  int height = 0;
+  // Cell index (row-major in the grid) of every pixel, row-major, width*height.
+  std::vector<std::int32_t> labels;
+  // Final centres, one per cell.
+  std::vector<Centre> centres;
+};
+
+// Runs the segmentation. Keeps scratch buffers between calls, so reuse one
+// Segmenter per stream of frames; not thread-safe (use one per thread).
+class Segmenter {
+ public:
+  explicit Segmenter(const SegmentationOptions& options = {});
+
+  const SegmentationOptions& options() const { return options_; }
+
+  // Segments `image` into `out`, reusing out's storage. Every pixel gets a
+  // label: each iteration resets the distances, centres are updated to the
+  // mean position and intensity of their pixels, an empty cluster keeps its
+  // previous centre, and a pixel no window reached joins the nearest centre.
+  void segment(const GrayImage& image, Segmentation& out);
+  Segmentation segment(const GrayImage& image);
+
+ private:
+  void seed(const GrayImage& image, Segmentation& out) const;
+  void assign(const GrayImage& image, Segmentation& out);
+  void update(const GrayImage& image, Segmentation& out);
+  void assign_unreached(Segmentation& out) const;
+
+  SegmentationOptions options_;
+  std::vector<float> distance_;         // best fuse distance^2 per pixel
+  std::vector<double> sums_;            // per centre: x, y, intensity sums
+};
+
+}  // namespace lsgd

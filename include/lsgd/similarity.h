@@ -1,0 +1,39 @@
+// Similarity of two LSGD descriptors, compared cell by cell (same grid index).
+// All metrics return a score in [0, 1], 1 for identical descriptors, larger
+// meaning more similar, so thresholds and dynamic nodes work with any of them.
+#pragma once
+
+#include "lsgd/descriptor.h"
+
+namespace lsgd {
+
+enum class SimilarityMetric {
+  // The reference implementation (what the paper's numbers come from):
+  // d_k = sqrt(L1(h_k, h'_k)) / 256 per cell, score = 1 / (1 + mean_k d_k).
+  kReference,
+  // The paper's formula: the plain L1 distance summed over cells, mapped to a
+  // score by 1 - sum_k L1_k / sum_k (n_k + n'_k) (n = pixels in the cell).
+  // For frames of one size this is 1 - L1 / (2 * pixels): same ranking as L1.
+  kL1,
+  // Beyond the paper: L1 of histograms normalised to unit mass per cell, so
+  // cells of different pixel counts weigh the same:
+  // score = 1 - mean_k L1(h_k / n_k, h'_k / n'_k) / 2. An empty cell counts as
+  // identical to an empty cell and as maximally different from a non-empty one.
+  kNormalizedL1,
+};
+
+const char* to_string(SimilarityMetric metric);
+// Parses "reference", "l1" or "normalized_l1"; throws InvalidArgument otherwise.
+SimilarityMetric parse_similarity_metric(const char* name);
+
+struct SimilarityOptions {
+  // Which formula turns two descriptors into a score.
+  SimilarityMetric metric = SimilarityMetric::kReference;
+  void check() const;
+};
+
+// Scalar reference kernel. Both descriptors must have the same number of
+// cells (throws InvalidArgument otherwise).
+double similarity(const DescriptorView& a, const DescriptorView& b, SimilarityMetric metric);
+
+}  // namespace lsgd

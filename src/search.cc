@@ -1,0 +1,114 @@
+#include "lsgd/search.h"
+
+#include <algorithm>
+#include <cstring>
+
+#include "internal/check.h"
+
+namespace lsgd {
+namespace {
+
+// Sorts `pool` best first and keeps at most top_n of it in `out`.
+void keep_best(std::vector<Candidate>& pool, int top_n, std::vector<Candidate>& out) {
+  const std::size_t n = std::min(pool.size(), static_cast<std::size_t>(top_n));
+  std::partial_sort(pool.begin(), pool.begin() + static_cast<std::ptrdiff_t>(n), pool.end(),
+                    better);
+  out.assign(pool.begin(), pool.begin() + static_cast<std::ptrdiff_t>(n));
+}
+
+}  // namespace
+
+const char* to_string(SearchMode mode) {
+  switch (mode) {
+    case SearchMode::kExhaustive: return "exhaustive";
+    case SearchMode::kDynamicNodes: return "nodes";
+  }
+  return "unknown";
+}
+
+SearchMode parse_search_mode(const char* name) {
+  if (std::strcmp(name, "exhaustive") == 0) return SearchMode::kExhaustive;
+  if (std::strcmp(name, "nodes") == 0) return SearchMode::kDynamicNodes;
+  internal::throw_invalid("search mode '", name, "' is unknown: expected exhaustive or nodes");
+}
+
+void DynamicNodeOptions::check() const {
+  internal::check_range_open_low("search.nodes.threshold_0", threshold_0, 0.0, 10.0);
+  internal::check_range("search.nodes.alpha", alpha, 0.0, 10.0);
+  internal::check_range("search.nodes.beta", beta, 0.0, 10.0);
+}
+
+void SearchOptions::check() const {
+  if (mode != SearchMode::kExhaustive && mode != SearchMode::kDynamicNodes) {
+    internal::throw_invalid("search.mode = ", static_cast<int>(mode), " is unknown");
+  }
+  internal::check_range<std::int64_t>("search.min_gap", min_gap, 0, 1000000000, "frames");
+  internal::check_range("search.top_n", top_n, 1, 1000);
+  nodes.check();
+}
+
+bool better(const Candidate& a, const Candidate& b) {
+  if (a.score != b.score) return a.score > b.score;
+  return a.frame < b.frame;
+}
+
+void search_exhaustive(const FrameStore& store, const DescriptorView& query, std::int64_t query_id,
+                       const SearchOptions& options, SimilarityMetric metric,
+                       std::vector<Candidate>& scratch, std::vector<Candidate>& out) {
+  scratch.clear();
+  const std::int64_t limit = std::min(store.size(), query_id - options.min_gap);
+  for (std::int64_t j = 0; j < limit; ++j) {
+    scratch.push_back({j, similarity(query, store.view(j), metric)});
+  }
+  keep_best(scratch, options.top_n, out);
+}
+
+DynamicNodes::Outcome DynamicNodes::assign(const FrameStore& store, const DescriptorView& query,
+                                           std::int64_t query_id, const SearchOptions& options,
+                                           SimilarityMetric metric,
+                                           std::vector<Candidate>& scratch,
+                                           std::vector<Candidate>& out) {
+  if (query_id != store.size()) {
+    internal::throw_invalid("DynamicNodes::assign: query ", query_id, " must be the next frame (",
+                            store.size(), ")");
+  }
+  Outcome outcome;
+  out.clear();
+  // Thresholds relative to how similar the query is to its previous frame
+  // (reference implementation; the first frame compares with itself: 1).
+  const double previous = query_id > 0 ? similarity(query, store.view(query_id - 1), metric) : 1.0;
+  outcome.similarities += query_id > 0 ? 1 : 0;
+  const double base = options.nodes.threshold_0 * previous;
+  for (std::size_t i = 0; i < nodes_.size(); ++i) {
+    std::vector<std::int64_t>& node = nodes_[i];
+    if (query_id - node.front() <= options.min_gap) continue;  // first frame too recent
+    const double first = similarity(query, store.view(node.front()), metric);
+    ++outcome.similarities;
+    if (!(first > options.nodes.alpha * base)) continue;
+    scratch.clear();
+    scratch.push_back({node.front(), first});
+    double sum = first;
+    for (std::size_t m = 1; m < node.size(); ++m) {
+      const double s = similarity(query, store.view(node[m]), metric);
+      scratch.push_back({node[m], s});
+      sum += s;
+    }
+    outcome.similarities += static_cast<std::int64_t>(node.size()) - 1;
+    if (!(sum / static_cast<double>(node.size()) > options.nodes.beta * base)) continue;
+    node.push_back(query_id);
+    // Members inside the temporal window are never candidates.
+    const std::int64_t limit = query_id - options.min_gap;
+    scratch.erase(std::remove_if(scratch.begin(), scratch.end(),
+                                 [limit](const Candidate& c) { return c.frame >= limit; }),
+                  scratch.end());
+    keep_best(scratch, options.top_n, out);
+    outcome.node = static_cast<std::int64_t>(i);
+    return outcome;
+  }
+  nodes_.push_back({query_id});
+  outcome.node = static_cast<std::int64_t>(nodes_.size()) - 1;
+  outcome.created = true;
+  return outcome;
+}
+
+}  // namespace lsgd

@@ -1,0 +1,91 @@
+#include "lsgd/similarity.h"
+
+#include <cmath>
+#include <cstdlib>
+#include <cstring>
+
+#include "internal/check.h"
+
+namespace lsgd {
+namespace {
+
+std::uint64_t cell_l1(const Count* a, const Count* b) {
+  std::uint64_t sum = 0;
+  for (int i = 0; i < kBins; ++i) {
+    sum += a[i] > b[i] ? a[i] - b[i] : b[i] - a[i];
+  }
+  return sum;
+}
+
+double normalized_cell_l1(const Count* a, Count na, const Count* b, Count nb) {
+  if (na == 0 || nb == 0) return na == nb ? 0.0 : 2.0;
+  const double sa = 1.0 / na, sb = 1.0 / nb;
+  double sum = 0;
+  for (int i = 0; i < kBins; ++i) sum += std::fabs(a[i] * sa - b[i] * sb);
+  return sum;
+}
+
+}  // namespace
+
+const char* to_string(SimilarityMetric metric) {
+  switch (metric) {
+    case SimilarityMetric::kReference: return "reference";
+    case SimilarityMetric::kL1: return "l1";
+    case SimilarityMetric::kNormalizedL1: return "normalized_l1";
+  }
+  return "unknown";
+}
+
+SimilarityMetric parse_similarity_metric(const char* name) {
+  for (auto m : {SimilarityMetric::kReference, SimilarityMetric::kL1,
+                 SimilarityMetric::kNormalizedL1}) {
+    if (std::strcmp(name, to_string(m)) == 0) return m;
+  }
+  internal::throw_invalid("similarity metric '", name,
+                          "' is unknown: expected reference, l1 or normalized_l1");
+}
+
+void SimilarityOptions::check() const {
+  if (metric != SimilarityMetric::kReference && metric != SimilarityMetric::kL1 &&
+      metric != SimilarityMetric::kNormalizedL1) {
+    internal::throw_invalid("similarity.metric = ", static_cast<int>(metric), " is unknown");
+  }
+}
+
+double similarity(const DescriptorView& a, const DescriptorView& b, SimilarityMetric metric) {
+  if (a.cells != b.cells || a.cells <= 0) {
+    internal::throw_invalid("similarity: descriptors have ", a.cells, " and ", b.cells,
+                            " cells; frames must have the same size and superpixel_size");
+  }
+  const int cells = a.cells;
+  switch (metric) {
+    case SimilarityMetric::kReference: {
+      double sum = 0;
+      for (int k = 0; k < cells; ++k) {
+        const std::size_t off = static_cast<std::size_t>(k) * kBins;
+        sum += std::sqrt(static_cast<double>(cell_l1(a.hist + off, b.hist + off))) / kBins;
+      }
+      return 1.0 / (1.0 + sum / cells);
+    }
+    case SimilarityMetric::kL1: {
+      std::uint64_t l1 = 0, mass = 0;
+      for (int k = 0; k < cells; ++k) {
+        const std::size_t off = static_cast<std::size_t>(k) * kBins;
+        l1 += cell_l1(a.hist + off, b.hist + off);
+        mass += static_cast<std::uint64_t>(a.pixels[k]) + b.pixels[k];
+      }
+      return mass == 0 ? 1.0 : 1.0 - static_cast<double>(l1) / static_cast<double>(mass);
+    }
+    case SimilarityMetric::kNormalizedL1: {
+      double sum = 0;
+      for (int k = 0; k < cells; ++k) {
+        const std::size_t off = static_cast<std::size_t>(k) * kBins;
+        sum += normalized_cell_l1(a.hist + off, a.pixels[k], b.hist + off, b.pixels[k]);
+      }
+      return 1.0 - sum / (2.0 * cells);
+    }
+  }
+  internal::throw_invalid("similarity: unknown metric ", static_cast<int>(metric));
+}
+
+}  // namespace lsgd

@@ -1,0 +1,435 @@
+// Tests of the online detector (include/lsgd/detector.h): frame ids, self
+// matches, determinism, agreement of the two search modes, rejection of bad
+// frames without side effects, result fields, memory accounting.
+#include "lsgd/detector.h"
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include <opencv2/core.hpp>
+#include <opencv2/imgproc.hpp>
+
+#include "lsgd/error.h"
+#include "lsgd/image.h"
+
+namespace lsgd {
+namespace {
+
+std::uint64_t splitmix64(std::uint64_t& state) {
+  std::uint64_t z = (state += 0x9E3779B97F4A7C15ull);
+  z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
+  z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
+  return z ^ (z >> 31);
+}
+
+constexpr int kW = 96;
+constexpr int kH = 64;
+
+// Textured random frame: a smooth random gradient plus noise, so frames from
+// different seeds differ but are not pure noise.
+cv::Mat random_frame(std::uint64_t seed, int type = CV_8UC3, int width = kW, int height = kH) {
+  std::uint64_t s = seed * 7919 + 1;
+  const double a = static_cast<double>(splitmix64(s) % 1000) / 1000.0;
+  const double b = static_cast<double>(splitmix64(s) % 1000) / 1000.0;
+  const double ph = static_cast<double>(splitmix64(s) % 628) / 100.0;
+  cv::Mat m(height, width, type);
+  const int ch = m.channels();
+  for (int y = 0; y < height; ++y) {
+    std::uint8_t* row = m.ptr<std::uint8_t>(y);
+    for (int x = 0; x < width; ++x) {
+      const double base = 128 + 80 * std::sin((0.05 + 0.2 * a) * x + ph) *
+                                    std::cos((0.05 + 0.2 * b) * y - ph);
+      for (int c = 0; c < ch; ++c) {
+        const int v = static_cast<int>(base) + static_cast<int>(splitmix64(s) % 41) - 20 + 10 * c;
+        row[x * ch + c] = static_cast<std::uint8_t>(std::max(0, std::min(255, v)));
+      }
+    }
+  }
+  return m;
+}
+
+DetectorOptions small_options(SearchMode mode = SearchMode::kExhaustive, std::int64_t min_gap = 3,
+                              int top_n = 5) {
+  DetectorOptions o;
+  o.segmentation.superpixel_size = 16;  // 96x64 -> 3 x 4 = 12 cells
+  o.search.mode = mode;
+  o.search.min_gap = min_gap;
+  o.search.top_n = top_n;
+  return o;
+}
+
+void expect_same_result(const Result& a, const Result& b) {
+  EXPECT_EQ(a.frame, b.frame);
+  EXPECT_EQ(a.loop, b.loop);
+  EXPECT_EQ(a.best.frame, b.best.frame);
+  EXPECT_EQ(a.best.score, b.best.score);
+  EXPECT_EQ(a.node, b.node);
+  EXPECT_EQ(a.node_created, b.node_created);
+  ASSERT_EQ(a.candidates.size(), b.candidates.size());
+  for (std::size_t i = 0; i < a.candidates.size(); ++i) {
+    EXPECT_EQ(a.candidates[i].frame, b.candidates[i].frame) << "rank " << i;
+    EXPECT_EQ(a.candidates[i].score, b.candidates[i].score) << "rank " << i;
+  }
+}
+
+ImageView view_of_mat(const cv::Mat& m) {
+  ImageView v;
+  v.data = m.ptr<std::uint8_t>(0);
+  v.width = m.cols;
+  v.height = m.rows;
+  v.stride_bytes = static_cast<std::ptrdiff_t>(m.step[0]);
+  v.format = m.channels() == 1 ? PixelFormat::kGray8
+             : m.channels() == 3 ? PixelFormat::kBgr8
+                                 : PixelFormat::kBgra8;
+  return v;
+}
+
+TEST(Detector, FrameIsItsOwnBestMatch) {
+  Detector det(small_options(SearchMode::kExhaustive, 3, 5));
+  const cv::Mat a = random_frame(1);
+  EXPECT_EQ(det.process(a).frame, 0);
+  for (int i = 0; i < 6; ++i) det.process(random_frame(100 + i));
+  const Result r = det.process(a);
+  EXPECT_EQ(r.frame, 7);
+  EXPECT_EQ(r.best.frame, 0);
+  EXPECT_EQ(r.best.score, 1.0);
+  EXPECT_TRUE(r.loop);
+  ASSERT_FALSE(r.candidates.empty());
+  EXPECT_EQ(r.candidates[0].frame, 0);
+  for (std::size_t i = 1; i < r.candidates.size(); ++i) EXPECT_LT(r.candidates[i].score, 1.0);
+  EXPECT_EQ(det.similarity(0, 7), 1.0);
+}
+
+TEST(Detector, OwnMatchInEveryMetricAndMode) {
+  for (SimilarityMetric metric :
+       {SimilarityMetric::kReference, SimilarityMetric::kL1, SimilarityMetric::kNormalizedL1}) {
+    for (SearchMode mode : {SearchMode::kExhaustive, SearchMode::kDynamicNodes}) {
+      SCOPED_TRACE(testing::Message() << to_string(metric) << " " << to_string(mode));
+      DetectorOptions o = small_options(mode, 2, 3);
+      o.similarity.metric = metric;
+      o.search.nodes.alpha = 0;  // every frame in one node: the query is always examined
+      o.search.nodes.beta = 0;
+      Detector det(o);
+      const cv::Mat a = random_frame(2);
+      det.process(a);
+      for (int i = 0; i < 4; ++i) det.process(random_frame(200 + i));
+      const Result r = det.process(a);
+      EXPECT_EQ(r.best.frame, 0);
+      EXPECT_EQ(r.best.score, 1.0);
+    }
+  }
+}
+
+TEST(Detector, GrayVersionOfABgrFrameMatchesIt) {
+  Detector det(small_options(SearchMode::kExhaustive, 1, 3));
+  const cv::Mat a = random_frame(3);
+  cv::Mat gray;
+  cv::cvtColor(a, gray, cv::COLOR_BGR2GRAY);
+  cv::Mat bgra;
+  cv::cvtColor(a, bgra, cv::COLOR_BGR2BGRA);
+  det.process(a);
+  det.process(random_frame(4));
+  const Result rg = det.process(gray);
+  EXPECT_EQ(rg.best.frame, 0);
+  EXPECT_EQ(rg.best.score, 1.0);
+  const Result ra = det.process(bgra);
+  EXPECT_EQ(ra.best.frame, 0);
+  EXPECT_EQ(ra.best.score, 1.0);
+}
+
+TEST(Detector, Deterministic) {
+  for (SearchMode mode : {SearchMode::kExhaustive, SearchMode::kDynamicNodes}) {
+    SCOPED_TRACE(to_string(mode));
+    Detector a(small_options(mode, 2, 4)), b(small_options(mode, 2, 4));
+    for (int i = 0; i < 14; ++i) {
+      const cv::Mat f = random_frame(300 + i % 5);  // revisits
+      const Result ra = a.process(f);
+      const Result rb = b.process(f);
+      expect_same_result(ra, rb);
+    }
+    EXPECT_EQ(a.nodes(), b.nodes());
+  }
+}
+
+TEST(Detector, ExhaustiveAndNodesAgreeWhenOneNode) {
+  DetectorOptions ex = small_options(SearchMode::kExhaustive, 0, 6);
+  DetectorOptions dn = small_options(SearchMode::kDynamicNodes, 0, 6);
+  dn.search.nodes.alpha = 0;
+  dn.search.nodes.beta = 0;
+  Detector a(ex), b(dn);
+  for (int i = 0; i < 16; ++i) {
+    SCOPED_TRACE(i);
+    const cv::Mat f = random_frame(400 + (i * 7) % 9);
+    const Result ra = a.process(f);
+    const Result rb = b.process(f);
+    EXPECT_EQ(ra.node, -1);
+    EXPECT_EQ(rb.node, 0);
+    EXPECT_EQ(rb.node_created, i == 0);
+    EXPECT_EQ(ra.best.frame, rb.best.frame);
+    EXPECT_EQ(ra.best.score, rb.best.score);
+    ASSERT_EQ(ra.candidates.size(), rb.candidates.size());
+    for (std::size_t k = 0; k < ra.candidates.size(); ++k) {
+      EXPECT_EQ(ra.candidates[k].frame, rb.candidates[k].frame);
+      EXPECT_EQ(ra.candidates[k].score, rb.candidates[k].score);
+    }
+    EXPECT_EQ(ra.loop, rb.loop);
+  }
+  EXPECT_EQ(a.nodes(), 0);
+  EXPECT_EQ(b.nodes(), 1);
+  EXPECT_EQ(b.dynamic_nodes().members(0).size(), 16u);
+}
+
+TEST(Detector, OtherSizeThrowsAndLeavesDetectorUnchanged) {
+  for (SearchMode mode : {SearchMode::kExhaustive, SearchMode::kDynamicNodes}) {
+    SCOPED_TRACE(to_string(mode));
+    Detector det(small_options(mode, 1, 5));
+    Detector reference(small_options(mode, 1, 5));
+    for (int i = 0; i < 3; ++i) {
+      det.process(random_frame(500 + i));
+      reference.process(random_frame(500 + i));
+    }
+    const std::int64_t nodes_before = det.nodes();
+    // Other sizes, including the same pixel count transposed and a size with
+    // the same grid (3 x 4 cells at S_p = 16).
+    for (const auto& wh : {std::pair{kH, kW}, std::pair{kW + 1, kH}, std::pair{kW, kH - 1},
+                           std::pair{80, 60}}) {
+      const cv::Mat bad = random_frame(600, CV_8UC3, wh.first, wh.second);
+      EXPECT_THROW(det.process(bad), InvalidArgument) << wh.first << "x" << wh.second;
+      EXPECT_THROW(det.process(view_of_mat(bad)), InvalidArgument);
+      EXPECT_EQ(det.size(), 3);
+      EXPECT_EQ(det.store().size(), 3);
+      EXPECT_EQ(det.nodes(), nodes_before);
+    }
+    // The next valid frame processes normally, exactly as if nothing happened.
+    for (int i = 3; i < 6; ++i) {
+      const Result r = det.process(random_frame(500 + i % 4));
+      const Result want = reference.process(random_frame(500 + i % 4));
+      EXPECT_EQ(r.frame, i);
+      expect_same_result(r, want);
+    }
+    EXPECT_EQ(det.size(), 6);
+  }
+}
+
+TEST(Detector, BadFormatThrowsAndLeavesDetectorUnchanged) {
+  Detector det(small_options(SearchMode::kDynamicNodes, 1, 5));
+  Detector reference(small_options(SearchMode::kDynamicNodes, 1, 5));
+  for (int i = 0; i < 2; ++i) {
+    det.process(random_frame(700 + i));
+    reference.process(random_frame(700 + i));
+  }
+  const cv::Mat sixteen(kH, kW, CV_16UC1, cv::Scalar(30000));
+  EXPECT_THROW(det.process(sixteen), InvalidArgument);
+  EXPECT_THROW(det.process(cv::Mat(kH, kW, CV_32FC1, cv::Scalar(0.5))), InvalidArgument);
+  EXPECT_THROW(det.process(cv::Mat(kH, kW, CV_8UC2, cv::Scalar(1, 2))), InvalidArgument);
+  EXPECT_THROW(det.process(cv::Mat()), InvalidArgument);
+  ImageView null_view;
+  null_view.width = kW;
+  null_view.height = kH;
+  null_view.stride_bytes = kW;
+  EXPECT_THROW(det.process(null_view), InvalidArgument);
+  EXPECT_EQ(det.size(), 2);
+  EXPECT_EQ(det.nodes(), reference.nodes());
+  const Result r = det.process(random_frame(702));
+  EXPECT_EQ(r.frame, 2);
+  expect_same_result(r, reference.process(random_frame(702)));
+}
+
+TEST(Detector, RejectedFirstFrameLeavesDetectorEmpty) {
+  Detector det(small_options());
+  EXPECT_THROW(det.process(cv::Mat(kH, kW, CV_16UC1)), InvalidArgument);
+  EXPECT_EQ(det.size(), 0);
+  EXPECT_EQ(det.process(random_frame(1, CV_8UC3, 50, 40)).frame, 0);
+  // The size is fixed by the first accepted frame.
+  EXPECT_THROW(det.process(random_frame(2)), InvalidArgument);
+  EXPECT_EQ(det.process(random_frame(3, CV_8UC1, 50, 40)).frame, 1);
+}
+
+TEST(Detector, ResultFields) {
+  DetectorOptions o = small_options(SearchMode::kExhaustive, 2, 3);
+  o.decision.threshold = 0.9;
+  Detector det(o);
+  for (int i = 0; i < 12; ++i) {
+    SCOPED_TRACE(i);
+    const Result r = det.process(random_frame(800 + i % 4));
+    EXPECT_EQ(r.frame, i);
+    EXPECT_EQ(det.size(), i + 1);
+    EXPECT_LE(r.candidates.size(), 3u);
+    // Candidates j < i - 2 exist from frame 3 on.
+    EXPECT_EQ(r.candidates.size(), static_cast<std::size_t>(std::max(0, std::min(3, i - 2))));
+    if (r.candidates.empty()) {
+      EXPECT_EQ(r.best.frame, -1);
+      EXPECT_FALSE(r.loop);
+    } else {
+      EXPECT_EQ(r.best.frame, r.candidates[0].frame);
+      EXPECT_EQ(r.best.score, r.candidates[0].score);
+      EXPECT_EQ(r.loop, r.best.score >= 0.9);
+    }
+    for (std::size_t k = 0; k < r.candidates.size(); ++k) {
+      EXPECT_LT(r.candidates[k].frame, i - 2);
+      EXPECT_GE(r.candidates[k].score, 0.0);
+      EXPECT_LE(r.candidates[k].score, 1.0);
+      EXPECT_EQ(r.candidates[k].score, det.similarity(i, r.candidates[k].frame));
+      if (k > 0) {
+        EXPECT_TRUE(better(r.candidates[k - 1], r.candidates[k]));
+      }
+    }
+    EXPECT_EQ(r.node, -1);
+    EXPECT_FALSE(r.node_created);
+    const Timings& t = r.timings;
+    EXPECT_GE(t.convert_ms, 0.0);
+    EXPECT_GE(t.segment_ms, 0.0);
+    EXPECT_GE(t.describe_ms, 0.0);
+    EXPECT_GE(t.search_ms, 0.0);
+    EXPECT_GE(t.total_ms, t.segment_ms);
+    EXPECT_GE(t.total_ms + 1e-9, t.convert_ms + t.segment_ms + t.describe_ms + t.search_ms);
+  }
+  // Revisits (period 4) beyond the window are exact matches and loops.
+  const Result r = det.process(random_frame(800));  // frame 12 == frame 0, 4, 8
+  EXPECT_EQ(r.best.frame, 0);
+  EXPECT_EQ(r.best.score, 1.0);
+  EXPECT_TRUE(r.loop);
+  ASSERT_EQ(r.candidates.size(), 3u);
+  EXPECT_EQ(r.candidates[1].frame, 4);
+  EXPECT_EQ(r.candidates[2].frame, 8);
+  EXPECT_EQ(det.nodes(), 0);
+}
+
+TEST(Detector, LoopDecisionThresholdBoundaries) {
+  DetectorOptions o = small_options(SearchMode::kExhaustive, 0, 1);
+  o.decision.threshold = 1.0;
+  Detector strict(o);
+  o.decision.threshold = 0.0;
+  Detector lax(o);
+  const cv::Mat a = random_frame(900), b = random_frame(901);
+  EXPECT_FALSE(strict.process(a).loop);  // no candidate
+  EXPECT_FALSE(lax.process(a).loop);
+  const Result sb = strict.process(b);
+  const Result lb = lax.process(b);
+  EXPECT_LT(sb.best.score, 1.0);
+  EXPECT_FALSE(sb.loop);
+  EXPECT_TRUE(lb.loop);  // any candidate is >= 0
+  EXPECT_TRUE(strict.process(a).loop);  // identical: score exactly 1 >= 1
+}
+
+TEST(Detector, NodeModeReportsNodes) {
+  DetectorOptions o = small_options(SearchMode::kDynamicNodes, 2, 5);
+  Detector det(o);
+  std::int64_t created = 0;
+  for (int i = 0; i < 15; ++i) {
+    const Result r = det.process(random_frame(1000 + i % 5));
+    EXPECT_GE(r.node, 0);
+    EXPECT_LT(r.node, det.nodes());
+    if (i == 0) {
+      EXPECT_TRUE(r.node_created);
+      EXPECT_EQ(r.node, 0);
+    }
+    if (r.node_created) {
+      ++created;
+      EXPECT_EQ(r.node, det.nodes() - 1);
+      EXPECT_TRUE(r.candidates.empty());
+    }
+    for (const Candidate& c : r.candidates) EXPECT_LT(c.frame, i - 2);
+  }
+  EXPECT_EQ(det.nodes(), created);
+  EXPECT_EQ(det.dynamic_nodes().size(), created);
+}
+
+TEST(Detector, ImageViewAndMatGiveIdenticalResults) {
+  Detector by_mat(small_options(SearchMode::kExhaustive, 1, 4));
+  Detector by_view(small_options(SearchMode::kExhaustive, 1, 4));
+  for (int i = 0; i < 8; ++i) {
+    const int type = i % 3 == 0 ? CV_8UC1 : i % 3 == 1 ? CV_8UC3 : CV_8UC4;
+    const cv::Mat f = random_frame(1100 + i % 3, type);
+    const Result rm = by_mat.process(f);
+    // Padded copy of the same pixels.
+    cv::Mat big(kH, kW + 7, type, cv::Scalar::all(3));
+    f.copyTo(big(cv::Rect(0, 0, kW, kH)));
+    const Result rv = by_view.process(view_of_mat(big(cv::Rect(0, 0, kW, kH))));
+    expect_same_result(rm, rv);
+  }
+  // RGB view of the same image equals the BGR Mat.
+  const cv::Mat bgr = random_frame(1200);
+  cv::Mat rgb;
+  cv::cvtColor(bgr, rgb, cv::COLOR_BGR2RGB);
+  ImageView v = view_of_mat(rgb);
+  v.format = PixelFormat::kRgb8;
+  expect_same_result(by_mat.process(bgr), by_view.process(v));
+}
+
+TEST(Detector, MemoryPerFrame) {
+  Detector det(small_options());
+  EXPECT_EQ(det.size(), 0);
+  for (int i = 0; i < 5; ++i) {
+    det.process(random_frame(1300 + i));
+    EXPECT_EQ(det.size(), i + 1);
+    EXPECT_EQ(det.store().size(), i + 1);
+  }
+  const GridSize g = grid_size(kW, kH, 16);
+  EXPECT_EQ(g, (GridSize{3, 4}));
+  EXPECT_EQ(det.store().grid(), g);
+  EXPECT_EQ(det.bytes_per_frame(), static_cast<std::size_t>(g.cells()) * (256 + 1) * 4);
+  EXPECT_EQ(det.bytes_per_frame(), 12u * 257u * 4u);
+  // KITTI-sized frames at S_p = 40: 80 cells.
+  DetectorOptions ko;
+  ko.segmentation.superpixel_size = 40;
+  Detector kitti(ko);
+  kitti.process(cv::Mat(376, 1241, CV_8UC1, cv::Scalar(90)));
+  EXPECT_EQ(kitti.bytes_per_frame(), 80u * 257u * 4u);
+}
+
+TEST(Detector, SimilarityAccessor) {
+  Detector det(small_options());
+  for (int i = 0; i < 4; ++i) det.process(random_frame(1400 + i));
+  for (int a = 0; a < 4; ++a) {
+    EXPECT_EQ(det.similarity(a, a), 1.0);
+    for (int b = 0; b < 4; ++b) {
+      EXPECT_EQ(det.similarity(a, b), det.similarity(b, a));
+      EXPECT_EQ(det.similarity(a, b),
+                lsgd::similarity(det.store().view(a), det.store().view(b),
+                                 SimilarityMetric::kReference));
+    }
+  }
+  EXPECT_THROW(det.similarity(0, 4), InvalidArgument);
+  EXPECT_THROW(det.similarity(-1, 0), InvalidArgument);
+}
+
+TEST(Detector, OptionsValidatedAtConstruction) {
+  DetectorOptions o;
+  o.decision.threshold = 1.5;
+  EXPECT_THROW(o.check(), InvalidArgument);
+  EXPECT_THROW(Detector{o}, InvalidArgument);
+  try {
+    Detector d(o);
+    ADD_FAILURE() << "no exception";
+  } catch (const InvalidArgument& e) {
+    EXPECT_NE(std::string(e.what()).find("threshold"), std::string::npos) << e.what();
+  }
+  o.decision.threshold = -0.1;
+  EXPECT_THROW(Detector{o}, InvalidArgument);
+  o = DetectorOptions{};
+  o.segmentation.superpixel_size = 1;
+  EXPECT_THROW(Detector{o}, InvalidArgument);
+  o = DetectorOptions{};
+  o.search.top_n = 0;
+  EXPECT_THROW(Detector{o}, InvalidArgument);
+  o = DetectorOptions{};
+  o.search.nodes.beta = -1;
+  EXPECT_THROW(Detector{o}, InvalidArgument);
+  o = DetectorOptions{};
+  o.similarity.metric = static_cast<SimilarityMetric>(5);
+  EXPECT_THROW(Detector{o}, InvalidArgument);
+  // Defaults are valid and kept.
+  Detector d;
+  EXPECT_NO_THROW(d.options().check());
+  EXPECT_EQ(d.size(), 0);
+  EXPECT_EQ(d.nodes(), 0);
+}
+
+}  // namespace
+}  // namespace lsgd

@@ -1,0 +1,293 @@
+// Tests of the descriptor similarities (include/lsgd/similarity.h): the
+// reference formula, the paper's L1 and the normalised L1, compared against
+// hand computations, plus the general properties every metric must have.
+#include "lsgd/similarity.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "lsgd/descriptor.h"
+#include "lsgd/error.h"
+#include "lsgd/image.h"
+#include "lsgd/segmentation.h"
+
+namespace lsgd {
+namespace {
+
+const SimilarityMetric kMetrics[] = {SimilarityMetric::kReference, SimilarityMetric::kL1,
+                                     SimilarityMetric::kNormalizedL1};
+
+std::uint64_t splitmix64(std::uint64_t& state) {
+  std::uint64_t z = (state += 0x9E3779B97F4A7C15ull);
+  z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
+  z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
+  return z ^ (z >> 31);
+}
+
+// Descriptor with `cells` cells, each holding the given (bin, count) pairs.
+Descriptor make(const std::vector<std::vector<std::pair<int, Count>>>& cells) {
+  Descriptor d;
+  d.grid = {1, static_cast<int>(cells.size())};
+  d.hist.assign(cells.size() * kBins, 0);
+  d.pixels.assign(cells.size(), 0);
+  for (std::size_t k = 0; k < cells.size(); ++k) {
+    for (const auto& [bin, count] : cells[k]) {
+      d.hist[k * kBins + bin] += count;
+      d.pixels[k] += count;
+    }
+  }
+  return d;
+}
+
+// Random descriptor: `cells` cells, each with a random pixel count in
+// [min_pixels, max_pixels] spread over random bins.
+Descriptor random_descriptor(int cells, std::uint64_t seed, int min_pixels = 50,
+                             int max_pixels = 400) {
+  std::uint64_t s = seed;
+  Descriptor d;
+  d.grid = {1, cells};
+  d.hist.assign(static_cast<std::size_t>(cells) * kBins, 0);
+  d.pixels.assign(cells, 0);
+  for (int k = 0; k < cells; ++k) {
+    const int n = min_pixels + static_cast<int>(splitmix64(s) % (max_pixels - min_pixels + 1));
+    const int centre = static_cast<int>(splitmix64(s) % 256);
+    for (int i = 0; i < n; ++i) {
+      const int bin = (centre + static_cast<int>(splitmix64(s) % 40)) % 256;
+      ++d.hist[static_cast<std::size_t>(k) * kBins + bin];
+    }
+    d.pixels[k] = static_cast<Count>(n);
+  }
+  return d;
+}
+
+std::uint64_t cell_l1(const Descriptor& a, const Descriptor& b, int k) {
+  std::uint64_t sum = 0;
+  for (int i = 0; i < kBins; ++i) {
+    const std::int64_t d = static_cast<std::int64_t>(a.hist[k * kBins + i]) - b.hist[k * kBins + i];
+    sum += static_cast<std::uint64_t>(d < 0 ? -d : d);
+  }
+  return sum;
+}
+
+// Independent implementations of the three documented formulas.
+double expected(const Descriptor& a, const Descriptor& b, SimilarityMetric metric) {
+  const int cells = a.grid.cells();
+  switch (metric) {
+    case SimilarityMetric::kReference: {
+      double sum = 0;
+      for (int k = 0; k < cells; ++k) sum += std::sqrt(static_cast<double>(cell_l1(a, b, k))) / 256.0;
+      return 1.0 / (1.0 + sum / cells);
+    }
+    case SimilarityMetric::kL1: {
+      double l1 = 0, mass = 0;
+      for (int k = 0; k < cells; ++k) {
+        l1 += static_cast<double>(cell_l1(a, b, k));
+        mass += static_cast<double>(a.pixels[k]) + b.pixels[k];
+      }
+      return mass == 0 ? 1.0 : 1.0 - l1 / mass;
+    }
+    case SimilarityMetric::kNormalizedL1: {
+      double sum = 0;
+      for (int k = 0; k < cells; ++k) {
+        const double na = a.pixels[k], nb = b.pixels[k];
+        if (na == 0 || nb == 0) {
+          sum += (na == nb) ? 0.0 : 2.0;
+          continue;
+        }
+        for (int i = 0; i < kBins; ++i) {
+          sum += std::fabs(a.hist[k * kBins + i] / na - b.hist[k * kBins + i] / nb);
+        }
+      }
+      return 1.0 - sum / (2.0 * cells);
+    }
+  }
+  return -1;
+}
+
+TEST(Similarity, IdenticalDescriptorsScoreExactlyOne) {
+  for (int trial = 0; trial < 5; ++trial) {
+    const Descriptor d = random_descriptor(12, 100 + trial);
+    for (SimilarityMetric m : kMetrics) {
+      SCOPED_TRACE(to_string(m));
+      EXPECT_EQ(similarity(d.view(), d.view(), m), 1.0);
+      const Descriptor copy = d;
+      EXPECT_EQ(similarity(d.view(), copy.view(), m), 1.0);
+    }
+  }
+}
+
+TEST(Similarity, IdenticalRealImageDescriptorsScoreOne) {
+  GrayImage img;
+  img.width = 96;
+  img.height = 64;
+  img.pixels.resize(96 * 64);
+  std::uint64_t s = 5;
+  for (auto& p : img.pixels) p = static_cast<std::uint8_t>(splitmix64(s));
+  SegmentationOptions o;
+  o.superpixel_size = 10;
+  Segmenter seg(o);
+  const Descriptor d = describe(img, seg.segment(img));
+  for (SimilarityMetric m : kMetrics) EXPECT_EQ(similarity(d.view(), d.view(), m), 1.0);
+}
+
+TEST(Similarity, ScoresInUnitIntervalAndSymmetric) {
+  for (int trial = 0; trial < 20; ++trial) {
+    const Descriptor a = random_descriptor(8, 1000 + trial);
+    const Descriptor b = random_descriptor(8, 2000 + trial);
+    for (SimilarityMetric m : kMetrics) {
+      SCOPED_TRACE(to_string(m));
+      const double ab = similarity(a.view(), b.view(), m);
+      const double ba = similarity(b.view(), a.view(), m);
+      EXPECT_GE(ab, 0.0);
+      EXPECT_LE(ab, 1.0);
+      EXPECT_EQ(ab, ba);
+      EXPECT_NEAR(ab, expected(a, b, m), 1e-12);
+      EXPECT_LT(ab, 1.0);  // different descriptors
+    }
+  }
+}
+
+TEST(Similarity, ExtremesStayInRange) {
+  // Disjoint histograms: L1 and normalised L1 reach 0, the reference stays positive.
+  const Descriptor a = make({{{0, 1000}}, {{10, 500}}});
+  const Descriptor b = make({{{255, 1000}}, {{200, 500}}});
+  EXPECT_EQ(similarity(a.view(), b.view(), SimilarityMetric::kL1), 0.0);
+  EXPECT_EQ(similarity(a.view(), b.view(), SimilarityMetric::kNormalizedL1), 0.0);
+  const double ref = similarity(a.view(), b.view(), SimilarityMetric::kReference);
+  EXPECT_GT(ref, 0.0);
+  EXPECT_LT(ref, 1.0);
+  // Huge counts do not overflow.
+  const Descriptor big_a = make({{{0, 4000000000u}}});
+  const Descriptor big_b = make({{{1, 4000000000u}}});
+  for (SimilarityMetric m : kMetrics) {
+    const double s = similarity(big_a.view(), big_b.view(), m);
+    EXPECT_GE(s, 0.0) << to_string(m);
+    EXPECT_LE(s, 1.0) << to_string(m);
+  }
+  EXPECT_EQ(similarity(big_a.view(), big_b.view(), SimilarityMetric::kL1), 0.0);
+}
+
+TEST(Similarity, ReferenceHandComputedTwoCells) {
+  // Cell 0: a = {bin 10: 4, bin 20: 6}, b = {bin 10: 1, bin 30: 9}
+  //   L1_0 = |4-1| + |6-0| + |0-9| = 18.
+  // Cell 1: a = {bin 0: 50}, b = {bin 0: 50, bin 1: 50}: L1_1 = 50.
+  const Descriptor a = make({{{10, 4}, {20, 6}}, {{0, 50}}});
+  const Descriptor b = make({{{10, 1}, {30, 9}}, {{0, 50}, {1, 50}}});
+  const double d0 = std::sqrt(18.0) / 256.0;
+  const double d1 = std::sqrt(50.0) / 256.0;
+  const double want = 1.0 / (1.0 + (d0 + d1) / 2.0);
+  EXPECT_NEAR(similarity(a.view(), b.view(), SimilarityMetric::kReference), want, 1e-15);
+  // Numerically: (4.2426 + 7.0711) / 512 = 0.022097, 1 / 1.022097 = 0.978381.
+  EXPECT_NEAR(similarity(a.view(), b.view(), SimilarityMetric::kReference), 0.978381, 1e-6);
+}
+
+TEST(Similarity, L1HandComputed) {
+  // Same example: L1 = 18 + 50 = 68, masses 10 + 10 + 50 + 100 = 170.
+  const Descriptor a = make({{{10, 4}, {20, 6}}, {{0, 50}}});
+  const Descriptor b = make({{{10, 1}, {30, 9}}, {{0, 50}, {1, 50}}});
+  EXPECT_NEAR(similarity(a.view(), b.view(), SimilarityMetric::kL1), 1.0 - 68.0 / 170.0, 1e-15);
+  // For frames of one size: 1 - L1 / (2 * pixels).
+  const Descriptor c = make({{{0, 30}, {1, 70}}});
+  const Descriptor e = make({{{0, 70}, {1, 30}}});
+  EXPECT_NEAR(similarity(c.view(), e.view(), SimilarityMetric::kL1), 1.0 - 80.0 / 200.0, 1e-15);
+}
+
+TEST(Similarity, NormalizedL1HandComputed) {
+  // Cell 0: a = {0: 1, 1: 3} -> (0.25, 0.75); b = {0: 2, 1: 2} -> (0.5, 0.5): L1 = 0.5.
+  // Cell 1: a = {5: 10}, b = {5: 1000}: same shape, L1 = 0.
+  // score = 1 - (0.5 + 0) / (2 * 2) = 0.875.
+  const Descriptor a = make({{{0, 1}, {1, 3}}, {{5, 10}}});
+  const Descriptor b = make({{{0, 2}, {1, 2}}, {{5, 1000}}});
+  EXPECT_NEAR(similarity(a.view(), b.view(), SimilarityMetric::kNormalizedL1), 0.875, 1e-15);
+  // Scale invariance: a histogram and a multiple of it are identical.
+  const Descriptor c = make({{{3, 2}, {9, 5}}});
+  const Descriptor d = make({{{3, 20}, {9, 50}}});
+  EXPECT_NEAR(similarity(c.view(), d.view(), SimilarityMetric::kNormalizedL1), 1.0, 1e-15);
+  EXPECT_LT(similarity(c.view(), d.view(), SimilarityMetric::kL1), 1.0);
+}
+
+TEST(Similarity, NormalizedL1EmptyCells) {
+  // Empty vs empty counts as identical.
+  const Descriptor a = make({{}, {{7, 10}}});
+  const Descriptor b = make({{}, {{7, 3}}});
+  EXPECT_EQ(similarity(a.view(), b.view(), SimilarityMetric::kNormalizedL1), 1.0);
+  // Empty vs non-empty counts as maximally different (L1 = 2).
+  const Descriptor c = make({{{0, 5}}, {{7, 10}}});
+  EXPECT_NEAR(similarity(a.view(), c.view(), SimilarityMetric::kNormalizedL1), 1.0 - 2.0 / 4.0,
+              1e-15);
+  EXPECT_NEAR(similarity(c.view(), a.view(), SimilarityMetric::kNormalizedL1), 0.5, 1e-15);
+  // All cells empty on both sides.
+  const Descriptor e = make({{}, {}});
+  EXPECT_EQ(similarity(e.view(), e.view(), SimilarityMetric::kNormalizedL1), 1.0);
+  // The other metrics are also defined on empty descriptors.
+  EXPECT_EQ(similarity(e.view(), e.view(), SimilarityMetric::kL1), 1.0);
+  EXPECT_EQ(similarity(e.view(), e.view(), SimilarityMetric::kReference), 1.0);
+}
+
+TEST(Similarity, MetricsMatchIndependentImplementationOnVariedMasses) {
+  for (int trial = 0; trial < 10; ++trial) {
+    Descriptor a = random_descriptor(6, 3000 + trial, 0, 60);
+    Descriptor b = random_descriptor(6, 4000 + trial, 0, 60);
+    for (SimilarityMetric m : kMetrics) {
+      EXPECT_NEAR(similarity(a.view(), b.view(), m), expected(a, b, m), 1e-12) << to_string(m);
+    }
+  }
+}
+
+TEST(Similarity, DifferentCellCountsThrow) {
+  const Descriptor a = random_descriptor(4, 1);
+  const Descriptor b = random_descriptor(5, 2);
+  for (SimilarityMetric m : kMetrics) {
+    EXPECT_THROW(similarity(a.view(), b.view(), m), InvalidArgument) << to_string(m);
+    EXPECT_THROW(similarity(b.view(), a.view(), m), InvalidArgument) << to_string(m);
+  }
+  // Zero cells is rejected too.
+  const DescriptorView empty{};
+  EXPECT_THROW(similarity(empty, empty, SimilarityMetric::kReference), InvalidArgument);
+}
+
+TEST(Similarity, UnknownMetricThrows) {
+  const Descriptor a = random_descriptor(2, 1);
+  EXPECT_THROW(similarity(a.view(), a.view(), static_cast<SimilarityMetric>(17)), InvalidArgument);
+  SimilarityOptions o;
+  o.metric = static_cast<SimilarityMetric>(17);
+  EXPECT_THROW(o.check(), InvalidArgument);
+}
+
+TEST(SimilarityMetricNames, RoundTrip) {
+  for (SimilarityMetric m : kMetrics) {
+    EXPECT_EQ(parse_similarity_metric(to_string(m)), m);
+  }
+  EXPECT_STREQ(to_string(SimilarityMetric::kReference), "reference");
+  EXPECT_STREQ(to_string(SimilarityMetric::kL1), "l1");
+  EXPECT_STREQ(to_string(SimilarityMetric::kNormalizedL1), "normalized_l1");
+}
+
+TEST(SimilarityMetricNames, RejectsUnknown) {
+  EXPECT_THROW(parse_similarity_metric("foo"), InvalidArgument);
+  EXPECT_THROW(parse_similarity_metric(""), InvalidArgument);
+  EXPECT_THROW(parse_similarity_metric("L1"), InvalidArgument);
+  EXPECT_THROW(parse_similarity_metric("reference "), InvalidArgument);
+  try {
+    parse_similarity_metric("foo");
+  } catch (const InvalidArgument& e) {
+    EXPECT_NE(std::string(e.what()).find("foo"), std::string::npos) << e.what();
+  }
+}
+
+TEST(SimilarityOptions, DefaultIsReference) {
+  SimilarityOptions o;
+  EXPECT_EQ(o.metric, SimilarityMetric::kReference);
+  EXPECT_NO_THROW(o.check());
+  for (SimilarityMetric m : kMetrics) {
+    o.metric = m;
+    EXPECT_NO_THROW(o.check());
+  }
+}
+
+}  // namespace
+}  // namespace lsgd

@@ -1,0 +1,252 @@
+#include "lsgd/io/sequence.h"
+
+#include <algorithm>
+#include <array>
+#include <cctype>
+#include <cstddef>
+#include <filesystem>
+#include <fstream>
+#include <iterator>
+#include <opencv2/core.hpp>
+#include <opencv2/imgcodecs.hpp>
+#include <string>
+#include <system_error>
+#include <vector>
+
+#include "internal/check.h"
+#include "lsgd/error.h"
+
+namespace lsgd::io {
+namespace {
+
+namespace fs = std::filesystem;
+using internal::concat;
+
+constexpr std::array<const char*, 8> kImageExtensions = {".png", ".jpg", ".jpeg", ".bmp",
+                                                         ".pgm", ".ppm", ".tif",  ".tiff"};
+
+std::string lower(std::string s) {
+  std::transform(s.begin(), s.end(), s.begin(),
+                 [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+  return s;
+}
+
+bool has_image_extension(const fs::path& path) {
+  const std::string ext = lower(path.extension().string());
+  return std::find(kImageExtensions.begin(), kImageExtensions.end(), ext) != kImageExtensions.end();
+}
+
+std::string extension_list() {
+  std::string out;
+  for (const char* ext : kImageExtensions) out += concat(out.empty() ? "" : " ", ext);
+  return out;
+}
+
+bool is_digit(char c) { return c >= '0' && c <= '9'; }
+
+// Compares the digit runs a[ia, ea) and b[ib, eb) by numeric value without
+// converting them (runs may be longer than any integer type). Returns <0, 0, >0.
+int compare_digit_runs(const std::string& a, std::size_t ia, std::size_t ea, const std::string& b,
+                       std::size_t ib, std::size_t eb) {
+  while (ia < ea && a[ia] == '0') ++ia;
+  while (ib < eb && b[ib] == '0') ++ib;
+  const std::size_t la = ea - ia;
+  const std::size_t lb = eb - ib;
+  if (la != lb) return la < lb ? -1 : 1;
+  return a.compare(ia, la, b, ib, lb);
+}
+
+std::size_t digit_run_end(const std::string& s, std::size_t i) {
+  while (i < s.size() && is_digit(s[i])) ++i;
+  return i;
+}
+
+// Natural comparison: <0, 0, >0. Equal values with different leading zeros
+// compare equal here; `zeros` receives the first such difference
+// (fewer zeros first) to break the tie.
+int natural_compare(const std::string& a, const std::string& b, int& zeros) {
+  std::size_t i = 0;
+  std::size_t j = 0;
+  zeros = 0;
+  while (i < a.size() && j < b.size()) {
+    if (is_digit(a[i]) && is_digit(b[j])) {
+      const std::size_t ei = digit_run_end(a, i);
+      const std::size_t ej = digit_run_end(b, j);
+      const int c = compare_digit_runs(a, i, ei, b, j, ej);
+      if (c != 0) return c;
+      // Same value: the longer run has more leading zeros.
+      if (zeros == 0 && ei - i != ej - j) zeros = (ei - i) < (ej - j) ? -1 : 1;
+      i = ei;
+      j = ej;
+      continue;
+    }
+    const auto ca = static_cast<unsigned char>(a[i]);
+    const auto cb = static_cast<unsigned char>(b[j]);
+    if (ca != cb) return ca < cb ? -1 : 1;
+    ++i;
+    ++j;
+  }
+  if (i < a.size()) return 1;   // b is a prefix of a
+  if (j < b.size()) return -1;  // a is a prefix of b
+  return 0;
+}
+
+std::string trim(const std::string& line) {
+  const char* kSpace = " \t\r\n\f\v";
+  const std::size_t first = line.find_first_not_of(kSpace);
+  if (first == std::string::npos) return {};
+  const std::size_t last = line.find_last_not_of(kSpace);
+  return line.substr(first, last - first + 1);
+}
+
+std::vector<std::string> list_folder(const std::string& path) {
+  std::error_code ec;
+  fs::directory_iterator it(path, ec);
+  if (ec) throw IoError(concat("cannot read folder '", path, "': ", ec.message()));
+  std::vector<std::string> names;
+  for (const fs::directory_iterator end; it != end; it.increment(ec)) {
+    std::error_code type_ec;
+    if (!it->is_regular_file(type_ec) || type_ec) continue;  // subfolders, broken links
+    if (has_image_extension(it->path())) names.push_back(it->path().filename().string());
+  }
+  if (ec) throw IoError(concat("cannot read folder '", path, "': ", ec.message()));
+  if (names.empty()) {
+    throw FormatError(
+        concat("no images in folder '", path, "' (looked for ", extension_list(), ", any case)"));
+  }
+  std::sort(names.begin(), names.end(), natural_less);
+  std::vector<std::string> images;
+  images.reserve(names.size());
+  for (const std::string& name : names) images.push_back((fs::path(path) / name).string());
+  return images;
+}
+
+std::vector<std::string> read_list_file(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw IoError(concat("cannot read list file '", path, "'"));
+  const fs::path folder = fs::path(path).parent_path();
+  std::vector<std::string> images;
+  std::string line;
+  bool first_line = true;
+  while (std::getline(in, line)) {
+    if (first_line && line.rfind("\xEF\xBB\xBF", 0) == 0) line.erase(0, 3);  // UTF-8 BOM
+    first_line = false;
+    const std::string entry = trim(line);
+    if (entry.empty() || entry[0] == '#') continue;
+    const fs::path image(entry);
+    images.push_back(image.is_absolute() ? image.string() : (folder / image).string());
+  }
+  if (in.bad()) throw IoError(concat("cannot read list file '", path, "'"));
+  if (images.empty()) {
+    throw FormatError(concat("list file '", path,
+                             "' lists no images (one path per line; blank lines and lines "
+                             "starting with '#' are skipped)"));
+  }
+  return images;
+}
+
+const char* depth_name(int depth) {
+  switch (depth) {
+    case CV_8S:
+      return "8-bit signed";
+    case CV_16U:
+      return "16-bit unsigned";
+    case CV_16S:
+      return "16-bit signed";
+    case CV_32S:
+      return "32-bit integer";
+    case CV_32F:
+      return "32-bit float";
+    case CV_64F:
+      return "64-bit float";
+    case CV_16F:
+      return "16-bit float";
+    default:
+      return "unknown";
+  }
+}
+
+// Reads the whole file; IoError when it is missing or unreadable.
+std::vector<unsigned char> read_bytes(const std::string& path) {
+  std::error_code ec;
+  const fs::file_status status = fs::status(path, ec);
+  if (!fs::exists(status)) {
+    throw IoError(concat("image '", path, "' does not exist",
+                         ec && ec != std::errc::no_such_file_or_directory
+                             ? concat(" or cannot be accessed: ", ec.message())
+                             : std::string()));
+  }
+  if (fs::is_directory(status)) throw IoError(concat("image '", path, "' is a folder"));
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw IoError(concat("cannot read image '", path, "'"));
+  std::vector<unsigned char> bytes((std::istreambuf_iterator<char>(in)),
+                                   std::istreambuf_iterator<char>());
+  if (in.bad()) throw IoError(concat("cannot read image '", path, "'"));
+  return bytes;
+}
+
+void check_decoded(const cv::Mat& image, const std::string& path) {
+  if (image.depth() != CV_8U) {
+    throw FormatError(concat("image '", path, "' has ", depth_name(image.depth()),
+                             " depth; only 8-bit images are supported: convert it to 8-bit"));
+  }
+  const int channels = image.channels();
+  if (channels != 1 && channels != 3 && channels != 4) {
+    throw FormatError(concat("image '", path, "' has ", channels,
+                             " channels; only 1 (gray), 3 (BGR) or 4 (BGRA) are supported"));
+  }
+}
+
+}  // namespace
+
+bool natural_less(const std::string& a, const std::string& b) {
+  int zeros = 0;
+  const int c = natural_compare(a, b, zeros);
+  if (c != 0) return c < 0;
+  if (zeros != 0) return zeros < 0;
+  return a < b;  // only reached for equal strings, kept for safety
+}
+
+Sequence open_sequence(const std::string& path) {
+  std::error_code ec;
+  const fs::file_status status = fs::status(path, ec);
+  if (status.type() == fs::file_type::not_found || path.empty()) {
+    throw IoError(concat("sequence '", path, "' does not exist"));
+  }
+  if (ec) throw IoError(concat("cannot access sequence '", path, "': ", ec.message()));
+  Sequence sequence;
+  sequence.source = path;
+  if (fs::is_directory(status)) {
+    sequence.images = list_folder(path);
+  } else if (has_image_extension(path)) {
+    throw FormatError(
+        concat("sequence '", path, "' is a single image; give a folder of images or a list file"));
+  } else if (fs::is_regular_file(status)) {
+    sequence.images = read_list_file(path);
+  } else {
+    throw IoError(concat("sequence '", path, "' is neither a folder nor a regular file"));
+  }
+  return sequence;
+}
+
+cv::Mat read_image(const std::string& path) {
+  const std::vector<unsigned char> bytes = read_bytes(path);
+  if (bytes.empty()) throw FormatError(concat("image '", path, "' is an empty file (0 bytes)"));
+  cv::Mat image;
+  try {
+    // IMREAD_UNCHANGED keeps gray/BGR/BGRA and the stored depth; it does not
+    // apply EXIF orientation, so frames are used exactly as stored.
+    image = cv::imdecode(bytes, cv::IMREAD_UNCHANGED);
+  } catch (const cv::Exception& e) {
+    throw FormatError(concat("'", path, "' is not a decodable image: ", e.what()));
+  }
+  if (image.empty()) {
+    throw FormatError(concat("'", path,
+                             "' is not a decodable image (corrupt, truncated or unsupported "
+                             "format)"));
+  }
+  check_decoded(image, path);
+  return image;
+}
+
+}  // namespace lsgd::io

@@ -1,0 +1,249 @@
+#include "lsgd/io/config.h"
+
+#include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <filesystem>
+#include <fstream>
+#include <string>
+#include <vector>
+
+#include "lsgd/error.h"
+
+namespace lsgd::io {
+namespace {
+
+namespace fs = std::filesystem;
+
+const char* kSource = "test.yaml";
+
+void expect_equal(const DetectorOptions& a, const DetectorOptions& b) {
+  EXPECT_EQ(a.segmentation.superpixel_size, b.segmentation.superpixel_size);
+  EXPECT_EQ(a.segmentation.iterations, b.segmentation.iterations);
+  EXPECT_EQ(a.segmentation.intensity_scale, b.segmentation.intensity_scale);
+  EXPECT_EQ(a.segmentation.distance_scale, b.segmentation.distance_scale);
+  EXPECT_EQ(a.similarity.metric, b.similarity.metric);
+  EXPECT_EQ(a.search.mode, b.search.mode);
+  EXPECT_EQ(a.search.min_gap, b.search.min_gap);
+  EXPECT_EQ(a.search.top_n, b.search.top_n);
+  EXPECT_EQ(a.search.nodes.threshold_0, b.search.nodes.threshold_0);
+  EXPECT_EQ(a.search.nodes.alpha, b.search.nodes.alpha);
+  EXPECT_EQ(a.search.nodes.beta, b.search.nodes.beta);
+  EXPECT_EQ(a.decision.threshold, b.decision.threshold);
+}
+
+// Options that differ from the defaults in every field.
+DetectorOptions custom_options() {
+  DetectorOptions o;
+  o.segmentation.superpixel_size = 17;
+  o.segmentation.iterations = 3;
+  o.segmentation.intensity_scale = 0.1;       // not exact in binary
+  o.segmentation.distance_scale = 1.0 / 3.0;  // needs 17 digits
+  o.similarity.metric = SimilarityMetric::kNormalizedL1;
+  o.search.mode = SearchMode::kDynamicNodes;
+  o.search.min_gap = 123456789;
+  o.search.top_n = 7;
+  o.search.nodes.threshold_0 = 0.123456789012345678;
+  o.search.nodes.alpha = 2.0 / 7.0;
+  o.search.nodes.beta = 1.1;
+  o.decision.threshold = 0.7000000000000001;
+  return o;
+}
+
+// Expects parse_config(text) to throw E with a message containing every part.
+template <typename E>
+void expect_error(const std::string& text, const std::vector<std::string>& parts) {
+  try {
+    parse_config(text, kSource);
+    ADD_FAILURE() << "no exception for:\n" << text;
+  } catch (const E& e) {
+    for (const std::string& part : parts) {
+      EXPECT_NE(std::string(e.what()).find(part), std::string::npos)
+          << "message '" << e.what() << "' lacks '" << part << "' for:\n"
+          << text;
+    }
+  } catch (const std::exception& e) {
+    ADD_FAILURE() << "wrong exception type '" << e.what() << "' for:\n" << text;
+  }
+}
+
+TEST(ParseConfig, EmptyTextGivesTheBase) {
+  expect_equal(parse_config("", kSource), DetectorOptions{});
+  expect_equal(parse_config("# only a comment\n", kSource), DetectorOptions{});
+  expect_equal(parse_config("~\n", kSource), DetectorOptions{});
+  const DetectorOptions base = custom_options();
+  expect_equal(parse_config("", kSource, base), base);
+  expect_equal(parse_config("segmentation:\n", kSource, base), base);  // empty section
+}
+
+TEST(ParseConfig, FullConfig) {
+  const DetectorOptions o = parse_config(
+      "segmentation:\n"
+      "  superpixel_size: 20\n"
+      "  iterations: 5\n"
+      "  intensity_scale: 4.5\n"
+      "  distance_scale: 2e-1\n"
+      "similarity:\n"
+      "  metric: l1\n"
+      "search:\n"
+      "  mode: nodes\n"
+      "  min_gap: 30\n"
+      "  top_n: 3\n"
+      "  nodes: {threshold_0: 0.5, alpha: 0.7, beta: +1.1}\n"
+      "decision:\n"
+      "  threshold: 0.6\n",
+      kSource);
+  EXPECT_EQ(o.segmentation.superpixel_size, 20);
+  EXPECT_EQ(o.segmentation.iterations, 5);
+  EXPECT_EQ(o.segmentation.intensity_scale, 4.5);
+  EXPECT_EQ(o.segmentation.distance_scale, 0.2);
+  EXPECT_EQ(o.similarity.metric, SimilarityMetric::kL1);
+  EXPECT_EQ(o.search.mode, SearchMode::kDynamicNodes);
+  EXPECT_EQ(o.search.min_gap, 30);
+  EXPECT_EQ(o.search.top_n, 3);
+  EXPECT_EQ(o.search.nodes.threshold_0, 0.5);
+  EXPECT_EQ(o.search.nodes.alpha, 0.7);
+  EXPECT_EQ(o.search.nodes.beta, 1.1);
+  EXPECT_EQ(o.decision.threshold, 0.6);
+}
+
+TEST(ParseConfig, ToYamlRoundTrips) {
+  const DetectorOptions custom = custom_options();
+  expect_equal(parse_config(to_yaml(custom), kSource), custom);
+  expect_equal(parse_config(to_yaml(DetectorOptions{}), kSource, custom), DetectorOptions{});
+  const std::string text = to_yaml(DetectorOptions{});
+  for (const char* key :
+       {"segmentation:", "superpixel_size: 40", "iterations: 10", "intensity_scale: 20",
+        "distance_scale: 1.0", "metric: reference", "mode: exhaustive", "min_gap: 50", "top_n: 10",
+        "threshold_0: 0.9", "alpha: 0.8", "beta: 1.0", "decision:", "threshold: 0.87"}) {
+    EXPECT_NE(text.find(key), std::string::npos) << key << " missing in:\n" << text;
+  }
+}
+
+TEST(ParseConfig, PartialConfigKeepsTheBase) {
+  const DetectorOptions base = custom_options();
+  const DetectorOptions o =
+      parse_config("search:\n  top_n: 4\n  nodes:\n    beta: 0.9\n", kSource, base);
+  DetectorOptions expected = base;
+  expected.search.top_n = 4;
+  expected.search.nodes.beta = 0.9;
+  expect_equal(o, expected);
+}
+
+TEST(ParseConfig, UnknownKeysAreFormatErrors) {
+  expect_error<FormatError>("segmentaton:\n  iterations: 3\n",
+                            {kSource, "unknown key 'segmentaton'", "segmentation, similarity"});
+  expect_error<FormatError>("search:\n  foo: 1\n",
+                            {kSource, "unknown key 'search.foo'", "mode, min_gap, top_n, nodes"});
+  expect_error<FormatError>("search:\n  nodes: {gamma: 1}\n",
+                            {kSource, "'search.nodes.gamma'", "threshold_0, alpha, beta"});
+  expect_error<FormatError>("decision:\n  threshold: 0.5\n  thresold: 0.5\n",
+                            {"'decision.thresold'"});
+}
+
+TEST(ParseConfig, DuplicateKeysAreFormatErrors) {
+  expect_error<FormatError>("search:\n  top_n: 3\n  top_n: 4\n", {kSource, "'search.top_n'"});
+}
+
+TEST(ParseConfig, WrongTypesAreFormatErrors) {
+  expect_error<FormatError>(
+      "segmentation:\n  superpixel_size: abc\n",
+      {kSource, "'segmentation.superpixel_size' must be an integer", "'abc'"});
+  expect_error<FormatError>("segmentation:\n  superpixel_size: 40.5\n",
+                            {"'segmentation.superpixel_size'", "40.5"});
+  expect_error<FormatError>("segmentation:\n  iterations: 40abc\n",
+                            {"'segmentation.iterations'", "40abc"});
+  expect_error<FormatError>("segmentation:\n  iterations: \"40\"\n",
+                            {"'segmentation.iterations'", "quoted"});
+  expect_error<FormatError>("segmentation:\n  iterations: true\n",
+                            {"'segmentation.iterations'", "true"});
+  expect_error<FormatError>("segmentation:\n  iterations:\n",
+                            {"'segmentation.iterations'", "null"});
+  expect_error<FormatError>("segmentation:\n  iterations: {a: 1}\n",
+                            {"'segmentation.iterations'", "a map"});
+  expect_error<FormatError>("segmentation:\n  intensity_scale: [1, 2]\n",
+                            {"'segmentation.intensity_scale' must be a number", "a sequence"});
+  expect_error<FormatError>("segmentation:\n  distance_scale: 1.0.0\n",
+                            {"'segmentation.distance_scale'", "1.0.0"});
+  expect_error<FormatError>("search:\n  min_gap: 1e3\n", {"'search.min_gap'"});
+  expect_error<FormatError>("search:\n  nodes: 3\n", {"'search.nodes' must be a map"});
+  expect_error<FormatError>("similarity: l1\n", {"'similarity' must be a map"});
+  expect_error<FormatError>("- 1\n- 2\n", {kSource, "map"});
+  expect_error<FormatError>("just text\n", {kSource, "map"});
+}
+
+TEST(ParseConfig, InvalidEnumsAreFormatErrors) {
+  expect_error<FormatError>("similarity:\n  metric: cosine\n",
+                            {kSource, "'similarity.metric'", "cosine", "normalized_l1"});
+  expect_error<FormatError>("search:\n  mode: fast\n", {kSource, "'search.mode'", "fast"});
+  expect_error<FormatError>("search:\n  mode: [nodes]\n", {"'search.mode'"});
+}
+
+TEST(ParseConfig, OutOfRangeValuesAreInvalidArguments) {
+  for (const char* text :
+       {"segmentation: {superpixel_size: 0}", "segmentation: {iterations: 0}",
+        "decision: {threshold: 1.5}", "search: {top_n: 0}", "search: {min_gap: -1}",
+        "segmentation: {intensity_scale: -1.0}", "decision: {threshold: .nan}",
+        "segmentation: {superpixel_size: 99999999999}"}) {
+    expect_error<InvalidArgument>(text, {kSource});
+  }
+}
+
+TEST(ParseConfig, MalformedYamlIsFormatError) {
+  expect_error<FormatError>("search:\n  top_n: [1, 2\n", {kSource, "invalid YAML", "line"});
+  expect_error<FormatError>("search: {top_n: 3\n", {kSource, "invalid YAML"});
+  expect_error<FormatError>("a: b: c\n", {kSource, "invalid YAML"});
+  expect_error<FormatError>("search: {}\n---\nsearch: {}\n", {kSource, "one YAML document"});
+}
+
+// ---------------------------------------------------------------- files
+
+class LoadConfigTest : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
+    dir_ = fs::path(LSGD_TEST_TMP) /
+           (std::string("config_") + info->name() + "_" + std::to_string(::getpid()));
+    fs::remove_all(dir_);
+    fs::create_directories(dir_);
+  }
+  void TearDown() override {
+    std::error_code ec;
+    fs::remove_all(dir_, ec);
+  }
+  fs::path dir_;
+};
+
+TEST_F(LoadConfigTest, ReadsAFile) {
+  const std::string path = (dir_ / "lsgd.yaml").string();
+  std::ofstream(path) << to_yaml(custom_options());
+  expect_equal(load_config(path), custom_options());
+  std::ofstream(path) << "search:\n  top_n: 5\n";
+  EXPECT_EQ(load_config(path, custom_options()).search.top_n, 5);
+  EXPECT_EQ(load_config(path, custom_options()).segmentation.iterations, 3);
+}
+
+TEST_F(LoadConfigTest, ErrorsNameTheFile) {
+  const std::string path = (dir_ / "bad.yaml").string();
+  std::ofstream(path) << "search:\n  top_n: 0\n";
+  try {
+    load_config(path);
+    ADD_FAILURE() << "no exception";
+  } catch (const InvalidArgument& e) {
+    EXPECT_NE(std::string(e.what()).find(path), std::string::npos) << e.what();
+  }
+}
+
+TEST_F(LoadConfigTest, MissingFileIsIoError) {
+  const std::string path = (dir_ / "missing.yaml").string();
+  try {
+    load_config(path);
+    ADD_FAILURE() << "no exception";
+  } catch (const IoError& e) {
+    EXPECT_NE(std::string(e.what()).find(path), std::string::npos) << e.what();
+  }
+  EXPECT_THROW(load_config(dir_.string()), IoError);  // a folder is not a config file
+}
+
+}  // namespace
+}  // namespace lsgd::io

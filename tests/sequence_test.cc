@@ -1,0 +1,297 @@
+#include "lsgd/io/sequence.h"
+
+#include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <filesystem>
+#include <fstream>
+#include <iterator>
+#include <opencv2/core.hpp>
+#include <opencv2/imgcodecs.hpp>
+#include <string>
+#include <vector>
+
+#include "lsgd/error.h"
+
+namespace lsgd::io {
+namespace {
+
+namespace fs = std::filesystem;
+
+// A fresh folder under LSGD_TEST_TMP per test, removed afterwards.
+class SequenceTest : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
+    dir_ = fs::path(LSGD_TEST_TMP) /
+           (std::string("sequence_") + info->name() + "_" + std::to_string(::getpid()));
+    fs::remove_all(dir_);
+    fs::create_directories(dir_);
+  }
+  void TearDown() override {
+    std::error_code ec;
+    fs::permissions(dir_, fs::perms::owner_all, fs::perm_options::add, ec);
+    fs::remove_all(dir_, ec);
+  }
+
+  std::string path(const std::string& name) const { return (dir_ / name).string(); }
+
+  std::string write(const std::string& name, const std::string& bytes) const {
+    const std::string p = path(name);
+    fs::create_directories(fs::path(p).parent_path());
+    std::ofstream out(p, std::ios::binary);
+    out << bytes;
+    return p;
+  }
+
+  fs::path dir_;
+};
+
+std::string read_bytes(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  return std::string((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+}
+
+cv::Mat random_image(int type) {
+  cv::Mat image(17, 23, type);
+  cv::randu(image, cv::Scalar::all(0), cv::Scalar::all(255));
+  return image;
+}
+
+bool same(const cv::Mat& a, const cv::Mat& b) {
+  return a.size() == b.size() && a.type() == b.type() && cv::norm(a, b, cv::NORM_INF) == 0;
+}
+
+// Expects `call` to throw E with a message containing every one of `parts`.
+template <typename E, typename F>
+void expect_error(F call, const std::vector<std::string>& parts) {
+  try {
+    call();
+    ADD_FAILURE() << "no exception thrown";
+  } catch (const E& e) {
+    for (const std::string& part : parts) {
+      EXPECT_NE(std::string(e.what()).find(part), std::string::npos)
+          << "message '" << e.what() << "' lacks '" << part << "'";
+    }
+  } catch (const std::exception& e) {
+    ADD_FAILURE() << "wrong exception type: " << e.what();
+  }
+}
+
+// ---------------------------------------------------------------- natural_less
+
+TEST(NaturalLess, NumbersCompareByValue) {
+  EXPECT_TRUE(natural_less("2.jpg", "10.jpg"));
+  EXPECT_FALSE(natural_less("10.jpg", "2.jpg"));
+  EXPECT_TRUE(natural_less("img9", "img10"));
+  EXPECT_TRUE(natural_less("img10", "img100"));
+  EXPECT_TRUE(natural_less("img9", "img100"));
+  EXPECT_FALSE(natural_less("img100", "img10"));
+}
+
+TEST(NaturalLess, SortsAMixedList) {
+  std::vector<std::string> names = {"img100.png", "img10.png", "b1",     "img9.png",
+                                    "a10b2",      "a10b10",    "a9",     "img2.png",
+                                    "a10",        "img1.png",  "frame_", "a10b"};
+  std::sort(names.begin(), names.end(), natural_less);
+  const std::vector<std::string> expected = {"a9",       "a10",      "a10b",      "a10b2",
+                                             "a10b10",   "b1",       "frame_",    "img1.png",
+                                             "img2.png", "img9.png", "img10.png", "img100.png"};
+  EXPECT_EQ(names, expected);
+}
+
+TEST(NaturalLess, LeadingZerosCompareByValueThenZeroCount) {
+  EXPECT_TRUE(natural_less("000009.png", "000010.png"));
+  EXPECT_TRUE(natural_less("img001", "img2"));
+  EXPECT_TRUE(natural_less("img9", "img010"));
+  // Same value: a total order that puts fewer leading zeros first.
+  EXPECT_TRUE(natural_less("img1", "img01"));
+  EXPECT_FALSE(natural_less("img01", "img1"));
+  EXPECT_TRUE(natural_less("img01", "img001"));
+  // The value decides before the zero count does.
+  EXPECT_TRUE(natural_less("a01b1", "a1b2"));
+}
+
+TEST(NaturalLess, LongDigitRunsDoNotOverflow) {
+  const std::string big(30, '9');                         // 30 digits
+  const std::string bigger = "1" + std::string(30, '0');  // 31 digits
+  EXPECT_TRUE(natural_less("f" + big, "f" + bigger));
+  EXPECT_FALSE(natural_less("f" + bigger, "f" + big));
+  const std::string a = "1" + std::string(28, '0') + "1";  // 30 digits
+  const std::string b = "1" + std::string(28, '0') + "2";
+  EXPECT_TRUE(natural_less(a, b));
+  EXPECT_TRUE(natural_less("2", std::string(29, '0') + "3"));
+  EXPECT_TRUE(natural_less(std::string(29, '0') + "3", "4"));
+}
+
+TEST(NaturalLess, IsAStrictTotalOrder) {
+  const std::vector<std::string> names = {"",    "a",  "a0", "a00", "a1", "a01", "a1b", "a01a",
+                                          "a10", "a9", "1",  "01",  "b",  "a-1", "a~",  "A1"};
+  for (const std::string& x : names) {
+    EXPECT_FALSE(natural_less(x, x)) << x;
+    for (const std::string& y : names) {
+      if (x == y) continue;
+      EXPECT_NE(natural_less(x, y), natural_less(y, x)) << "'" << x << "' vs '" << y << "'";
+      for (const std::string& z : names) {
+        if (natural_less(x, y) && natural_less(y, z)) {
+          EXPECT_TRUE(natural_less(x, z)) << x << " < " << y << " < " << z;
+        }
+      }
+    }
+  }
+}
+
+// ---------------------------------------------------------------- open_sequence
+
+TEST_F(SequenceTest, FolderListsImagesInNaturalOrder) {
+  for (const char* name : {"10.png", "2.PNG", "1.JpEg", "3.jpg", "4.bmp", "5.pgm", "6.ppm", "7.tif",
+                           "8.TIFF", "notes.txt", "11.png.bak", "noext"}) {
+    write(name, "x");
+  }
+  fs::create_directories(dir_ / "9.png");  // a folder with an image name
+  write("sub/0.png", "x");                 // subfolders are not searched
+  const Sequence seq = open_sequence(dir_.string());
+  EXPECT_EQ(seq.source, dir_.string());
+  std::vector<std::string> expected;
+  for (const char* name :
+       {"1.JpEg", "2.PNG", "3.jpg", "4.bmp", "5.pgm", "6.ppm", "7.tif", "8.TIFF", "10.png"}) {
+    expected.push_back(path(name));
+  }
+  EXPECT_EQ(seq.images, expected);
+}
+
+TEST_F(SequenceTest, ListFileResolvesRelativeAndAbsolutePaths) {
+  const std::string absolute = path("elsewhere/abs.png");
+  const std::string list = write("lists/seq.txt",
+                                 "# a comment\r\n"
+                                 "b.png\r\n"
+                                 "\r\n"
+                                 "   \n"
+                                 "sub/a.png  \r\n"
+                                 "#skipped.png\n"
+                                 "../up.png\n" +
+                                     absolute + "\r\n" + "last.png");  // no final newline
+  const Sequence seq = open_sequence(list);
+  EXPECT_EQ(seq.source, list);
+  const fs::path base = dir_ / "lists";
+  const std::vector<std::string> expected = {
+      (base / "b.png").string(), (base / "sub/a.png").string(), (base / "../up.png").string(),
+      absolute, (base / "last.png").string()};
+  EXPECT_EQ(seq.images, expected);
+}
+
+TEST_F(SequenceTest, ListFileKeepsItsOrderAndDoesNotCheckFiles) {
+  const std::string list = write("seq.txt", "10.png\n2.png\nmissing.png\n");
+  const Sequence seq = open_sequence(list);
+  const std::vector<std::string> expected = {path("10.png"), path("2.png"), path("missing.png")};
+  EXPECT_EQ(seq.images, expected);
+}
+
+TEST_F(SequenceTest, MissingPathIsIoError) {
+  const std::string missing = path("nope");
+  expect_error<IoError>([&] { open_sequence(missing); }, {missing, "does not exist"});
+}
+
+TEST_F(SequenceTest, EmptyFolderIsFormatError) {
+  const std::string empty = path("empty");
+  fs::create_directories(empty);
+  expect_error<FormatError>([&] { open_sequence(empty); }, {empty, "no images", ".png"});
+  write("empty/readme.txt", "not an image");
+  expect_error<FormatError>([&] { open_sequence(empty); }, {empty, "no images"});
+}
+
+TEST_F(SequenceTest, EmptyListIsFormatError) {
+  const std::string empty = write("empty.txt", "");
+  expect_error<FormatError>([&] { open_sequence(empty); }, {empty});
+  const std::string comments = write("comments.txt", "# only\r\n\r\n   \n# comments\n");
+  expect_error<FormatError>([&] { open_sequence(comments); }, {comments});
+}
+
+TEST_F(SequenceTest, SingleImageIsNotASequence) {
+  const std::string image = write("frame.png", "x");
+  expect_error<FormatError>([&] { open_sequence(image); }, {image});
+}
+
+TEST_F(SequenceTest, UnreadableFolderIsIoError) {
+  if (::geteuid() == 0) GTEST_SKIP() << "root reads every folder";
+  const std::string locked = path("locked");
+  fs::create_directories(locked);
+  write("locked/1.png", "x");
+  fs::permissions(locked, fs::perms::none);
+  expect_error<IoError>([&] { open_sequence(locked); }, {locked});
+  fs::permissions(locked, fs::perms::owner_all);
+}
+
+// ---------------------------------------------------------------- read_image
+
+TEST_F(SequenceTest, PngRoundTripsForGrayBgrAndBgra) {
+  for (int type : {CV_8UC1, CV_8UC3, CV_8UC4}) {
+    const cv::Mat image = random_image(type);
+    const std::string p = path("img_" + std::to_string(type) + ".png");
+    ASSERT_TRUE(cv::imwrite(p, image));
+    const cv::Mat back = read_image(p);
+    EXPECT_TRUE(same(back, image)) << "type " << type;
+  }
+}
+
+TEST_F(SequenceTest, ReadsOtherFormats) {
+  const cv::Mat image = random_image(CV_8UC3);
+  for (const char* name : {"a.bmp", "a.ppm", "a.jpg"}) {
+    ASSERT_TRUE(cv::imwrite(path(name), image)) << name;
+    const cv::Mat back = read_image(path(name));
+    EXPECT_EQ(back.size(), image.size()) << name;
+    EXPECT_EQ(back.type(), CV_8UC3) << name;
+  }
+  const cv::Mat gray = random_image(CV_8UC1);
+  ASSERT_TRUE(cv::imwrite(path("g.pgm"), gray));
+  EXPECT_TRUE(same(read_image(path("g.pgm")), gray));
+}
+
+TEST_F(SequenceTest, MissingImageIsIoError) {
+  const std::string missing = path("missing.png");
+  expect_error<IoError>([&] { read_image(missing); }, {missing});
+  expect_error<IoError>([&] { read_image(dir_.string()); }, {dir_.string()});
+}
+
+TEST_F(SequenceTest, ZeroByteFileIsFormatError) {
+  const std::string empty = write("empty.png", "");
+  expect_error<FormatError>([&] { read_image(empty); }, {empty, "empty"});
+}
+
+TEST_F(SequenceTest, TextFileIsFormatError) {
+  const std::string text = write("text.png", "this is not an image\n");
+  expect_error<FormatError>([&] { read_image(text); }, {text, "not a decodable image"});
+}
+
+TEST_F(SequenceTest, TruncatedPngIsFormatError) {
+  const std::string full = path("full.png");
+  ASSERT_TRUE(cv::imwrite(full, random_image(CV_8UC3)));
+  const std::string bytes = read_bytes(full);
+  ASSERT_GT(bytes.size(), 100u);
+  const std::string truncated = write("truncated.png", bytes.substr(0, bytes.size() / 2));
+  expect_error<FormatError>([&] { read_image(truncated); }, {truncated});
+}
+
+TEST_F(SequenceTest, SixteenBitPngIsFormatError) {
+  cv::Mat deep(8, 8, CV_16UC1, cv::Scalar(1000));
+  const std::string p = path("deep.png");
+  ASSERT_TRUE(cv::imwrite(p, deep));
+  ASSERT_EQ(cv::imread(p, cv::IMREAD_UNCHANGED).depth(), CV_16U);  // the file really is 16-bit
+  expect_error<FormatError>([&] { read_image(p); }, {p, "16-bit", "8-bit"});
+}
+
+TEST_F(SequenceTest, FloatTiffIsFormatError) {
+  cv::Mat real(8, 8, CV_32FC1, cv::Scalar(0.5));
+  const std::string p = path("real.tiff");
+  bool written = false;
+  try {
+    written = cv::imwrite(p, real);
+  } catch (const cv::Exception&) {
+  }
+  if (!written) GTEST_SKIP() << "this OpenCV cannot write float TIFF";
+  expect_error<FormatError>([&] { read_image(p); }, {p, "float"});
+}
+
+}  // namespace
+}  // namespace lsgd::io

@@ -1,0 +1,43 @@
+// Loop ground truth: which pairs of frames show the same place.
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+namespace lsgd::eval {
+
+class GroundTruth {
+ public:
+  // A ground truth over `frames` frames (ids 0 .. frames-1) with no loop yet.
+  explicit GroundTruth(std::int64_t frames = 0);
+
+  // Marks frames a and b as the same place (order does not matter; a == b is
+  // ignored). Throws InvalidArgument for ids outside [0, frames).
+  void add(std::int64_t a, std::int64_t b);
+
+  std::int64_t frames() const { return static_cast<std::int64_t>(matches_.size()); }
+  // Number of distinct unordered pairs.
+  std::int64_t pairs() const { return pairs_; }
+  // True when a and b (either order) are a ground-truth loop.
+  bool is_loop(std::int64_t a, std::int64_t b) const;
+  // Earlier frames m < q that show the same place as q, ascending.
+  const std::vector<std::int64_t>& matches(std::int64_t q) const;
+  // True when q has a match m < q - min_gap (q counts as a positive query).
+  bool has_loop(std::int64_t q, std::int64_t min_gap) const;
+
+ private:
+  std::vector<std::vector<std::int64_t>> matches_;  // per query, sorted, unique
+  std::int64_t pairs_ = 0;
+};
+
+// Reads the pairs text format: one "q m" pair of 0-based frame ids per line;
+// blank lines and lines starting with '#' are ignored. Throws IoError when the
+// file cannot be opened and FormatError naming the file and line for a
+// malformed line or an id outside [0, frames).
+GroundTruth read_pairs(const std::string& path, std::int64_t frames);
+
+// Writes the pairs text format ("q m" with q > m, sorted), with a comment line.
+void write_pairs(const GroundTruth& gt, const std::string& path);
+
+}  // namespace lsgd::eval

@@ -1,0 +1,75 @@
+// The strict evaluation protocol of docs/evaluation.md: every query reports at
+// most its best candidate j < i - w; a reported loop is a true positive iff
+// GT(i, j) = 1 and a false positive otherwise, also on queries without any
+// ground-truth loop; a threshold sweep over the scores gives the PR curve.
+#pragma once
+
+#include <cstdint>
+#include <vector>
+
+#include "lsgd/detector.h"
+#include "lsgd/eval/groundtruth.h"
+
+namespace lsgd::eval {
+
+// What a system reported for one query frame.
+struct FrameRecord {
+  std::int64_t frame = -1;
+  std::vector<Candidate> candidates;  // best first; the first one is the reported loop
+  Timings timings;                    // zeros when unknown (detections from another system)
+  double load_ms = 0;                 // reading and decoding the image (outside process())
+};
+
+struct PrPoint {
+  double threshold = 0;  // score threshold: loops with score >= threshold are reported
+  double precision = 0;
+  double recall = 0;
+  std::int64_t true_positives = 0;
+  std::int64_t false_positives = 0;
+};
+
+struct Metrics {
+  std::int64_t frames = 0;     // query frames evaluated
+  std::int64_t positives = 0;  // queries with a GT match j < i - min_gap
+  std::int64_t min_gap = 0;    // temporal window w, frames
+  // Largest recall reached at precision exactly 1 (0 when the best-scored
+  // report is already false), and the threshold that reaches it.
+  double recall_at_100_precision = 0;
+  double threshold_at_100_precision = 0;
+  // Largest precision reached at recall 1 (0 when recall 1 is never reached).
+  double precision_at_100_recall = 0;
+  // Area under the PR curve, step-wise: sum over thresholds of
+  // (R_k - R_{k-1}) * P_k (as scikit-learn's average_precision_score).
+  double average_precision = 0;
+  // Fraction of positive queries with a GT match among their N best candidates.
+  double recall_at_1 = 0;
+  double recall_at_5 = 0;
+  double recall_at_10 = 0;
+  // Per-frame wall time of Detector::process() (conversion, segmentation,
+  // descriptor, search), milliseconds; image decoding is reported apart.
+  double ms_per_frame_median = 0;
+  double ms_per_frame_p95 = 0;
+  double ms_per_frame_mean = 0;
+  // Per-stage medians, milliseconds.
+  double load_ms_median = 0;  // reading + decoding the image file
+  double convert_ms_median = 0;
+  double segment_ms_median = 0;
+  double describe_ms_median = 0;
+  double search_ms_median = 0;
+  // PRT = AP / (1 + omega * t), t = mean seconds per frame, omega = 10 (paper Sec. IV-D).
+  double prt = 0;
+  std::vector<PrPoint> curve;  // one point per distinct score, decreasing threshold
+};
+
+// Scores records (one per query, any order, frame ids in [0, gt.frames()))
+// under the strict protocol with temporal window min_gap. A reported candidate
+// inside the window (j >= i - min_gap) is not allowed and counts as a false
+// positive; candidates beyond the first only matter for Recall@N. Throws
+// InvalidArgument for a frame id outside the ground truth or a repeated frame.
+Metrics evaluate(const std::vector<FrameRecord>& records, const GroundTruth& gt,
+                 std::int64_t min_gap);
+
+// Value at quantile q in [0, 1] by nearest rank (0 for an empty set).
+double percentile(std::vector<double> values, double q);
+
+}  // namespace lsgd::eval

@@ -1,0 +1,89 @@
+#include "lsgd/eval/groundtruth.h"
+
+#include <algorithm>
+#include <fstream>
+#include <sstream>
+
+#include "internal/check.h"
+#include "lsgd/error.h"
+
+namespace lsgd::eval {
+
+using internal::concat;
+
+GroundTruth::GroundTruth(std::int64_t frames) {
+  if (frames < 0) internal::throw_invalid("ground truth frames = ", frames, ": must be >= 0");
+  matches_.resize(static_cast<std::size_t>(frames));
+}
+
+void GroundTruth::add(std::int64_t a, std::int64_t b) {
+  const std::int64_t n = frames();
+  if (a < 0 || a >= n || b < 0 || b >= n) {
+    internal::throw_invalid("ground-truth pair (", a, ", ", b, ") is outside the ", n, " frames");
+  }
+  if (a == b) return;
+  const std::int64_t q = std::max(a, b), m = std::min(a, b);
+  auto& list = matches_[static_cast<std::size_t>(q)];
+  auto it = std::lower_bound(list.begin(), list.end(), m);
+  if (it != list.end() && *it == m) return;
+  list.insert(it, m);
+  ++pairs_;
+}
+
+bool GroundTruth::is_loop(std::int64_t a, std::int64_t b) const {
+  const std::int64_t q = std::max(a, b), m = std::min(a, b);
+  if (m < 0 || q >= frames() || q == m) return false;
+  const auto& list = matches_[static_cast<std::size_t>(q)];
+  return std::binary_search(list.begin(), list.end(), m);
+}
+
+const std::vector<std::int64_t>& GroundTruth::matches(std::int64_t q) const {
+  if (q < 0 || q >= frames()) {
+    internal::throw_invalid("frame ", q, " is outside the ground truth's ", frames(), " frames");
+  }
+  return matches_[static_cast<std::size_t>(q)];
+}
+
+bool GroundTruth::has_loop(std::int64_t q, std::int64_t min_gap) const {
+  const auto& list = matches(q);
+  return !list.empty() && list.front() < q - min_gap;
+}
+
+GroundTruth read_pairs(const std::string& path, std::int64_t frames) {
+  std::ifstream in(path);
+  if (!in) throw IoError(concat("cannot open ground-truth file '", path, "'"));
+  GroundTruth gt(frames);
+  std::string line;
+  for (std::int64_t number = 1; std::getline(in, line); ++number) {
+    const auto first = line.find_first_not_of(" \t\r");
+    if (first == std::string::npos || line[first] == '#') continue;
+    std::istringstream fields(line);
+    long long q = 0, m = 0;
+    std::string rest;
+    if (!(fields >> q >> m) || (fields >> rest)) {
+      throw FormatError(concat(path, ":", number, ": expected two frame ids 'q m', got '", line,
+                               "'"));
+    }
+    if (q < 0 || m < 0 || q >= frames || m >= frames) {
+      throw FormatError(concat(path, ":", number, ": pair (", q, ", ", m,
+                               ") is outside the sequence's ", frames,
+                               " frames (does the ground truth belong to this sequence?)"));
+    }
+    gt.add(q, m);
+  }
+  if (in.bad()) throw IoError(concat("error while reading '", path, "'"));
+  return gt;
+}
+
+void write_pairs(const GroundTruth& gt, const std::string& path) {
+  std::ofstream out(path);
+  if (!out) throw IoError(concat("cannot write ground-truth file '", path, "'"));
+  out << "# lsgd pairs: frames=" << gt.frames() << " pairs=" << gt.pairs()
+      << "; one line per loop: q m (0-based, q > m)\n";
+  for (std::int64_t q = 0; q < gt.frames(); ++q) {
+    for (std::int64_t m : gt.matches(q)) out << q << ' ' << m << '\n';
+  }
+  if (!out) throw IoError(concat("error while writing '", path, "'"));
+}
+
+}  // namespace lsgd::eval

@@ -1,0 +1,137 @@
+#include "lsgd/eval/metrics.h"
+
+#include <algorithm>
+#include <cmath>
+#include <numeric>
+
+#include "internal/check.h"
+
+namespace lsgd::eval {
+namespace {
+
+struct Report {
+  double score;
+  bool correct;
+};
+
+bool correct_loop(const GroundTruth& gt, std::int64_t query, const Candidate& c,
+                  std::int64_t min_gap) {
+  return c.frame >= 0 && c.frame < query - min_gap && gt.is_loop(query, c.frame);
+}
+
+// Fills the threshold sweep, R@100P, P@100R and AP from the best reports.
+void sweep(std::vector<Report> reports, Metrics& m) {
+  std::sort(reports.begin(), reports.end(),
+            [](const Report& a, const Report& b) { return a.score > b.score; });
+  std::int64_t tp = 0, fp = 0;
+  double previous_recall = 0;
+  for (std::size_t i = 0; i < reports.size();) {
+    const double threshold = reports[i].score;
+    for (; i < reports.size() && reports[i].score == threshold; ++i) {
+      (reports[i].correct ? tp : fp) += 1;
+    }
+    PrPoint p;
+    p.threshold = threshold;
+    p.true_positives = tp;
+    p.false_positives = fp;
+    p.precision = static_cast<double>(tp) / static_cast<double>(tp + fp);
+    p.recall = m.positives > 0 ? static_cast<double>(tp) / static_cast<double>(m.positives) : 0.0;
+    m.average_precision += (p.recall - previous_recall) * p.precision;
+    previous_recall = p.recall;
+    if (fp == 0 && p.recall > m.recall_at_100_precision) {
+      m.recall_at_100_precision = p.recall;
+      m.threshold_at_100_precision = threshold;
+    }
+    if (m.positives > 0 && tp == m.positives) {
+      m.precision_at_100_recall = std::max(m.precision_at_100_recall, p.precision);
+    }
+    m.curve.push_back(p);
+  }
+}
+
+void fill_recall_at_n(const std::vector<FrameRecord>& records, const GroundTruth& gt,
+                      std::int64_t min_gap, Metrics& m) {
+  std::int64_t hits[3] = {0, 0, 0};
+  const std::size_t ns[3] = {1, 5, 10};
+  for (const auto& r : records) {
+    if (!gt.has_loop(r.frame, min_gap)) continue;
+    for (int k = 0; k < 3; ++k) {
+      const std::size_t n = std::min(ns[k], r.candidates.size());
+      for (std::size_t c = 0; c < n; ++c) {
+        if (correct_loop(gt, r.frame, r.candidates[c], min_gap)) {
+          ++hits[k];
+          break;
+        }
+      }
+    }
+  }
+  if (m.positives == 0) return;
+  const double p = static_cast<double>(m.positives);
+  m.recall_at_1 = hits[0] / p;
+  m.recall_at_5 = hits[1] / p;
+  m.recall_at_10 = hits[2] / p;
+}
+
+void fill_timings(const std::vector<FrameRecord>& records, Metrics& m) {
+  std::vector<double> total, load, convert, segment, describe, search;
+  for (const auto& r : records) {
+    load.push_back(r.load_ms);
+    total.push_back(r.timings.total_ms);
+    convert.push_back(r.timings.convert_ms);
+    segment.push_back(r.timings.segment_ms);
+    describe.push_back(r.timings.describe_ms);
+    search.push_back(r.timings.search_ms);
+  }
+  m.ms_per_frame_median = percentile(total, 0.5);
+  m.ms_per_frame_p95 = percentile(total, 0.95);
+  m.ms_per_frame_mean =
+      total.empty() ? 0.0 : std::accumulate(total.begin(), total.end(), 0.0) / total.size();
+  m.load_ms_median = percentile(load, 0.5);
+  m.convert_ms_median = percentile(convert, 0.5);
+  m.segment_ms_median = percentile(segment, 0.5);
+  m.describe_ms_median = percentile(describe, 0.5);
+  m.search_ms_median = percentile(search, 0.5);
+  m.prt = m.average_precision / (1.0 + 10.0 * m.ms_per_frame_mean * 1e-3);
+}
+
+}  // namespace
+
+double percentile(std::vector<double> values, double q) {
+  if (values.empty()) return 0.0;
+  q = std::clamp(q, 0.0, 1.0);
+  const std::size_t rank = static_cast<std::size_t>(std::ceil(q * values.size()));
+  const std::size_t index = rank == 0 ? 0 : rank - 1;
+  std::nth_element(values.begin(), values.begin() + static_cast<std::ptrdiff_t>(index),
+                   values.end());
+  return values[index];
+}
+
+Metrics evaluate(const std::vector<FrameRecord>& records, const GroundTruth& gt,
+                 std::int64_t min_gap) {
+  if (min_gap < 0) internal::throw_invalid("evaluate: min_gap = ", min_gap, " must be >= 0");
+  Metrics m;
+  m.min_gap = min_gap;
+  m.frames = static_cast<std::int64_t>(records.size());
+  std::vector<char> seen(static_cast<std::size_t>(gt.frames()), 0);
+  std::vector<Report> reports;
+  for (const auto& r : records) {
+    if (r.frame < 0 || r.frame >= gt.frames()) {
+      internal::throw_invalid("evaluate: frame ", r.frame, " is outside the ground truth's ",
+                              gt.frames(), " frames");
+    }
+    if (seen[static_cast<std::size_t>(r.frame)]++) {
+      internal::throw_invalid("evaluate: frame ", r.frame, " is reported twice");
+    }
+    if (gt.has_loop(r.frame, min_gap)) ++m.positives;
+    if (!r.candidates.empty()) {
+      const Candidate& best = r.candidates.front();
+      reports.push_back({best.score, correct_loop(gt, r.frame, best, min_gap)});
+    }
+  }
+  sweep(std::move(reports), m);
+  fill_recall_at_n(records, gt, min_gap, m);
+  fill_timings(records, m);
+  return m;
+}
+
+}  // namespace lsgd::eval

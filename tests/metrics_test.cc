@@ -1,0 +1,143 @@
+// Tests of the strict evaluation protocol (eval/metrics.h), on hand-made
+// reports whose metrics can be computed by hand.
+#include "lsgd/eval/metrics.h"
+
+#include <gtest/gtest.h>
+
+#include "lsgd/error.h"
+
+using lsgd::Candidate;
+using lsgd::eval::FrameRecord;
+using lsgd::eval::GroundTruth;
+
+namespace {
+
+FrameRecord report(std::int64_t frame, std::vector<Candidate> candidates, double ms = 1.0) {
+  FrameRecord r;
+  r.frame = frame;
+  r.candidates = std::move(candidates);
+  r.timings.total_ms = ms;
+  return r;
+}
+
+// 10 frames, window 2. Queries 5, 6, 7 have GT loops with frames 0, 1, 2.
+GroundTruth small_gt() {
+  GroundTruth gt(10);
+  gt.add(5, 0);
+  gt.add(6, 1);
+  gt.add(7, 2);
+  return gt;
+}
+
+TEST(Evaluate, CountsPositivesOnlyOutsideTheWindow) {
+  GroundTruth gt(10);
+  gt.add(5, 0);
+  gt.add(6, 5);  // inside any window >= 1: not a positive
+  std::vector<FrameRecord> records;
+  for (int i = 0; i < 10; ++i) records.push_back(report(i, {}));
+  EXPECT_EQ(lsgd::eval::evaluate(records, gt, 2).positives, 1);
+  EXPECT_EQ(lsgd::eval::evaluate(records, gt, 0).positives, 2);
+  EXPECT_EQ(lsgd::eval::evaluate(records, gt, 5).positives, 0);
+}
+
+TEST(Evaluate, PerfectRankingGivesFullRecallAtFullPrecision) {
+  std::vector<FrameRecord> r = {report(5, {{0, 0.9}}), report(6, {{1, 0.8}}),
+                                report(7, {{2, 0.85}}), report(8, {{3, 0.5}}),
+                                report(9, {{4, 0.4}})};
+  const auto m = lsgd::eval::evaluate(r, small_gt(), 2);
+  EXPECT_EQ(m.positives, 3);
+  EXPECT_DOUBLE_EQ(m.recall_at_100_precision, 1.0);
+  EXPECT_DOUBLE_EQ(m.threshold_at_100_precision, 0.8);
+  EXPECT_DOUBLE_EQ(m.average_precision, 1.0);
+  EXPECT_DOUBLE_EQ(m.precision_at_100_recall, 1.0);
+  EXPECT_DOUBLE_EQ(m.recall_at_1, 1.0);
+}
+
+TEST(Evaluate, FalsePositivesOnLoopFreeQueriesCount) {
+  // The best score is a false loop on query 9, which has no GT loop at all:
+  // the reference evaluator would not see it; the strict protocol does.
+  std::vector<FrameRecord> r = {report(5, {{0, 0.9}}), report(6, {{1, 0.8}}),
+                                report(7, {{3, 0.7}}), report(9, {{4, 0.95}})};
+  const auto m = lsgd::eval::evaluate(r, small_gt(), 2);
+  EXPECT_DOUBLE_EQ(m.recall_at_100_precision, 0.0);
+  // Sweep: 0.95 F (P 0, R 0), 0.9 T (1/2, 1/3), 0.8 T (2/3, 2/3), 0.7 F (2/4, 2/3).
+  ASSERT_EQ(m.curve.size(), 4u);
+  EXPECT_DOUBLE_EQ(m.curve[2].precision, 2.0 / 3.0);
+  EXPECT_DOUBLE_EQ(m.curve[2].recall, 2.0 / 3.0);
+  EXPECT_DOUBLE_EQ(m.average_precision, (1.0 / 3.0) * 0.5 + (1.0 / 3.0) * (2.0 / 3.0));
+  EXPECT_DOUBLE_EQ(m.precision_at_100_recall, 0.0);  // recall 1 never reached
+  EXPECT_NEAR(m.recall_at_1, 2.0 / 3.0, 1e-12);
+}
+
+TEST(Evaluate, RecallAt100PrecisionStopsAtTheFirstFalsePositive) {
+  std::vector<FrameRecord> r = {report(5, {{0, 0.9}}), report(6, {{4, 0.8}}),
+                                report(7, {{2, 0.7}})};
+  const auto m = lsgd::eval::evaluate(r, small_gt(), 2);
+  EXPECT_DOUBLE_EQ(m.recall_at_100_precision, 1.0 / 3.0);
+  EXPECT_DOUBLE_EQ(m.threshold_at_100_precision, 0.9);
+}
+
+TEST(Evaluate, TiedScoresAreDecidedTogether) {
+  // A true and a false report with the same score: no threshold separates them.
+  std::vector<FrameRecord> r = {report(5, {{0, 0.9}}), report(6, {{3, 0.9}})};
+  const auto m = lsgd::eval::evaluate(r, small_gt(), 2);
+  ASSERT_EQ(m.curve.size(), 1u);
+  EXPECT_DOUBLE_EQ(m.recall_at_100_precision, 0.0);
+  EXPECT_DOUBLE_EQ(m.curve[0].precision, 0.5);
+}
+
+TEST(Evaluate, CandidateInsideTheWindowIsAFalsePositive) {
+  GroundTruth gt(10);
+  gt.add(5, 0);
+  gt.add(5, 4);  // a GT neighbour inside the window
+  std::vector<FrameRecord> r = {report(5, {{4, 0.9}})};
+  const auto m = lsgd::eval::evaluate(r, gt, 2);
+  EXPECT_EQ(m.positives, 1);
+  EXPECT_EQ(m.curve.at(0).false_positives, 1);
+  EXPECT_DOUBLE_EQ(m.recall_at_1, 0.0);
+}
+
+TEST(Evaluate, RecallAtNLooksAtTheNBestCandidates) {
+  std::vector<Candidate> c;
+  for (int j = 1; j <= 6; ++j) c.push_back({j, 1.0 - 0.1 * j});
+  GroundTruth gt(20);
+  gt.add(15, 6);  // sixth candidate
+  gt.add(16, 2);  // second candidate
+  std::vector<FrameRecord> r = {report(15, c), report(16, c)};
+  const auto m = lsgd::eval::evaluate(r, gt, 2);
+  EXPECT_DOUBLE_EQ(m.recall_at_1, 0.0);
+  EXPECT_DOUBLE_EQ(m.recall_at_5, 0.5);
+  EXPECT_DOUBLE_EQ(m.recall_at_10, 1.0);
+}
+
+TEST(Evaluate, TimingsAndPrt) {
+  std::vector<FrameRecord> r;
+  for (int i = 0; i < 10; ++i) r.push_back(report(i, {}, i + 1.0));  // 1..10 ms
+  r[3].timings.segment_ms = 7;
+  const auto m = lsgd::eval::evaluate(r, small_gt(), 2);
+  EXPECT_DOUBLE_EQ(m.ms_per_frame_median, 5.0);
+  EXPECT_DOUBLE_EQ(m.ms_per_frame_p95, 10.0);
+  EXPECT_DOUBLE_EQ(m.ms_per_frame_mean, 5.5);
+  EXPECT_DOUBLE_EQ(m.segment_ms_median, 0.0);
+  EXPECT_DOUBLE_EQ(m.prt, 0.0);  // AP 0 without reports
+}
+
+TEST(Evaluate, EmptyAndInvalidInput) {
+  const auto m = lsgd::eval::evaluate({}, small_gt(), 2);
+  EXPECT_EQ(m.frames, 0);
+  EXPECT_DOUBLE_EQ(m.average_precision, 0.0);
+  EXPECT_THROW(lsgd::eval::evaluate({report(10, {})}, small_gt(), 2), lsgd::InvalidArgument);
+  EXPECT_THROW(lsgd::eval::evaluate({report(3, {}), report(3, {})}, small_gt(), 2),
+               lsgd::InvalidArgument);
+  EXPECT_THROW(lsgd::eval::evaluate({}, small_gt(), -1), lsgd::InvalidArgument);
+}
+
+TEST(Percentile, NearestRank) {
+  EXPECT_DOUBLE_EQ(lsgd::eval::percentile({}, 0.5), 0.0);
+  EXPECT_DOUBLE_EQ(lsgd::eval::percentile({3, 1, 2}, 0.5), 2.0);
+  EXPECT_DOUBLE_EQ(lsgd::eval::percentile({3, 1, 2}, 0.0), 1.0);
+  EXPECT_DOUBLE_EQ(lsgd::eval::percentile({3, 1, 2}, 1.0), 3.0);
+  EXPECT_DOUBLE_EQ(lsgd::eval::percentile({4, 1, 2, 3}, 0.5), 2.0);
+}
+
+}  // namespace

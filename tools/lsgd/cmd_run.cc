@@ -1,0 +1,54 @@
+// lsgd run --sequence PATH [--config FILE] [--output FILE]
+#include <iostream>
+#include <memory>
+
+#include <CLI/CLI.hpp>
+
+#include "commands.h"
+#include "common.h"
+#include "lsgd/eval/runner.h"
+#include "lsgd/io/sequence.h"
+
+namespace lsgd::cli {
+namespace {
+
+struct RunArgs {
+  std::string sequence;
+  std::string output;
+  DetectorFlags detector;
+};
+
+void run(const RunArgs& args) {
+  const DetectorOptions options = args.detector.resolve();
+  const io::Sequence sequence = io::open_sequence(args.sequence);
+  const eval::FrameSource source = eval::sequence_source(sequence);
+  CsvWriter csv(args.output);
+  Detector detector(options);
+  Progress progress(source.frames, "run");
+  std::int64_t loops = 0;
+  double total_ms = 0;
+  const auto records = eval::run_detector(detector, source, [&](const Result& r, double) {
+    csv.write(r, source.name(r.frame));
+    loops += r.loop ? 1 : 0;
+    total_ms += r.timings.total_ms;
+    progress.update(r.frame + 1, total_ms / static_cast<double>(r.frame + 1));
+  });
+  std::cerr << "processed " << records.size() << " frames, " << loops << " loops, "
+            << total_ms / static_cast<double>(records.size()) << " ms/frame mean"
+            << (args.output.empty() ? "" : ", rows in " + args.output) << "\n";
+}
+
+}  // namespace
+
+void register_run(CLI::App& app) {
+  auto args = std::make_shared<RunArgs>();
+  CLI::App* cmd = app.add_subcommand("run", "detect loops in an image sequence, one CSV row per frame");
+  cmd->add_option("--sequence", args->sequence,
+                  "folder of images (natural order) or a text file listing image paths")
+      ->required();
+  cmd->add_option("--output", args->output, "CSV file to write (default: standard output)");
+  args->detector.add_to(*cmd);
+  cmd->callback([args] { run(*args); });
+}
+
+}  // namespace lsgd::cli

@@ -1,0 +1,137 @@
+#include "common.h"
+
+#include <unistd.h>
+
+#include <chrono>
+#include <cstdio>
+#include <iomanip>
+#include <iostream>
+
+#include <CLI/CLI.hpp>
+
+#include "lsgd/error.h"
+#include "lsgd/io/config.h"
+
+namespace lsgd::cli {
+namespace {
+
+std::int64_t now_ns() {
+  return std::chrono::duration_cast<std::chrono::nanoseconds>(
+             std::chrono::steady_clock::now().time_since_epoch())
+      .count();
+}
+
+}  // namespace
+
+void DetectorFlags::add_to(CLI::App& command) {
+  command.add_option("--config", config, "YAML detector configuration (unknown keys are errors)")
+      ->check(CLI::ExistingFile);
+  command.add_option("--mode", mode, "search mode, overrides search.mode")
+      ->check(CLI::IsMember({"exhaustive", "nodes"}));
+  command.add_option("--min-gap", min_gap,
+                     "temporal window in frames: only frames j < i - W are candidates");
+  command.add_option("--threshold", threshold, "loop decision threshold on the score, in [0, 1]");
+}
+
+DetectorOptions DetectorFlags::resolve() const {
+  DetectorOptions options = config.empty() ? DetectorOptions{} : io::load_config(config);
+  if (!mode.empty()) options.search.mode = parse_search_mode(mode.c_str());
+  if (min_gap) options.search.min_gap = *min_gap;
+  if (threshold) options.decision.threshold = *threshold;
+  options.check();
+  return options;
+}
+
+Progress::Progress(std::int64_t total, std::string label)
+    : total_(total), label_(std::move(label)), enabled_(isatty(STDERR_FILENO) == 1) {}
+
+Progress::~Progress() {
+  if (enabled_ && last_draw_ns_ != 0) std::fputs("\r\033[K", stderr);
+}
+
+void Progress::update(std::int64_t done, double ms_per_frame) {
+  if (!enabled_) return;
+  const std::int64_t now = now_ns();
+  if (done < total_ && now - last_draw_ns_ < 100'000'000) return;  // redraw at most 10 Hz
+  last_draw_ns_ = now;
+  constexpr int kWidth = 30;
+  const int filled = total_ > 0 ? static_cast<int>(kWidth * done / total_) : kWidth;
+  std::fprintf(stderr, "\r%s [%s%s] %lld/%lld frames, %.2f ms/frame\033[K", label_.c_str(),
+               std::string(filled, '#').c_str(), std::string(kWidth - filled, '.').c_str(),
+               static_cast<long long>(done), static_cast<long long>(total_), ms_per_frame);
+  std::fflush(stderr);
+}
+
+CsvWriter::CsvWriter(const std::string& path) : out_(&std::cout) {
+  if (!path.empty()) {
+    file_ = std::make_unique<std::ofstream>(path);
+    if (!*file_) throw IoError("cannot write output file '" + path + "'");
+    out_ = file_.get();
+  }
+  *out_ << "frame,image,loop_frame,candidate_frame,score,ms\n" << std::flush;
+}
+
+void CsvWriter::write(const Result& r, const std::string& image) {
+  std::string quoted = image;
+  if (quoted.find_first_of(",\"\n") != std::string::npos) {
+    std::string escaped = "\"";
+    for (char c : image) escaped += c == '"' ? std::string("\"\"") : std::string(1, c);
+    quoted = escaped + "\"";
+  }
+  *out_ << r.frame << ',' << quoted << ',' << (r.loop ? r.best.frame : -1) << ',' << r.best.frame
+        << ',' << std::setprecision(9) << r.best.score << ',' << std::setprecision(4)
+        << r.timings.total_ms << '\n'
+        << std::flush;
+  if (!*out_) throw IoError("error while writing the CSV output");
+}
+
+nlohmann::json metrics_json(const eval::Metrics& m) {
+  nlohmann::json j;
+  j["protocol"] = "strict";
+  j["frames"] = m.frames;
+  j["positives"] = m.positives;
+  j["min_gap"] = m.min_gap;
+  j["recall_at_100_precision"] = m.recall_at_100_precision;
+  j["threshold_at_100_precision"] = m.threshold_at_100_precision;
+  j["precision_at_100_recall"] = m.precision_at_100_recall;
+  j["average_precision"] = m.average_precision;
+  j["recall_at_1"] = m.recall_at_1;
+  j["recall_at_5"] = m.recall_at_5;
+  j["recall_at_10"] = m.recall_at_10;
+  j["prt"] = m.prt;
+  j["ms_per_frame_median"] = m.ms_per_frame_median;
+  j["ms_per_frame_p95"] = m.ms_per_frame_p95;
+  j["ms_per_frame_mean"] = m.ms_per_frame_mean;
+  j["stage_ms_median"] = {{"load", m.load_ms_median},         {"convert", m.convert_ms_median},
+                          {"segment", m.segment_ms_median},   {"describe", m.describe_ms_median},
+                          {"search", m.search_ms_median}};
+  nlohmann::json curve = nlohmann::json::array();
+  for (const auto& p : m.curve) curve.push_back({p.threshold, p.precision, p.recall});
+  j["pr_curve"] = {{"columns", {"threshold", "precision", "recall"}}, {"points", curve}};
+  return j;
+}
+
+void print_metrics(const eval::Metrics& m, std::int64_t nodes, std::ostream& out) {
+  out << std::fixed << std::setprecision(3);
+  out << "frames " << m.frames << ", positives " << m.positives << ", min gap " << m.min_gap
+      << " (strict protocol)\n"
+      << "  R@100P " << m.recall_at_100_precision << "  (threshold "
+      << m.threshold_at_100_precision << ")\n"
+      << "  AP     " << m.average_precision << "\n"
+      << "  R@1    " << m.recall_at_1 << "   R@5 " << m.recall_at_5 << "   R@10 " << m.recall_at_10
+      << "\n"
+      << "  time   " << std::setprecision(2) << m.ms_per_frame_median << " ms/frame median, "
+      << m.ms_per_frame_p95 << " p95 (segment " << m.segment_ms_median << ", describe "
+      << m.describe_ms_median << ", search " << m.search_ms_median << ")\n"
+      << "  nodes  " << nodes << "\n";
+  out.unsetf(std::ios::floatfield);
+}
+
+void write_json(const nlohmann::json& json, const std::string& path) {
+  std::ofstream out(path);
+  if (!out) throw IoError("cannot write JSON file '" + path + "'");
+  out << json.dump(2) << '\n';
+  if (!out) throw IoError("error while writing JSON file '" + path + "'");
+}
+
+}  // namespace lsgd::cli

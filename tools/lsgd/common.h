@@ -1,0 +1,65 @@
+// Pieces shared by the lsgd subcommands: options from YAML plus flags, a
+// progress bar, the CSV writer and the evaluation summary (text and JSON).
+#pragma once
+
+#include <cstdint>
+#include <fstream>
+#include <memory>
+#include <optional>
+#include <string>
+
+#include <nlohmann/json.hpp>
+
+#include "lsgd/detector.h"
+#include "lsgd/eval/metrics.h"
+
+namespace CLI {
+class App;
+}
+
+namespace lsgd::cli {
+
+// Flags every detector-running subcommand accepts on top of --config.
+struct DetectorFlags {
+  std::string config;                  // YAML file; empty: defaults
+  std::string mode;                    // exhaustive | nodes; empty: from config
+  std::optional<std::int64_t> min_gap;  // overrides search.min_gap
+  std::optional<double> threshold;      // overrides decision.threshold
+
+  void add_to(CLI::App& command);
+  // Defaults, then the config file, then the flags; validated.
+  DetectorOptions resolve() const;
+};
+
+// A one-line progress bar on stderr, drawn only when stderr is a terminal.
+class Progress {
+ public:
+  Progress(std::int64_t total, std::string label);
+  ~Progress();
+  void update(std::int64_t done, double ms_per_frame);
+
+ private:
+  std::int64_t total_;
+  std::string label_;
+  bool enabled_;
+  std::int64_t last_draw_ns_ = 0;
+};
+
+// Writes `lsgd run` rows: frame,image,loop_frame,candidate_frame,score,ms.
+// Each row is flushed, so an error later in the run loses nothing written.
+class CsvWriter {
+ public:
+  explicit CsvWriter(const std::string& path);  // empty path: stdout
+  void write(const Result& result, const std::string& image);
+
+ private:
+  std::unique_ptr<std::ofstream> file_;
+  std::ostream* out_;
+};
+
+nlohmann::json metrics_json(const eval::Metrics& m);
+// Prints the headline numbers of an evaluation, one per line.
+void print_metrics(const eval::Metrics& m, std::int64_t nodes, std::ostream& out);
+void write_json(const nlohmann::json& json, const std::string& path);
+
+}  // namespace lsgd::cli

@@ -11,34 +11,13 @@
 #include "lsgd/error.h"
 #include "lsgd/image.h"
 #include "lsgd/segmentation.h"
+#include "test_util.h"
 
 namespace lsgd {
 namespace {
 
-std::uint64_t splitmix64(std::uint64_t& state) {
-  std::uint64_t z = (state += 0x9E3779B97F4A7C15ull);
-  z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
-  z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
-  return z ^ (z >> 31);
-}
-
-GrayImage random_image(int width, int height, std::uint64_t seed) {
-  GrayImage g;
-  g.width = width;
-  g.height = height;
-  g.pixels.resize(static_cast<std::size_t>(width) * height);
-  std::uint64_t s = seed;
-  for (auto& p : g.pixels) p = static_cast<std::uint8_t>(splitmix64(s) & 0xFF);
-  return g;
-}
-
-GrayImage uniform_image(int width, int height, std::uint8_t value) {
-  GrayImage g;
-  g.width = width;
-  g.height = height;
-  g.pixels.assign(static_cast<std::size_t>(width) * height, value);
-  return g;
-}
+using test::random_image;
+using test::uniform_image;
 
 Segmentation segment(const GrayImage& image, int superpixel_size) {
   SegmentationOptions o;

@@ -14,16 +14,13 @@
 #include <opencv2/imgproc.hpp>
 
 #include "lsgd/error.h"
+#include "test_util.h"
 
 namespace lsgd {
 namespace {
 
-std::uint64_t splitmix64(std::uint64_t& state) {
-  std::uint64_t z = (state += 0x9E3779B97F4A7C15ull);
-  z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
-  z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
-  return z ^ (z >> 31);
-}
+using test::message_of;
+using test::splitmix64;
 
 // Random 8-bit image of the given type (CV_8UC1/3/4), deterministic per seed.
 cv::Mat random_mat(int rows, int cols, int type, std::uint64_t seed) {
@@ -53,6 +50,12 @@ void expect_equal(const GrayImage& gray, const cv::Mat& expected) {
   EXPECT_EQ(mismatches, 0);
 }
 
+// A view of the pixels of `m` (which must outlive it), read as `format`.
+ImageView view_of_mat(const cv::Mat& m, PixelFormat format) {
+  return ImageView{m.ptr<std::uint8_t>(0), m.cols, m.rows, static_cast<std::ptrdiff_t>(m.step[0]),
+                   format};
+}
+
 // Copies `src` row by row into a buffer whose rows are `stride` bytes apart;
 // the padding bytes are filled with garbage that must never be read.
 std::vector<std::uint8_t> padded_copy(const cv::Mat& src, std::size_t stride) {
@@ -60,18 +63,6 @@ std::vector<std::uint8_t> padded_copy(const cv::Mat& src, std::size_t stride) {
   std::vector<std::uint8_t> buffer(stride * src.rows, 0xA5);
   for (int y = 0; y < src.rows; ++y) std::memcpy(&buffer[y * stride], src.ptr(y), row_bytes);
   return buffer;
-}
-
-template <typename F>
-std::string invalid_message(F&& f) {
-  try {
-    f();
-  } catch (const InvalidArgument& e) {
-    return e.what();
-  } catch (...) {
-    return "<other exception>";
-  }
-  return "<no exception>";
 }
 
 TEST(ImageMat, GrayIsCopiedUnchanged) {
@@ -151,9 +142,7 @@ TEST(ImageMat, SingleColumnAndSingleRowRoi) {
 
 TEST(ImageView, GrayViewEqualsMat) {
   const cv::Mat m = random_mat(19, 23, CV_8UC1, 9);
-  ImageView v{m.ptr<std::uint8_t>(0), m.cols, m.rows, static_cast<std::ptrdiff_t>(m.step[0]),
-              PixelFormat::kGray8};
-  expect_equal(to_gray(v), m);
+  expect_equal(to_gray(view_of_mat(m, PixelFormat::kGray8)), m);
 }
 
 TEST(ImageView, PaddedStrideEqualsUnpadded) {
@@ -183,35 +172,25 @@ TEST(ImageView, BgrViewMatchesCvtColor) {
   const cv::Mat m = random_mat(17, 26, CV_8UC3, 11);
   cv::Mat expected;
   cv::cvtColor(m, expected, cv::COLOR_BGR2GRAY);
-  const ImageView v{m.ptr<std::uint8_t>(0), m.cols, m.rows, static_cast<std::ptrdiff_t>(m.step[0]),
-                    PixelFormat::kBgr8};
-  expect_equal(to_gray(v), expected);
+  expect_equal(to_gray(view_of_mat(m, PixelFormat::kBgr8)), expected);
 }
 
 TEST(ImageView, BgraViewMatchesCvtColor) {
   const cv::Mat m = random_mat(17, 26, CV_8UC4, 12);
   cv::Mat expected;
   cv::cvtColor(m, expected, cv::COLOR_BGRA2GRAY);
-  const ImageView v{m.ptr<std::uint8_t>(0), m.cols, m.rows, static_cast<std::ptrdiff_t>(m.step[0]),
-                    PixelFormat::kBgra8};
-  expect_equal(to_gray(v), expected);
+  expect_equal(to_gray(view_of_mat(m, PixelFormat::kBgra8)), expected);
 }
 
 TEST(ImageView, RgbEqualsBgrWithSwappedChannels) {
   const cv::Mat bgr = random_mat(25, 38, CV_8UC3, 13);
   cv::Mat rgb;
   cv::cvtColor(bgr, rgb, cv::COLOR_BGR2RGB);
-  const ImageView bgr_view{bgr.ptr<std::uint8_t>(0), bgr.cols, bgr.rows,
-                           static_cast<std::ptrdiff_t>(bgr.step[0]), PixelFormat::kBgr8};
-  const ImageView rgb_view{rgb.ptr<std::uint8_t>(0), rgb.cols, rgb.rows,
-                           static_cast<std::ptrdiff_t>(rgb.step[0]), PixelFormat::kRgb8};
-  const GrayImage a = to_gray(bgr_view);
-  const GrayImage b = to_gray(rgb_view);
+  const GrayImage a = to_gray(view_of_mat(bgr, PixelFormat::kBgr8));
+  const GrayImage b = to_gray(view_of_mat(rgb, PixelFormat::kRgb8));
   EXPECT_EQ(a.pixels, b.pixels);
   // And reading the BGR buffer as RGB is a different image (the weights differ).
-  const ImageView wrong{bgr.ptr<std::uint8_t>(0), bgr.cols, bgr.rows,
-                        static_cast<std::ptrdiff_t>(bgr.step[0]), PixelFormat::kRgb8};
-  EXPECT_NE(to_gray(wrong).pixels, a.pixels);
+  EXPECT_NE(to_gray(view_of_mat(bgr, PixelFormat::kRgb8)).pixels, a.pixels);
 }
 
 TEST(ImageView, ViewOfRoundTrips) {
@@ -248,9 +227,9 @@ TEST(ImageReject, EmptyMat) {
 TEST(ImageReject, SixteenBitMentions16Bit) {
   const cv::Mat m(10, 10, CV_16UC1, cv::Scalar(1000));
   EXPECT_THROW(to_gray(m), InvalidArgument);
-  const std::string msg = invalid_message([&] { to_gray(m); });
+  const std::string msg = message_of<InvalidArgument>([&] { to_gray(m); });
   EXPECT_NE(msg.find("16-bit"), std::string::npos) << msg;
-  const std::string msg3 = invalid_message([&] { to_gray(cv::Mat(4, 4, CV_16UC3)); });
+  const std::string msg3 = message_of<InvalidArgument>([&] { to_gray(cv::Mat(4, 4, CV_16UC3)); });
   EXPECT_NE(msg3.find("16-bit"), std::string::npos) << msg3;
 }
 
@@ -260,14 +239,14 @@ TEST(ImageReject, FloatAndSigned) {
   EXPECT_THROW(to_gray(cv::Mat(10, 10, CV_32FC3)), InvalidArgument);
   EXPECT_THROW(to_gray(cv::Mat(10, 10, CV_16SC1)), InvalidArgument);
   EXPECT_THROW(to_gray(cv::Mat(10, 10, CV_8SC1)), InvalidArgument);
-  const std::string msg = invalid_message([] { to_gray(cv::Mat(3, 3, CV_32FC1)); });
+  const std::string msg = message_of<InvalidArgument>([] { to_gray(cv::Mat(3, 3, CV_32FC1)); });
   EXPECT_NE(msg.find("float"), std::string::npos) << msg;
 }
 
 TEST(ImageReject, TwoChannels) {
   const cv::Mat m(10, 10, CV_8UC2, cv::Scalar(1, 2));
   EXPECT_THROW(to_gray(m), InvalidArgument);
-  const std::string msg = invalid_message([&] { to_gray(m); });
+  const std::string msg = message_of<InvalidArgument>([&] { to_gray(m); });
   EXPECT_NE(msg.find("2 channels"), std::string::npos) << msg;
 }
 

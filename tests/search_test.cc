@@ -16,16 +16,13 @@
 #include "lsgd/error.h"
 #include "lsgd/frame_store.h"
 #include "lsgd/similarity.h"
+#include "test_util.h"
 
 namespace lsgd {
 namespace {
 
-std::uint64_t splitmix64(std::uint64_t& state) {
-  std::uint64_t z = (state += 0x9E3779B97F4A7C15ull);
-  z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
-  z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
-  return z ^ (z >> 31);
-}
+using test::message_of;
+using test::splitmix64;
 
 // A 1-cell descriptor on a line: `mass - t` pixels in bin 0 and `t` in bin 1.
 // With the L1 metric, sim(t_a, t_b) = 1 - 2 |t_a - t_b| / (2 mass) = 1 - |t_a - t_b| / mass.
@@ -60,18 +57,6 @@ FrameStore store_of(const std::vector<Descriptor>& frames) {
   FrameStore store;
   for (const Descriptor& d : frames) store.add(d);
   return store;
-}
-
-template <typename F>
-std::string invalid_message(F&& f) {
-  try {
-    f();
-  } catch (const InvalidArgument& e) {
-    return e.what();
-  } catch (...) {
-    return "<other exception>";
-  }
-  return "<no exception>";
 }
 
 // ---- better()
@@ -226,7 +211,7 @@ TEST(SearchOptions, EachFieldOutOfRangeNamesTheField) {
     c.mutate(o);
     SCOPED_TRACE(c.field);
     EXPECT_THROW(o.check(), InvalidArgument);
-    const std::string msg = invalid_message([&] { o.check(); });
+    const std::string msg = message_of<InvalidArgument>([&] { o.check(); });
     EXPECT_NE(msg.find(c.field), std::string::npos) << msg;
   }
 }
@@ -269,7 +254,8 @@ TEST(SearchMode, ParseAndToString) {
   EXPECT_THROW(parse_search_mode(""), InvalidArgument);
   EXPECT_THROW(parse_search_mode("Nodes"), InvalidArgument);
   EXPECT_THROW(parse_search_mode("dynamic"), InvalidArgument);
-  EXPECT_NE(invalid_message([] { parse_search_mode("foo"); }).find("foo"), std::string::npos);
+  EXPECT_NE(message_of<InvalidArgument>([] { parse_search_mode("foo"); }).find("foo"),
+            std::string::npos);
 }
 
 // ---- dynamic nodes
@@ -293,6 +279,20 @@ std::vector<Step> run_nodes(DynamicNodes& nodes, const std::vector<Descriptor>& 
     steps.push_back(step);
   }
   return steps;
+}
+
+// Feeds `frames` to dynamic nodes with zero thresholds (alpha = beta = 0) and
+// the reference metric, whose scores are positive: each frame joins the first
+// node whose first frame lies outside the window `min_gap`.
+std::vector<Step> run_zero_thresholds(DynamicNodes& nodes, const std::vector<Descriptor>& frames,
+                                      std::int64_t min_gap, int top_n) {
+  SearchOptions o;
+  o.mode = SearchMode::kDynamicNodes;
+  o.min_gap = min_gap;
+  o.top_n = top_n;
+  o.nodes.alpha = 0;
+  o.nodes.beta = 0;
+  return run_nodes(nodes, frames, o, SimilarityMetric::kReference);
 }
 
 TEST(DynamicNodes, FirstFrameCreatesNodeZero) {
@@ -331,14 +331,8 @@ TEST(DynamicNodes, QueryMustBeTheNextFrame) {
 TEST(DynamicNodes, ZeroThresholdsPutEveryFrameInNodeZero) {
   std::vector<Descriptor> frames;
   for (int i = 0; i < 25; ++i) frames.push_back(random_descriptor(6, 700 + i));
-  SearchOptions o;
-  o.mode = SearchMode::kDynamicNodes;
-  o.min_gap = 0;
-  o.top_n = 1000;
-  o.nodes.alpha = 0;
-  o.nodes.beta = 0;
   DynamicNodes nodes;
-  const auto steps = run_nodes(nodes, frames, o, SimilarityMetric::kReference);
+  const auto steps = run_zero_thresholds(nodes, frames, 0, 1000);
   EXPECT_EQ(nodes.size(), 1);
   EXPECT_TRUE(steps[0].outcome.created);
   const FrameStore store = store_of(frames);
@@ -364,14 +358,8 @@ TEST(DynamicNodes, ZeroThresholdsPutEveryFrameInNodeZero) {
 TEST(DynamicNodes, NodeInsideWindowIsNeverExamined) {
   std::vector<Descriptor> frames;
   for (int i = 0; i < 12; ++i) frames.push_back(random_descriptor(6, 800 + i));
-  SearchOptions o;
-  o.mode = SearchMode::kDynamicNodes;
-  o.min_gap = 3;
-  o.top_n = 1000;
-  o.nodes.alpha = 0;
-  o.nodes.beta = 0;
   DynamicNodes nodes;
-  const auto steps = run_nodes(nodes, frames, o, SimilarityMetric::kReference);
+  const auto steps = run_zero_thresholds(nodes, frames, 3, 1000);
   // Frames 0..3: node 0 (first frame 0) lies inside the window (q - 0 <= 3),
   // so each frame creates its own node.
   for (int q = 0; q <= 3; ++q) {
@@ -409,20 +397,52 @@ TEST(DynamicNodes, NodeInsideWindowIsNeverExamined) {
 TEST(DynamicNodes, TopNLimitsCandidates) {
   std::vector<Descriptor> frames;
   for (int i = 0; i < 15; ++i) frames.push_back(random_descriptor(6, 900 + i));
-  SearchOptions o;
-  o.mode = SearchMode::kDynamicNodes;
-  o.min_gap = 0;
-  o.top_n = 4;
-  o.nodes.alpha = 0;
-  o.nodes.beta = 0;
   DynamicNodes nodes;
-  const auto steps = run_nodes(nodes, frames, o, SimilarityMetric::kReference);
+  const auto steps = run_zero_thresholds(nodes, frames, 0, 4);
   for (std::size_t q = 1; q < frames.size(); ++q) {
     FrameStore prefix;
     for (std::size_t j = 0; j < q; ++j) prefix.add(frames[j]);
     expect_same(steps[q].candidates,
                 brute_force(prefix, frames[q].view(), static_cast<std::int64_t>(q), 0, 4,
                             SimilarityMetric::kReference));
+  }
+}
+
+// The run the two hand-computed tests below follow: frames are the points
+// t = 50, 60, 70, 72, 55, 42, 90, 44, 46, 88 on a line (line_descriptor, L1
+// metric), threshold_0 = 1, alpha = 0.9, beta = 0.95, top_n = 10 and the given
+// temporal window `min_gap`.
+std::vector<Step> run_hand_computed(DynamicNodes& nodes, std::int64_t min_gap) {
+  const int ts[] = {50, 60, 70, 72, 55, 42, 90, 44, 46, 88};
+  std::vector<Descriptor> frames;
+  for (int t : ts) frames.push_back(line_descriptor(t));
+  SearchOptions o;
+  o.mode = SearchMode::kDynamicNodes;
+  o.min_gap = min_gap;
+  o.top_n = 10;
+  o.nodes.threshold_0 = 1.0;
+  o.nodes.alpha = 0.9;
+  o.nodes.beta = 0.95;
+  return run_nodes(nodes, frames, o, SimilarityMetric::kL1);
+}
+
+// Checks every step of a hand-computed run against the expected node, node
+// creation, similarity count and candidates (frame and score, rank by rank);
+// stops at the first step whose candidate count is wrong.
+template <std::size_t N>
+void expect_steps(const std::vector<Step>& steps, const std::int64_t (&want_node)[N],
+                  const bool (&want_created)[N], const std::int64_t (&want_sims)[N],
+                  const std::vector<std::vector<Candidate>>& want_candidates) {
+  for (std::size_t q = 0; q < steps.size(); ++q) {
+    SCOPED_TRACE(testing::Message() << "frame " << q);
+    EXPECT_EQ(steps[q].outcome.node, want_node[q]);
+    EXPECT_EQ(steps[q].outcome.created, want_created[q]);
+    EXPECT_EQ(steps[q].outcome.similarities, want_sims[q]);
+    ASSERT_EQ(steps[q].candidates.size(), want_candidates[q].size());
+    for (std::size_t i = 0; i < want_candidates[q].size(); ++i) {
+      EXPECT_EQ(steps[q].candidates[i].frame, want_candidates[q][i].frame) << "rank " << i;
+      EXPECT_NEAR(steps[q].candidates[i].score, want_candidates[q][i].score, 1e-12) << "rank " << i;
+    }
   }
 }
 
@@ -442,18 +462,8 @@ TEST(DynamicNodes, TopNLimitsCandidates) {
 //            <= .931; N1 first .76 <= .882: creates N2.
 //   q9 t=88: base .58; N0 first .62 > .522, mean .6817 > .551: joins N0.
 TEST(DynamicNodes, HandComputedAlgorithm1) {
-  const int ts[] = {50, 60, 70, 72, 55, 42, 90, 44, 46, 88};
-  std::vector<Descriptor> frames;
-  for (int t : ts) frames.push_back(line_descriptor(t));
-  SearchOptions o;
-  o.mode = SearchMode::kDynamicNodes;
-  o.min_gap = 0;
-  o.top_n = 10;
-  o.nodes.threshold_0 = 1.0;
-  o.nodes.alpha = 0.9;
-  o.nodes.beta = 0.95;
   DynamicNodes nodes;
-  const auto steps = run_nodes(nodes, frames, o, SimilarityMetric::kL1);
+  const auto steps = run_hand_computed(nodes, 0);
 
   const std::int64_t want_node[] = {0, 0, 1, 1, 0, 0, 0, 0, 2, 0};
   const bool want_created[] = {true, false, true, false, false, false, false, false, true, false};
@@ -470,17 +480,7 @@ TEST(DynamicNodes, HandComputedAlgorithm1) {
       {},
       {{6, .98}, {1, .72}, {4, .67}, {0, .62}, {7, .56}, {5, .54}},
   };
-  for (std::size_t q = 0; q < frames.size(); ++q) {
-    SCOPED_TRACE(testing::Message() << "frame " << q);
-    EXPECT_EQ(steps[q].outcome.node, want_node[q]);
-    EXPECT_EQ(steps[q].outcome.created, want_created[q]);
-    EXPECT_EQ(steps[q].outcome.similarities, want_sims[q]);
-    ASSERT_EQ(steps[q].candidates.size(), want_candidates[q].size());
-    for (std::size_t i = 0; i < want_candidates[q].size(); ++i) {
-      EXPECT_EQ(steps[q].candidates[i].frame, want_candidates[q][i].frame) << "rank " << i;
-      EXPECT_NEAR(steps[q].candidates[i].score, want_candidates[q][i].score, 1e-12) << "rank " << i;
-    }
-  }
+  ASSERT_NO_FATAL_FAILURE(expect_steps(steps, want_node, want_created, want_sims, want_candidates));
   ASSERT_EQ(nodes.size(), 3);
   EXPECT_EQ(nodes.members(0), (std::vector<std::int64_t>{0, 1, 4, 5, 6, 7, 9}));
   EXPECT_EQ(nodes.members(1), (std::vector<std::int64_t>{2, 3}));
@@ -497,18 +497,8 @@ TEST(DynamicNodes, HandComputedAlgorithm1) {
 //   q8 t=46: N0 mean .874 <= .931; N1 .86, N2 .76, N3 .74 all <= .882: creates N4.
 //   q9 t=88: joins N0; candidates j < 7: 6 (.98), 4 (.67), 0 (.62), 5 (.54); 7 is too recent.
 TEST(DynamicNodes, HandComputedAlgorithm1WithWindow) {
-  const int ts[] = {50, 60, 70, 72, 55, 42, 90, 44, 46, 88};
-  std::vector<Descriptor> frames;
-  for (int t : ts) frames.push_back(line_descriptor(t));
-  SearchOptions o;
-  o.mode = SearchMode::kDynamicNodes;
-  o.min_gap = 2;
-  o.top_n = 10;
-  o.nodes.threshold_0 = 1.0;
-  o.nodes.alpha = 0.9;
-  o.nodes.beta = 0.95;
   DynamicNodes nodes;
-  const auto steps = run_nodes(nodes, frames, o, SimilarityMetric::kL1);
+  const auto steps = run_hand_computed(nodes, 2);
 
   const std::int64_t want_node[] = {0, 1, 2, 3, 0, 0, 0, 0, 4, 0};
   const bool want_created[] = {true, true, true, true, false, false, false, false, true, false};
@@ -517,17 +507,7 @@ TEST(DynamicNodes, HandComputedAlgorithm1WithWindow) {
       {}, {}, {}, {}, {{0, .95}}, {{0, .92}}, {{0, .60}}, {{0, .94}, {4, .89}}, {},
       {{6, .98}, {4, .67}, {0, .62}, {5, .54}},
   };
-  for (std::size_t q = 0; q < frames.size(); ++q) {
-    SCOPED_TRACE(testing::Message() << "frame " << q);
-    EXPECT_EQ(steps[q].outcome.node, want_node[q]);
-    EXPECT_EQ(steps[q].outcome.created, want_created[q]);
-    EXPECT_EQ(steps[q].outcome.similarities, want_sims[q]);
-    ASSERT_EQ(steps[q].candidates.size(), want_candidates[q].size());
-    for (std::size_t i = 0; i < want_candidates[q].size(); ++i) {
-      EXPECT_EQ(steps[q].candidates[i].frame, want_candidates[q][i].frame) << "rank " << i;
-      EXPECT_NEAR(steps[q].candidates[i].score, want_candidates[q][i].score, 1e-12) << "rank " << i;
-    }
-  }
+  ASSERT_NO_FATAL_FAILURE(expect_steps(steps, want_node, want_created, want_sims, want_candidates));
   ASSERT_EQ(nodes.size(), 5);
   EXPECT_EQ(nodes.members(0), (std::vector<std::int64_t>{0, 4, 5, 6, 7, 9}));
   EXPECT_EQ(nodes.members(4), (std::vector<std::int64_t>{8}));

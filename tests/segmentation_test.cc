@@ -16,34 +16,15 @@
 
 #include "lsgd/error.h"
 #include "lsgd/image.h"
+#include "test_util.h"
 
 namespace lsgd {
 namespace {
 
-std::uint64_t splitmix64(std::uint64_t& state) {
-  std::uint64_t z = (state += 0x9E3779B97F4A7C15ull);
-  z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
-  z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
-  return z ^ (z >> 31);
-}
-
-GrayImage random_image(int width, int height, std::uint64_t seed) {
-  GrayImage g;
-  g.width = width;
-  g.height = height;
-  g.pixels.resize(static_cast<std::size_t>(width) * height);
-  std::uint64_t s = seed;
-  for (auto& p : g.pixels) p = static_cast<std::uint8_t>(splitmix64(s) & 0xFF);
-  return g;
-}
-
-GrayImage uniform_image(int width, int height, std::uint8_t value) {
-  GrayImage g;
-  g.width = width;
-  g.height = height;
-  g.pixels.assign(static_cast<std::size_t>(width) * height, value);
-  return g;
-}
+using test::message_of;
+using test::random_image;
+using test::splitmix64;
+using test::uniform_image;
 
 // Smooth procedural pattern (sum of sinusoids), deterministic.
 GrayImage smooth_image(int width, int height, double phase) {
@@ -59,18 +40,6 @@ GrayImage smooth_image(int width, int height, double phase) {
     }
   }
   return g;
-}
-
-template <typename F>
-std::string invalid_message(F&& f) {
-  try {
-    f();
-  } catch (const InvalidArgument& e) {
-    return e.what();
-  } catch (...) {
-    return "<other exception>";
-  }
-  return "<no exception>";
 }
 
 // Checks the structural invariants every segmentation must satisfy.
@@ -209,7 +178,7 @@ TEST(SegmentationOptions, EachFieldOutOfRangeNamesTheField) {
     c.mutate(o);
     SCOPED_TRACE(c.field);
     EXPECT_THROW(o.check(), InvalidArgument);
-    const std::string msg = invalid_message([&] { o.check(); });
+    const std::string msg = message_of<InvalidArgument>([&] { o.check(); });
     EXPECT_NE(msg.find(c.field), std::string::npos) << msg;
     // The Segmenter validates its options at construction.
     EXPECT_THROW(Segmenter{o}, InvalidArgument);
@@ -304,6 +273,21 @@ TEST(Segmenter, EmptyClustersDoNotCrash) {
   expect_valid(tall2, harsh.segment(tall2), 2);
 }
 
+// Two-level checkerboard: 7 columns x 5 rows of tiles, alternately 0 and 255.
+GrayImage two_level_image(int width, int height) {
+  GrayImage img;
+  img.width = width;
+  img.height = height;
+  img.pixels.resize(static_cast<std::size_t>(width) * height);
+  for (int y = 0; y < height; ++y) {
+    for (int x = 0; x < width; ++x) {
+      img.pixels[static_cast<std::size_t>(y) * width + x] =
+          static_cast<std::uint8_t>(((x * 7 / width + y * 5 / height) % 2) * 255);
+    }
+  }
+  return img;
+}
+
 // Two-level patterns where k-means moves centres so far that, in the last
 // iteration, some pixels lie outside every centre's search window (+- W/cols x
 // +- H/rows around the rounded centre, algorithm.md section 2; cases found by
@@ -321,16 +305,7 @@ TEST(Segmenter, PixelsOutsideEveryWindowJoinTheNearestCentre) {
   int unreached_total = 0;
   for (const Case& c : cases) {
     SCOPED_TRACE(testing::Message() << c.w << "x" << c.h << " sp " << c.sp);
-    GrayImage img;
-    img.width = c.w;
-    img.height = c.h;
-    img.pixels.resize(static_cast<std::size_t>(c.w) * c.h);
-    for (int y = 0; y < c.h; ++y) {
-      for (int x = 0; x < c.w; ++x) {
-        img.pixels[static_cast<std::size_t>(y) * c.w + x] =
-            static_cast<std::uint8_t>(((x * 7 / c.w + y * 5 / c.h) % 2) * 255);
-      }
-    }
+    const GrayImage img = two_level_image(c.w, c.h);
     SegmentationOptions o = options_with(c.sp, c.iterations);
     o.intensity_scale = c.intensity_scale;
     Segmenter segmenter(o);
@@ -379,16 +354,7 @@ TEST(Segmenter, EmptyClusterKeepsItsPreviousCentre) {
   int empty_total = 0;
   for (const Case& c : cases) {
     SCOPED_TRACE(testing::Message() << c.w << "x" << c.h << " sp " << c.sp);
-    GrayImage img;
-    img.width = c.w;
-    img.height = c.h;
-    img.pixels.resize(static_cast<std::size_t>(c.w) * c.h);
-    for (int y = 0; y < c.h; ++y) {
-      for (int x = 0; x < c.w; ++x) {
-        img.pixels[static_cast<std::size_t>(y) * c.w + x] =
-            static_cast<std::uint8_t>(((x * 7 / c.w + y * 5 / c.h) % 2) * 255);
-      }
-    }
+    const GrayImage img = two_level_image(c.w, c.h);
     // Check every iteration count, so the iteration where a cluster first
     // empties is covered.
     SegmentationOptions o = options_with(c.sp, 1);

@@ -14,19 +14,17 @@
 #include "lsgd/error.h"
 #include "lsgd/image.h"
 #include "lsgd/segmentation.h"
+#include "test_util.h"
 
 namespace lsgd {
 namespace {
 
+using test::message_of;
+using test::random_image;
+using test::splitmix64;
+
 const SimilarityMetric kMetrics[] = {SimilarityMetric::kReference, SimilarityMetric::kL1,
                                      SimilarityMetric::kNormalizedL1};
-
-std::uint64_t splitmix64(std::uint64_t& state) {
-  std::uint64_t z = (state += 0x9E3779B97F4A7C15ull);
-  z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
-  z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
-  return z ^ (z >> 31);
-}
 
 // Descriptor with `cells` cells, each holding the given (bin, count) pairs.
 Descriptor make(const std::vector<std::vector<std::pair<int, Count>>>& cells) {
@@ -121,12 +119,7 @@ TEST(Similarity, IdenticalDescriptorsScoreExactlyOne) {
 }
 
 TEST(Similarity, IdenticalRealImageDescriptorsScoreOne) {
-  GrayImage img;
-  img.width = 96;
-  img.height = 64;
-  img.pixels.resize(96 * 64);
-  std::uint64_t s = 5;
-  for (auto& p : img.pixels) p = static_cast<std::uint8_t>(splitmix64(s));
+  const GrayImage img = random_image(96, 64, 5);
   SegmentationOptions o;
   o.superpixel_size = 10;
   Segmenter seg(o);
@@ -272,11 +265,8 @@ TEST(SimilarityMetricNames, RejectsUnknown) {
   EXPECT_THROW(parse_similarity_metric(""), InvalidArgument);
   EXPECT_THROW(parse_similarity_metric("L1"), InvalidArgument);
   EXPECT_THROW(parse_similarity_metric("reference "), InvalidArgument);
-  try {
-    parse_similarity_metric("foo");
-  } catch (const InvalidArgument& e) {
-    EXPECT_NE(std::string(e.what()).find("foo"), std::string::npos) << e.what();
-  }
+  const std::string msg = message_of<InvalidArgument>([] { parse_similarity_metric("foo"); });
+  EXPECT_NE(msg.find("foo"), std::string::npos) << msg;
 }
 
 TEST(SimilarityOptions, DefaultIsReference) {

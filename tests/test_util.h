@@ -1,0 +1,59 @@
+// Small helpers shared by the unit tests: a deterministic random generator,
+// gray test images and a way to read the message of an expected exception.
+// Header-only; every generator is deterministic, so tests stay reproducible.
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <string>
+#include <utility>
+
+#include "lsgd/image.h"
+
+namespace lsgd::test {
+
+// SplitMix64: advances `state` and returns the next 64-bit pseudo-random value.
+inline std::uint64_t splitmix64(std::uint64_t& state) {
+  std::uint64_t z = (state += 0x9E3779B97F4A7C15ull);
+  z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
+  z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
+  return z ^ (z >> 31);
+}
+
+// Gray image of uniform noise: pixel i (row-major) is the low byte of the
+// i-th splitmix64 value drawn from `seed`.
+inline GrayImage random_image(int width, int height, std::uint64_t seed) {
+  GrayImage g;
+  g.width = width;
+  g.height = height;
+  g.pixels.resize(static_cast<std::size_t>(width) * height);
+  std::uint64_t s = seed;
+  for (auto& p : g.pixels) p = static_cast<std::uint8_t>(splitmix64(s) & 0xFF);
+  return g;
+}
+
+// Gray image whose pixels all equal `value`.
+inline GrayImage uniform_image(int width, int height, std::uint8_t value) {
+  GrayImage g;
+  g.width = width;
+  g.height = height;
+  g.pixels.assign(static_cast<std::size_t>(width) * height, value);
+  return g;
+}
+
+// Runs `f` and returns the what() of the exception of type E it throws,
+// "<other exception>" if it throws anything else, "<no exception>" if it
+// returns normally.
+template <class E, class F>
+std::string message_of(F&& f) {
+  try {
+    std::forward<F>(f)();
+  } catch (const E& e) {
+    return e.what();
+  } catch (...) {
+    return "<other exception>";
+  }
+  return "<no exception>";
+}
+
+}  // namespace lsgd::test

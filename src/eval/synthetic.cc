@@ -95,6 +95,7 @@ Rgb tinted(double g, const double tint[3]) {
 
 // ---- route ----------------------------------------------------------------
 enum class Light { kDay, kDim, kBright };
+enum class Traffic { kNone, kSome, kDense };  // moving objects on a stretch
 
 // One stretch of the default route. A new stretch shows region `region` (new
 // regions are laid out one after the other, kRegionGap apart); a revisit
@@ -106,19 +107,27 @@ struct StretchSpec {
   double from, to;
   double speed;  // world units per frame
   Light light;
-  bool objects;
+  Traffic traffic;
   const char* label;
 };
 
+// A to E came first and must keep their frames and ground truth: new
+// stretches go at the end. F, G and H are new places under the conditions of
+// the revisits (A' lighting; A'' lighting with objects; denser objects than
+// anywhere else): a detector must find no loop there.
 constexpr StretchSpec kRoute[] = {
-    {0, false, 180, 0, 1, 1.00, Light::kDay, false, "A: new street"},
-    {1, false, 120, 0, 1, 1.00, Light::kDay, false, "B: new street"},
-    {0, true, 0, 10.0 / 180, 130.0 / 180, 0.90, Light::kDim, false, "A': revisit of A"},
-    {2, false, 100, 0, 1, 1.05, Light::kDay, true, "C: new street"},
-    {1, true, 0, 10.0 / 120, 110.0 / 120, 1.10, Light::kDay, true, "B': revisit of B"},
-    {3, false, 80, 0, 1, 1.00, Light::kDay, false, "D: new street"},
-    {0, true, 0, 80.0 / 180, 170.0 / 180, 0.95, Light::kBright, true, "A'': revisit of A"},
-    {4, false, 60, 0, 1, 1.00, Light::kDay, false, "E: new street"},
+    {0, false, 180, 0, 1, 1.00, Light::kDay, Traffic::kNone, "A: new street"},
+    {1, false, 120, 0, 1, 1.00, Light::kDay, Traffic::kNone, "B: new street"},
+    {0, true, 0, 10.0 / 180, 130.0 / 180, 0.90, Light::kDim, Traffic::kNone, "A': revisit of A"},
+    {2, false, 100, 0, 1, 1.05, Light::kDay, Traffic::kSome, "C: new street"},
+    {1, true, 0, 10.0 / 120, 110.0 / 120, 1.10, Light::kDay, Traffic::kSome, "B': revisit of B"},
+    {3, false, 80, 0, 1, 1.00, Light::kDay, Traffic::kNone, "D: new street"},
+    {0, true, 0, 80.0 / 180, 170.0 / 180, 0.95, Light::kBright, Traffic::kSome,
+     "A'': revisit of A"},
+    {4, false, 60, 0, 1, 1.00, Light::kDay, Traffic::kNone, "E: new street"},
+    {5, false, 80, 0, 1, 1.00, Light::kDim, Traffic::kNone, "F: new street"},
+    {6, false, 75, 0, 1, 1.05, Light::kBright, Traffic::kSome, "G: new street"},
+    {7, false, 85, 0, 1, 1.00, Light::kDay, Traffic::kDense, "H: new street"},
 };
 
 void set_light(Light light, RouteSegment& seg) {
@@ -136,7 +145,11 @@ std::string describe(const StretchSpec& spec, const RouteSegment& seg) {
   if (seg.light_gain != 1 || seg.light_offset != 0) {
     label += spec.light == Light::kDim ? ", dim lighting" : ", bright lighting";
   }
-  if (seg.moving_objects) label += ", moving objects";
+  if (seg.dense_objects) {
+    label += ", dense moving objects";
+  } else if (seg.moving_objects) {
+    label += ", moving objects";
+  }
   return label;
 }
 
@@ -355,8 +368,9 @@ Rgb fogged(Rgb c, double dist) {
 }
 
 // ---- moving objects -------------------------------------------------------
-constexpr std::int64_t kSpawnPeriod = 9;  // frames between two objects
-constexpr std::int64_t kLifetime = 45;    // frames an object exists
+constexpr std::int64_t kSpawnPeriod = 9;       // frames between two objects
+constexpr std::int64_t kDenseSpawnPeriod = 3;  // the same on a stretch with dense objects
+constexpr std::int64_t kLifetime = 45;         // frames an object exists
 
 struct Mover {
   bool vehicle = false;
@@ -369,21 +383,34 @@ struct Mover {
 };
 
 // Object k of a stretch: spawned ahead of the camera at frame `spawn`,
-// pedestrians cross the street, vehicles come down the left lane.
-Mover make_mover(std::uint64_t key, double spawn_place, std::int64_t age) {
+// pedestrians cross the street, vehicles come down the left lane. `dense`
+// (only on stretches with dense objects) makes them more often vehicles,
+// larger (vans and buses, tall people) and spawned nearer, so they cover more
+// of the view; without it the draws are those of the first version of the
+// route, which keeps the frames of A to E unchanged.
+Mover make_mover(std::uint64_t key, double spawn_place, std::int64_t age, bool dense) {
   Mover m;
-  m.vehicle = unit(hash(key, 1)) < 0.4;
-  const double s0 = spawn_place + uniform(hash(key, 2), 14, 30);
+  m.vehicle = unit(hash(key, 1)) < (dense ? 0.5 : 0.4);
+  const double s0 =
+      spawn_place + (dense ? uniform(hash(key, 2), 8, 26) : uniform(hash(key, 2), 14, 30));
   if (m.vehicle) {
     m.x = -1.6 + uniform(hash(key, 3), -0.2, 0.2);
     m.s = s0 - uniform(hash(key, 4), 0.2, 0.8) * static_cast<double>(age);
-    m.width = uniform(hash(key, 5), 1.7, 2.0), m.height = uniform(hash(key, 6), 1.4, 1.9);
+    if (dense) {
+      m.width = uniform(hash(key, 5), 1.9, 2.5), m.height = uniform(hash(key, 6), 1.8, 3.2);
+    } else {
+      m.width = uniform(hash(key, 5), 1.7, 2.0), m.height = uniform(hash(key, 6), 1.4, 1.9);
+    }
   } else {
     const double dir = unit(hash(key, 7)) < 0.5 ? -1 : 1;
     m.x = uniform(hash(key, 3), -4.6, 4.6) +
           dir * uniform(hash(key, 4), 0.04, 0.12) * static_cast<double>(age);
     m.s = s0;
-    m.width = uniform(hash(key, 5), 0.5, 0.65), m.height = uniform(hash(key, 6), 1.55, 1.9);
+    if (dense) {
+      m.width = uniform(hash(key, 5), 0.6, 0.85), m.height = uniform(hash(key, 6), 1.7, 2.0);
+    } else {
+      m.width = uniform(hash(key, 5), 0.5, 0.65), m.height = uniform(hash(key, 6), 1.55, 1.9);
+    }
     m.stride = 0.8 * static_cast<double>(age) + uniform(hash(key, 8), 0, 2 * kPi);
   }
   random_tint(hash(key, 9), 0.5, m.tint);
@@ -463,7 +490,8 @@ void SyntheticWorld::build_route() {
     seg.first_frame = frames();
     seg.last_frame = seg.first_frame + n - 1;
     seg.revisit = spec.revisit;
-    seg.moving_objects = spec.objects && options_.moving_objects;
+    seg.moving_objects = spec.traffic != Traffic::kNone && options_.moving_objects;
+    seg.dense_objects = spec.traffic == Traffic::kDense && options_.moving_objects;
     if (options_.lighting_change) set_light(spec.light, seg);
     seg.label = describe(spec, seg);
     for (std::int64_t k = 0; k < n; ++k) {
@@ -537,15 +565,15 @@ void draw_movers(const SyntheticWorld& world, int seg_index, std::int64_t frame,
   const RouteSegment& seg = world.route()[static_cast<std::size_t>(seg_index)];
   const SyntheticOptions& opt = world.options();
   std::vector<Mover> movers;
+  const std::int64_t period = seg.dense_objects ? kDenseSpawnPeriod : kSpawnPeriod;
   const std::int64_t age0 = frame - seg.first_frame;
-  for (std::int64_t k = std::max<std::int64_t>(0, (age0 - kLifetime) / kSpawnPeriod - 1);
-       k <= age0 / kSpawnPeriod; ++k) {
+  for (std::int64_t k = std::max<std::int64_t>(0, (age0 - kLifetime) / period - 1);
+       k <= age0 / period; ++k) {
     const std::uint64_t key = hash(opt.seed, 0x0B1EC7 + static_cast<std::uint64_t>(seg_index),
                                    static_cast<std::uint64_t>(k));
-    const std::int64_t spawn =
-        seg.first_frame + k * kSpawnPeriod + static_cast<std::int64_t>(key % 5);
+    const std::int64_t spawn = seg.first_frame + k * period + static_cast<std::int64_t>(key % 5);
     if (spawn > frame || spawn > seg.last_frame || frame - spawn > kLifetime) continue;
-    Mover m = make_mover(key, world.place(spawn), frame - spawn);
+    Mover m = make_mover(key, world.place(spawn), frame - spawn, seg.dense_objects);
     const double rx = m.x - cam.pose.x, rz = m.s - cam.pose.s;
     m.xc = rx * cam.pose.cos_yaw - rz * cam.pose.sin_yaw;
     m.depth = rx * cam.pose.sin_yaw + rz * cam.pose.cos_yaw;

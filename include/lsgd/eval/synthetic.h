@@ -14,6 +14,26 @@
 // the camera, and on some stretches by lighting and by moving pedestrians and
 // vehicles. A jump of s between stretches stands for an unrecorded drive.
 //
+// The default route (frame ranges at route_scale 1):
+//     0- 179  A    new street
+//   180- 299  B    new street
+//   300- 432  A'   revisit of A, dim lighting
+//   433- 527  C    new street, moving objects
+//   528- 618  B'   revisit of B, moving objects
+//   619- 698  D    new street
+//   699- 793  A''  revisit of A, bright lighting, moving objects
+//   794- 853  E    new street
+//   854- 933  F    new street, dim lighting (that of A')
+//   934-1004  G    new street, bright lighting (that of A''), moving objects
+//  1005-1089  H    new street, dense moving objects (more, larger, nearer)
+// F, G and H were appended later (frames 0-853 and their ground truth are
+// those of the earlier 854-frame route): they are new places under the
+// conditions of the revisits, where an accepted loop can only be a false
+// positive. Every facade of the street draws its look from the same
+// distributions (style, shade, tint, windows, shops, signs), so a new place
+// has the colour and texture statistics of the places seen before: only its
+// layout differs, the hard case for histogram-like descriptors.
+//
 // Ground truth: frames i != j are a loop iff |place(i) - place(j)| <=
 // loop_radius. All traverses have the same heading, so no opposite-direction
 // pair exists. Temporal neighbours on one traverse are also within the
@@ -40,12 +60,16 @@ struct SyntheticOptions {
   int width = 320;         // image width, pixels, in [32, 4096]
   int height = 240;        // image height, pixels, in [32, 4096]
   std::uint64_t seed = 1;  // world and route randomness, any value
-  // Multiplies every stretch's length, so the frame count (854 at 1), in [0.1, 10]; the first
+  // Multiplies every stretch's length, so the frame count (1090 at 1), in [0.1, 10]; the first
   // revisit starts at frame ~300 * route_scale.
   double route_scale = 1.0;
-  double loop_radius = 2.5;     // loop iff places differ by <= this, world units, (0, 30]
-  bool lighting_change = true;  // two revisits under other lighting; false: all frames alike
-  bool moving_objects = true;   // pedestrians and vehicles on three stretches; false: none
+  double loop_radius = 2.5;  // loop iff places differ by <= this, world units, (0, 30]
+  // Two revisits (A', A'') and two new stretches (F, G) under other lighting;
+  // false: all frames in the same daylight.
+  bool lighting_change = true;
+  // Pedestrians and vehicles on five stretches (C, B', A'', G; dense on H);
+  // false: none anywhere.
+  bool moving_objects = true;
   double sensor_noise = 2.0;    // per-pixel noise amplitude, gray levels, [0, 64]
   double field_of_view = 90.0;  // horizontal field of view, degrees, [30, 150]
 
@@ -69,6 +93,9 @@ struct RouteSegment {
   double step = 1;              // world units between consecutive frames
   double light_gradient_x = 0;  // gray levels added at the right edge minus the left edge
   double light_gradient_y = 0;  // gray levels added at the bottom edge minus the top edge
+  // More, larger and nearer pedestrians and vehicles than on other stretches
+  // (only with moving_objects).
+  bool dense_objects = false;
 };
 
 class SyntheticWorld {

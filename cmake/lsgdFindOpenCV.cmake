@@ -3,7 +3,7 @@
 # libopencv-dev (which pulls in ~150 packages: Qt, VTK, ffmpeg); the per-module
 # -dev packages we install ship headers and libraries only, so fall back to
 # locating those directly.
-set(_lsgd_cv_modules core imgproc imgcodecs ${LSGD_EXTRA_OPENCV_MODULES})
+set(_lsgd_cv_modules core imgproc imgcodecs features2d calib3d ${LSGD_EXTRA_OPENCV_MODULES})
 
 if(NOT TARGET lsgd_opencv)
   find_package(OpenCV QUIET COMPONENTS ${_lsgd_cv_modules})

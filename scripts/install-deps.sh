@@ -6,6 +6,7 @@ set -euo pipefail
 packages=(
   cmake g++ make pkgconf
   libopencv-core-dev libopencv-imgproc-dev libopencv-imgcodecs-dev
+  libopencv-features2d-dev libopencv-calib3d-dev
   libcli11-dev libyaml-cpp-dev nlohmann-json3-dev
   libgtest-dev libgmock-dev
 )

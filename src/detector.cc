@@ -1,5 +1,6 @@
 #include "lsgd/detector.h"
 
+#include <algorithm>
 #include <chrono>
 
 #include <opencv2/core.hpp>
@@ -28,11 +29,15 @@ void DetectorOptions::check() const {
   segmentation.check();
   similarity.check();
   search.check();
+  verification.check();
   decision.check();
 }
 
 Detector::Detector(const DetectorOptions& options)
-    : options_(options), segmenter_((options.check(), options.segmentation)) {}
+    : options_(options),
+      segmenter_((options.check(), options.segmentation)),
+      temporal_(options.verification.temporal_options),
+      geometric_(options.verification.geometric_options) {}
 
 Result Detector::process(const cv::Mat& frame) {
   const std::int64_t start = now_ns();
@@ -81,14 +86,59 @@ Result Detector::process_gray(double convert_ms, std::int64_t start_ns) {
     search_exhaustive(store_, descriptor_.view(), result.frame, options_.search, metric, scratch_,
                       result.candidates);
   }
-  store_.add(descriptor_);
-  if (result.frame == 0) width_ = gray_.width, height_ = gray_.height;
   result.timings.search_ms = ms_since(t);
 
-  if (!result.candidates.empty()) result.best = result.candidates.front();
+  t = now_ns();
+  verify(result);
+  result.timings.verify_ms = ms_since(t);
+  store_.add(descriptor_);
+  if (result.frame == 0) width_ = gray_.width, height_ = gray_.height;
+
   result.loop = result.best.frame >= 0 && result.best.score >= options_.decision.threshold;
   result.timings.total_ms = ms_since(start_ns);
   return result;
+}
+
+// Re-ranks the candidates by sequence score (temporal), then examines the
+// best ones in order and reports the first that every enabled gate accepts
+// (the temporal agreement first: it is the cheaper one).
+void Detector::verify(Result& result) {
+  const VerificationOptions& v = options_.verification;
+  if (v.geometric) geometric_.add(gray_);
+  if (v.temporal) {
+    temporal_.rescore(store_, descriptor_.view(), result.frame, result.candidates,
+                      options_.search.min_gap, options_.similarity.metric, options_.search.top_n,
+                      scratch_);
+    result.candidates.swap(scratch_);
+  }
+  if (!v.temporal && !v.geometric) {
+    if (!result.candidates.empty()) result.best = result.candidates.front();
+    return;
+  }
+  const std::size_t n =
+      std::min(result.candidates.size(), static_cast<std::size_t>(v.max_candidates));
+  for (std::size_t i = 0; i < n && result.best.frame < 0; ++i) {
+    const Candidate& candidate = result.candidates[i];
+    bool accepted = true;
+    if (v.temporal) {
+      const std::int64_t start = now_ns();
+      const auto check = temporal_.agree(result.frame, candidate);
+      result.verification.push_back(
+          {candidate.frame, "temporal", check.accepted, check.reason, ms_since(start)});
+      accepted = check.accepted;
+    }
+    if (accepted && v.geometric) {
+      const auto check = geometric_.verify(result.frame, candidate.frame);
+      result.verification.push_back(
+          {candidate.frame, "geometric", check.accepted, check.reason, check.ms});
+      accepted = check.accepted;
+    }
+    if (accepted) result.best = candidate;
+  }
+  if (v.temporal) {
+    temporal_.push(result.frame,
+                   result.candidates.empty() ? -1 : result.candidates.front().frame);
+  }
 }
 
 }  // namespace lsgd

@@ -29,6 +29,19 @@ void expect_equal(const DetectorOptions& a, const DetectorOptions& b) {
   EXPECT_EQ(a.search.nodes.threshold_0, b.search.nodes.threshold_0);
   EXPECT_EQ(a.search.nodes.alpha, b.search.nodes.alpha);
   EXPECT_EQ(a.search.nodes.beta, b.search.nodes.beta);
+  EXPECT_EQ(a.verification.temporal, b.verification.temporal);
+  EXPECT_EQ(a.verification.geometric, b.verification.geometric);
+  EXPECT_EQ(a.verification.max_candidates, b.verification.max_candidates);
+  EXPECT_EQ(a.verification.temporal_options.frames, b.verification.temporal_options.frames);
+  EXPECT_EQ(a.verification.temporal_options.tolerance, b.verification.temporal_options.tolerance);
+  EXPECT_EQ(a.verification.temporal_options.agree, b.verification.temporal_options.agree);
+  const GeometricOptions& ga = a.verification.geometric_options;
+  const GeometricOptions& gb = b.verification.geometric_options;
+  EXPECT_EQ(ga.max_features, gb.max_features);
+  EXPECT_EQ(ga.min_side, gb.min_side);
+  EXPECT_EQ(ga.ratio, gb.ratio);
+  EXPECT_EQ(ga.ransac_threshold, gb.ransac_threshold);
+  EXPECT_EQ(ga.min_inliers, gb.min_inliers);
   EXPECT_EQ(a.decision.threshold, b.decision.threshold);
 }
 
@@ -46,6 +59,15 @@ DetectorOptions custom_options() {
   o.search.nodes.threshold_0 = 0.123456789012345678;
   o.search.nodes.alpha = 2.0 / 7.0;
   o.search.nodes.beta = 1.1;
+  o.verification.temporal = true;
+  o.verification.geometric = false;
+  o.verification.max_candidates = 5;
+  o.verification.temporal_options = {11, 4, 2};
+  o.verification.geometric_options.max_features = 321;
+  o.verification.geometric_options.min_side = 100;
+  o.verification.geometric_options.ratio = 0.77;
+  o.verification.geometric_options.ransac_threshold = 2.5;
+  o.verification.geometric_options.min_inliers = 33;
   o.decision.threshold = 0.7000000000000001;
   return o;
 }
@@ -115,7 +137,7 @@ TEST(ParseConfig, ToYamlRoundTrips) {
   for (const char* key :
        {"segmentation:", "superpixel_size: 40", "iterations: 10", "intensity_scale: 20",
         "distance_scale: 1.0", "metric: reference", "mode: exhaustive", "min_gap: 50", "top_n: 10",
-        "threshold_0: 0.9", "alpha: 0.8", "beta: 1.0", "decision:", "threshold: 0.87"}) {
+        "threshold_0: 0.9", "alpha: 0.8", "beta: 1.0", "decision:", "threshold: 0.855", "stages: temporal"}) {
     EXPECT_NE(text.find(key), std::string::npos) << key << " missing in:\n" << text;
   }
 }
@@ -243,6 +265,24 @@ TEST_F(LoadConfigTest, MissingFileIsIoError) {
     EXPECT_NE(std::string(e.what()).find(path), std::string::npos) << e.what();
   }
   EXPECT_THROW(load_config(dir_.string()), IoError);  // a folder is not a config file
+}
+
+TEST(ParseConfig, VerificationSection) {
+  const DetectorOptions o = parse_config(
+      "verification:\n  stages: temporal,geometric\n  temporal: {frames: 5}\n"
+      "  geometric: {min_inliers: 12}\n",
+      kSource);
+  EXPECT_TRUE(o.verification.temporal);
+  EXPECT_TRUE(o.verification.geometric);
+  EXPECT_EQ(o.verification.temporal_options.frames, 5);
+  EXPECT_EQ(o.verification.geometric_options.min_inliers, 12);
+  EXPECT_THROW(parse_config("verification:\n  stages: sift\n", kSource), lsgd::FormatError);
+  EXPECT_THROW(parse_config("verification:\n  temporal: {window: 3}\n", kSource),
+               lsgd::FormatError);
+  EXPECT_THROW(parse_config("verification:\n  temporal: {frames: 0}\n", kSource),
+               lsgd::InvalidArgument);
+  EXPECT_THROW(parse_config("verification:\n  geometric: {ratio: 1.5}\n", kSource),
+               lsgd::InvalidArgument);
 }
 
 }  // namespace

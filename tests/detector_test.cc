@@ -57,6 +57,7 @@ DetectorOptions small_options(SearchMode mode = SearchMode::kExhaustive, std::in
   o.search.mode = mode;
   o.search.min_gap = min_gap;
   o.search.top_n = top_n;
+  o.verification.temporal = false;  // the faithful method: these tests check the search itself
   return o;
 }
 

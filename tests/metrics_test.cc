@@ -15,6 +15,7 @@ namespace {
 FrameRecord report(std::int64_t frame, std::vector<Candidate> candidates, double ms = 1.0) {
   FrameRecord r;
   r.frame = frame;
+  if (!candidates.empty()) r.reported = candidates.front();
   r.candidates = std::move(candidates);
   r.timings.total_ms = ms;
   return r;

@@ -73,7 +73,7 @@ void fill_recall_at_n(const std::vector<FrameRecord>& records, const GroundTruth
 }
 
 void fill_timings(const std::vector<FrameRecord>& records, Metrics& m) {
-  std::vector<double> total, load, convert, segment, describe, search;
+  std::vector<double> total, load, convert, segment, describe, search, verify;
   for (const auto& r : records) {
     load.push_back(r.load_ms);
     total.push_back(r.timings.total_ms);
@@ -81,6 +81,7 @@ void fill_timings(const std::vector<FrameRecord>& records, Metrics& m) {
     segment.push_back(r.timings.segment_ms);
     describe.push_back(r.timings.describe_ms);
     search.push_back(r.timings.search_ms);
+    verify.push_back(r.timings.verify_ms);
   }
   m.ms_per_frame_median = percentile(total, 0.5);
   m.ms_per_frame_p95 = percentile(total, 0.95);
@@ -91,6 +92,7 @@ void fill_timings(const std::vector<FrameRecord>& records, Metrics& m) {
   m.segment_ms_median = percentile(segment, 0.5);
   m.describe_ms_median = percentile(describe, 0.5);
   m.search_ms_median = percentile(search, 0.5);
+  m.verify_ms_median = percentile(verify, 0.5);
   m.prt = m.average_precision / (1.0 + 10.0 * m.ms_per_frame_mean * 1e-3);
 }
 
@@ -123,9 +125,8 @@ Metrics evaluate(const std::vector<FrameRecord>& records, const GroundTruth& gt,
       internal::throw_invalid("evaluate: frame ", r.frame, " is reported twice");
     }
     if (gt.has_loop(r.frame, min_gap)) ++m.positives;
-    if (!r.candidates.empty()) {
-      const Candidate& best = r.candidates.front();
-      reports.push_back({best.score, correct_loop(gt, r.frame, best, min_gap)});
+    if (r.reported.frame >= 0) {
+      reports.push_back({r.reported.score, correct_loop(gt, r.frame, r.reported, min_gap)});
     }
   }
   sweep(std::move(reports), m);

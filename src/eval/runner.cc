@@ -52,7 +52,7 @@ std::vector<FrameRecord> run_detector(Detector& detector, const FrameSource& sou
       rethrow_for_frame(e, i, source.name ? source.name(i) : std::to_string(i));
     }
     if (on_frame) on_frame(result, load_ms);
-    records.push_back({result.frame, result.candidates, result.timings, load_ms});
+    records.push_back({result.frame, result.best, result.candidates, result.timings, load_ms});
   }
   return records;
 }

@@ -253,6 +253,54 @@ void read_decision(const YAML::Node& node, const std::string& source, DecisionOp
                                        }}});
 }
 
+void read_temporal(const YAML::Node& node, const std::string& source, TemporalOptions& o) {
+  read_map(node, source, "verification.temporal",
+           {{"frames",
+             [&](const YAML::Node& v, const std::string& k) { o.frames = read_int(v, source, k); }},
+            {"tolerance",
+             [&](const YAML::Node& v, const std::string& k) { o.tolerance = read_int(v, source, k); }},
+            {"agree",
+             [&](const YAML::Node& v, const std::string& k) { o.agree = read_int(v, source, k); }}});
+}
+
+void read_geometric(const YAML::Node& node, const std::string& source, GeometricOptions& o) {
+  read_map(
+      node, source, "verification.geometric",
+      {{"max_features",
+        [&](const YAML::Node& v, const std::string& k) { o.max_features = read_int(v, source, k); }},
+       {"min_side",
+        [&](const YAML::Node& v, const std::string& k) { o.min_side = read_int(v, source, k); }},
+       {"ratio",
+        [&](const YAML::Node& v, const std::string& k) { o.ratio = read_double(v, source, k); }},
+       {"ransac_threshold",
+        [&](const YAML::Node& v,
+            const std::string& k) { o.ransac_threshold = read_double(v, source, k); }},
+       {"min_inliers",
+        [&](const YAML::Node& v, const std::string& k) { o.min_inliers = read_int(v, source, k); }}});
+}
+
+void read_verification(const YAML::Node& node, const std::string& source,
+                       VerificationOptions& o) {
+  read_map(
+      node, source, "verification",
+      {{"stages",
+        [&](const YAML::Node& v, const std::string& k) {
+          const std::string text = read_string(v, source, k);
+          try {
+            parse_verification_stages(text, o);
+          } catch (const InvalidArgument& e) {
+            throw FormatError(concat(source, ": '", k, "': ", e.what(), at_line(v)));
+          }
+        }},
+       {"max_candidates", [&](const YAML::Node& v,
+                              const std::string& k) { o.max_candidates = read_int(v, source, k); }},
+       {"temporal", [&](const YAML::Node& v,
+                        const std::string&) { read_temporal(v, source, o.temporal_options); }},
+       {"geometric", [&](const YAML::Node& v, const std::string&) {
+          read_geometric(v, source, o.geometric_options);
+        }}});
+}
+
 void read_root(const YAML::Node& root, const std::string& source, DetectorOptions& o) {
   read_map(
       root, source, "",
@@ -262,6 +310,8 @@ void read_root(const YAML::Node& root, const std::string& source, DetectorOption
         [&](const YAML::Node& v, const std::string&) { read_similarity(v, source, o.similarity); }},
        {"search",
         [&](const YAML::Node& v, const std::string&) { read_search(v, source, o.search); }},
+       {"verification", [&](const YAML::Node& v,
+                            const std::string&) { read_verification(v, source, o.verification); }},
        {"decision",
         [&](const YAML::Node& v, const std::string&) { read_decision(v, source, o.decision); }}});
 }
@@ -333,6 +383,8 @@ DetectorOptions load_config(const std::string& path, const DetectorOptions& base
 std::string to_yaml(const DetectorOptions& options) {
   const SegmentationOptions& seg = options.segmentation;
   const SearchOptions& search = options.search;
+  const VerificationOptions& v = options.verification;
+  const GeometricOptions& geo = v.geometric_options;
   std::ostringstream out;
   out << "segmentation:\n"
       << "  superpixel_size: " << seg.superpixel_size << "  # S_p, pixels\n"
@@ -349,6 +401,17 @@ std::string to_yaml(const DetectorOptions& options) {
       << "  nodes: {threshold_0: " << format_double(search.nodes.threshold_0)
       << ", alpha: " << format_double(search.nodes.alpha)
       << ", beta: " << format_double(search.nodes.beta) << "}\n"
+      << "verification:\n"
+      << "  stages: " << verification_stages(v) << "  # none | temporal | geometric | "
+      << "temporal,geometric\n"
+      << "  max_candidates: " << v.max_candidates << "\n"
+      << "  temporal: {frames: " << v.temporal_options.frames
+      << ", tolerance: " << v.temporal_options.tolerance
+      << ", agree: " << v.temporal_options.agree << "}\n"
+      << "  geometric: {max_features: " << geo.max_features << ", min_side: " << geo.min_side
+      << ", ratio: " << format_double(geo.ratio)
+      << ", ransac_threshold: " << format_double(geo.ransac_threshold)
+      << ", min_inliers: " << geo.min_inliers << "}\n"
       << "decision:\n"
       << "  threshold: " << format_double(options.decision.threshold) << "\n";
   return out.str();

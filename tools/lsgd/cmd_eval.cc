@@ -43,13 +43,15 @@ void evaluate(const EvalArgs& args) {
 
   nlohmann::json json = metrics_json(metrics);
   json["mode"] = to_string(options.search.mode);
+  json["verification"] = verification_stages(options.verification);
   json["nodes"] = detector.nodes();
   json["bytes_per_frame"] = detector.bytes_per_frame();
   json["sequence"] = args.sequence;
   json["ground_truth"] = args.gt;
   json["config_yaml"] = io::to_yaml(options);
   write_json(json, args.json);
-  std::cout << args.sequence << " (" << to_string(options.search.mode) << ")\n";
+  std::cout << args.sequence << " (" << to_string(options.search.mode) << ", verification "
+            << verification_stages(options.verification) << ")\n";
   print_metrics(metrics, detector.nodes(), std::cout);
 }
 

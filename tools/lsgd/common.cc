@@ -31,6 +31,9 @@ void DetectorFlags::add_to(CLI::App& command) {
   command.add_option("--min-gap", min_gap,
                      "temporal window in frames: only frames j < i - W are candidates");
   command.add_option("--threshold", threshold, "loop decision threshold on the score, in [0, 1]");
+  command.add_option("--verify", verify,
+                     "verification stages: none, temporal, geometric or temporal,geometric "
+                     "(overrides verification.stages)");
 }
 
 DetectorOptions DetectorFlags::resolve() const {
@@ -38,6 +41,7 @@ DetectorOptions DetectorFlags::resolve() const {
   if (!mode.empty()) options.search.mode = parse_search_mode(mode.c_str());
   if (min_gap) options.search.min_gap = *min_gap;
   if (threshold) options.decision.threshold = *threshold;
+  if (!verify.empty()) parse_verification_stages(verify, options.verification);
   options.check();
   return options;
 }
@@ -104,7 +108,7 @@ nlohmann::json metrics_json(const eval::Metrics& m) {
   j["ms_per_frame_mean"] = m.ms_per_frame_mean;
   j["stage_ms_median"] = {{"load", m.load_ms_median},         {"convert", m.convert_ms_median},
                           {"segment", m.segment_ms_median},   {"describe", m.describe_ms_median},
-                          {"search", m.search_ms_median}};
+                          {"search", m.search_ms_median},     {"verify", m.verify_ms_median}};
   nlohmann::json curve = nlohmann::json::array();
   for (const auto& p : m.curve) curve.push_back({p.threshold, p.precision, p.recall});
   j["pr_curve"] = {{"columns", {"threshold", "precision", "recall"}}, {"points", curve}};
@@ -122,7 +126,8 @@ void print_metrics(const eval::Metrics& m, std::int64_t nodes, std::ostream& out
       << "\n"
       << "  time   " << std::setprecision(2) << m.ms_per_frame_median << " ms/frame median, "
       << m.ms_per_frame_p95 << " p95 (segment " << m.segment_ms_median << ", describe "
-      << m.describe_ms_median << ", search " << m.search_ms_median << ")\n"
+      << m.describe_ms_median << ", search " << m.search_ms_median << ", verify "
+      << m.verify_ms_median << ")\n"
       << "  nodes  " << nodes << "\n";
   out.unsetf(std::ios::floatfield);
 }

@@ -25,6 +25,7 @@ struct DetectorFlags {
   std::string mode;                    // exhaustive | nodes; empty: from config
   std::optional<std::int64_t> min_gap;  // overrides search.min_gap
   std::optional<double> threshold;      // overrides decision.threshold
+  std::string verify;                   // none | temporal | geometric | temporal,geometric
 
   void add_to(CLI::App& command);
   // Defaults, then the config file, then the flags; validated.

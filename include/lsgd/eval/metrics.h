@@ -15,7 +15,8 @@ namespace lsgd::eval {
 // What a system reported for one query frame.
 struct FrameRecord {
   std::int64_t frame = -1;
-  std::vector<Candidate> candidates;  // best first; the first one is the reported loop
+  Candidate reported;                 // the reported loop and its score; frame -1: none
+  std::vector<Candidate> candidates;  // ranked candidates, best first (for Recall@N)
   Timings timings;                    // zeros when unknown (detections from another system)
   double load_ms = 0;                 // reading and decoding the image (outside process())
 };
@@ -56,6 +57,7 @@ struct Metrics {
   double segment_ms_median = 0;
   double describe_ms_median = 0;
   double search_ms_median = 0;
+  double verify_ms_median = 0;
   // PRT = AP / (1 + omega * t), t = mean seconds per frame, omega = 10 (paper Sec. IV-D).
   double prt = 0;
   std::vector<PrPoint> curve;  // one point per distinct score, decreasing threshold
@@ -64,7 +66,7 @@ struct Metrics {
 // Scores records (one per query, any order, frame ids in [0, gt.frames()))
 // under the strict protocol with temporal window min_gap. A reported candidate
 // inside the window (j >= i - min_gap) is not allowed and counts as a false
-// positive; candidates beyond the first only matter for Recall@N. Throws
+// positive; the ranked candidates only matter for Recall@N. Throws
 // InvalidArgument for a frame id outside the ground truth or a repeated frame.
 Metrics evaluate(const std::vector<FrameRecord>& records, const GroundTruth& gt,
                  std::int64_t min_gap);

@@ -1,0 +1,91 @@
+// Geometric verification of a loop candidate (beyond the paper): ORB features
+// matched between the query and the candidate frame, a fundamental matrix and
+// a homography fitted with RANSAC, accepted on the inlier count of the better
+// model. Features of every frame are computed once, when the frame is added,
+// and kept, so a query never recomputes a stored frame's features.
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "lsgd/image.h"
+
+namespace lsgd {
+
+struct GeometricOptions {
+  // ORB keypoints kept per frame, [16, 20000].
+  int max_features = 500;
+  // Images whose shorter side is below this are upscaled (bilinear) before
+  // ORB, so small frames (160x120) still yield keypoints; pixels, [0, 4096]
+  // (0: never upscale).
+  int min_side = 240;
+  // Lowe's ratio test: a match is kept when best distance < ratio * second best; (0, 1].
+  double ratio = 0.8;
+  // RANSAC reprojection threshold in pixels of the original image; (0, 100].
+  double ransac_threshold = 3.0;
+  // A candidate is accepted when the better model (F or H) has at least this
+  // many inliers; [8, 10000].
+  int min_inliers = 20;
+  void check() const;
+};
+
+// What the geometric check found for one (query, candidate) pair.
+struct GeometricCheck {
+  bool accepted = false;
+  int matches = 0;         // ratio-test matches
+  int inliers = 0;         // inliers of the better model
+  std::string model;       // "fundamental", "homography" or "" when none was fitted
+  std::string reason;      // why it was accepted or rejected, for the Result
+  double ms = 0;           // time spent in verify()
+};
+
+// Thread safety: verify() and the other const members only read the stored
+// features and may run concurrently; add() is not (it appends to the stores
+// and runs the ORB detector, which OpenCV does not document as thread-safe).
+// A copy gets its own ORB detector.
+class GeometricVerifier {
+ public:
+  // Validates the options (throws InvalidArgument naming the field).
+  explicit GeometricVerifier(const GeometricOptions& options = {});
+  ~GeometricVerifier();
+  GeometricVerifier(const GeometricVerifier& other);
+  GeometricVerifier& operator=(const GeometricVerifier& other);
+  GeometricVerifier(GeometricVerifier&&) noexcept;
+  GeometricVerifier& operator=(GeometricVerifier&&) noexcept;
+
+  // Computes and keeps the features of the next frame (id = size()). Frames
+  // must be added in order; any non-empty gray image is accepted (a flat image
+  // simply has no keypoints). Throws InvalidArgument, leaving the verifier
+  // unchanged, only for an empty image or one whose pixel count is not
+  // width x height.
+  void add(const GrayImage& image);
+
+  // Checks frames `query` and `candidate` (both added). Never throws on
+  // degenerate geometry (identical images, pure rotation, planar scenes, too
+  // few matches): those give an accepted or rejected check with a reason.
+  // Throws InvalidArgument for ids not added yet.
+  GeometricCheck verify(std::int64_t query, std::int64_t candidate) const;
+
+  std::int64_t size() const;
+  const GeometricOptions& options() const { return options_; }
+  // Keypoints stored for frame i.
+  int keypoints(std::int64_t frame) const;
+  // Mean bytes of feature data held per added frame.
+  std::size_t bytes_per_frame() const;
+
+ private:
+  friend struct GeometricVerifierTestPeer;  // tests read the stored keypoints
+
+  GeometricOptions options_;
+  // Contiguous storage: frame i owns keypoints [offsets_[i], offsets_[i+1]).
+  std::vector<std::int64_t> offsets_{0};
+  std::vector<float> points_;               // x, y per keypoint, original image pixels
+  std::vector<std::uint8_t> descriptors_;   // 32 bytes per keypoint (ORB)
+  struct Orb;                               // cv::ORB, kept out of this header
+  std::unique_ptr<Orb> orb_;                // created once, in the constructor
+};
+
+}  // namespace lsgd

@@ -1,0 +1,102 @@
+// Verification stages that run after the candidate search (beyond the paper),
+// so that a reported loop can be trusted by a SLAM map. Each is switchable;
+// with none enabled the detector is the faithful method.
+//
+// - temporal (sequence consistency): every candidate j of query i is scored
+//   by the mean similarity along the diagonal, sim(i - t, j - t) for
+//   t = 0 .. frames-1, after moving j within +-tolerance to the best-aligned
+//   diagonal; candidates are re-ranked by that sequence score, which becomes
+//   the loop's score. A loop is then accepted only when the previous `agree`
+//   queries were placed on consecutive places (query i - t's best place within
+//   tolerance + 1 of j - t), as iBoW-LCD's islands and Tsintotas' temporal
+//   checks require.
+// - geometric: ORB features matched between the query and the candidate,
+//   F and H fitted with RANSAC, accepted on the inlier count (geometric.h).
+#pragma once
+
+#include <cstdint>
+#include <deque>
+#include <string>
+#include <vector>
+
+#include "lsgd/frame_store.h"
+#include "lsgd/geometric.h"
+#include "lsgd/search.h"
+
+namespace lsgd {
+
+struct TemporalOptions {
+  // Sequence length: the query and the frames-1 frames before it, [1, 100].
+  int frames = 8;
+  // Realignment: a candidate moves within +-tolerance frames to its
+  // best-aligned diagonal; also the slack of the agreement check. [0, 100].
+  int tolerance = 2;
+  // Previous queries that must agree on consecutive places, [0, 100] (0: no gate).
+  int agree = 1;
+  void check() const;
+};
+
+struct VerificationOptions {
+  // Sequence consistency: on by default (docs/results.md: it raises R@100P,
+  // AP and R@1 on every sequence measured, for ~0.3 ms per frame).
+  bool temporal = true;
+  // ORB + RANSAC: off by default (it helps on sharp 320x240 frames, hurts on
+  // small fisheye ones, and costs ~5 ms per frame); see docs/results.md.
+  bool geometric = false;
+  // Candidates examined best first; the first one every enabled stage accepts
+  // is reported. [1, 100]; at most search.top_n are available.
+  int max_candidates = 3;
+  TemporalOptions temporal_options;
+  GeometricOptions geometric_options;
+  void check() const;
+};
+
+// "none", "temporal", "geometric" or "temporal,geometric" (either order).
+// Throws InvalidArgument naming the unknown stage.
+void parse_verification_stages(const std::string& text, VerificationOptions& options);
+std::string verification_stages(const VerificationOptions& options);
+
+// The verdict of one stage on one candidate.
+struct StageVerdict {
+  std::int64_t candidate = -1;
+  std::string stage;   // "temporal" or "geometric"
+  bool accepted = false;
+  std::string reason;  // e.g. "3 of 3 previous queries agree" or "12 inliers < 20"
+  double ms = 0;
+};
+
+// The temporal stage. Remembers the best place of the last `agree` queries.
+class TemporalVerifier {
+ public:
+  explicit TemporalVerifier(const TemporalOptions& options = {});
+
+  // Re-ranks `raw` (query's candidates by similarity) by sequence score and
+  // writes the best top_n, best first, to `out`. `query` is the frame being
+  // processed (descriptor `descriptor`, not stored yet); every earlier frame
+  // is in `store`. Candidates stay outside the temporal window.
+  void rescore(const FrameStore& store, const DescriptorView& descriptor, std::int64_t query,
+               const std::vector<Candidate>& raw, std::int64_t min_gap, SimilarityMetric metric,
+               int top_n, std::vector<Candidate>& out) const;
+
+  struct Check {
+    bool accepted = false;
+    std::string reason;
+  };
+  // The agreement gate for a rescored candidate of query `query`.
+  Check agree(std::int64_t query, const Candidate& candidate) const;
+
+  // Remembers the query's best place (the first rescored candidate, frame -1
+  // for none); call once per processed frame, after agree().
+  void push(std::int64_t query, std::int64_t place);
+
+ private:
+  // Mean of sim(i - t, j - t) over t = 0..frames-1 (fewer near the start).
+  double sequence_score(const FrameStore& store, const DescriptorView& descriptor,
+                        std::int64_t query, std::int64_t j, SimilarityMetric metric) const;
+
+  TemporalOptions options_;
+  std::deque<std::int64_t> places_;  // best place of the previous queries, newest last
+  std::int64_t last_query_ = -1;
+};
+
+}  // namespace lsgd

@@ -1,0 +1,129 @@
+#include "lsgd/verification.h"
+
+#include <algorithm>
+#include <cstdlib>
+#include <sstream>
+
+#include "internal/check.h"
+
+namespace lsgd {
+
+void TemporalOptions::check() const {
+  internal::check_range("verification.temporal.frames", frames, 1, 100, "frames");
+  internal::check_range("verification.temporal.tolerance", tolerance, 0, 100, "frames");
+  internal::check_range("verification.temporal.agree", agree, 0, 100, "queries");
+}
+
+void VerificationOptions::check() const {
+  internal::check_range("verification.max_candidates", max_candidates, 1, 100);
+  temporal_options.check();
+  geometric_options.check();
+}
+
+void parse_verification_stages(const std::string& text, VerificationOptions& options) {
+  bool temporal = false, geometric = false;
+  if (text != "none") {
+    std::istringstream parts(text);
+    std::string stage;
+    while (std::getline(parts, stage, ',')) {
+      if (stage == "temporal") {
+        temporal = true;
+      } else if (stage == "geometric") {
+        geometric = true;
+      } else {
+        internal::throw_invalid("verification stage '", stage, "' in '", text,
+                                "' is unknown: expected none, temporal, geometric or "
+                                "temporal,geometric");
+      }
+    }
+    if (!temporal && !geometric) {
+      internal::throw_invalid("verification '", text, "' names no stage: use none, temporal, "
+                              "geometric or temporal,geometric");
+    }
+  }
+  options.temporal = temporal;
+  options.geometric = geometric;
+}
+
+std::string verification_stages(const VerificationOptions& options) {
+  if (options.temporal && options.geometric) return "temporal,geometric";
+  if (options.temporal) return "temporal";
+  if (options.geometric) return "geometric";
+  return "none";
+}
+
+TemporalVerifier::TemporalVerifier(const TemporalOptions& options) : options_(options) {
+  options_.check();
+}
+
+double TemporalVerifier::sequence_score(const FrameStore& store, const DescriptorView& descriptor,
+                                        std::int64_t query, std::int64_t j,
+                                        SimilarityMetric metric) const {
+  const std::int64_t steps = std::min<std::int64_t>(options_.frames, j + 1);
+  double sum = similarity(descriptor, store.view(j), metric);
+  for (std::int64_t t = 1; t < steps; ++t) {
+    sum += similarity(store.view(query - t), store.view(j - t), metric);
+  }
+  return sum / static_cast<double>(steps);
+}
+
+void TemporalVerifier::rescore(const FrameStore& store, const DescriptorView& descriptor,
+                               std::int64_t query, const std::vector<Candidate>& raw,
+                               std::int64_t min_gap, SimilarityMetric metric, int top_n,
+                               std::vector<Candidate>& out) const {
+  out.clear();
+  const std::int64_t limit = std::min(store.size(), query - min_gap);  // candidates j < limit
+  for (const Candidate& c : raw) {
+    Candidate aligned{-1, -1.0};
+    const std::int64_t lo = std::max<std::int64_t>(0, c.frame - options_.tolerance);
+    const std::int64_t hi = std::min(limit - 1, c.frame + options_.tolerance);
+    for (std::int64_t j = lo; j <= hi; ++j) {
+      const Candidate s{j, sequence_score(store, descriptor, query, j, metric)};
+      if (better(s, aligned)) aligned = s;
+    }
+    const bool seen = std::any_of(out.begin(), out.end(),
+                                  [&](const Candidate& o) { return o.frame == aligned.frame; });
+    if (aligned.frame >= 0 && !seen) out.push_back(aligned);
+  }
+  std::sort(out.begin(), out.end(), better);
+  if (out.size() > static_cast<std::size_t>(top_n)) out.resize(static_cast<std::size_t>(top_n));
+}
+
+TemporalVerifier::Check TemporalVerifier::agree(std::int64_t query,
+                                                const Candidate& candidate) const {
+  Check check;
+  const int k = options_.agree;
+  if (k == 0) {
+    check.accepted = true;
+    check.reason = internal::concat("sequence score ", candidate.score, " (no agreement gate)");
+    return check;
+  }
+  if (last_query_ != query - 1 || places_.size() < static_cast<std::size_t>(k)) {
+    check.reason = internal::concat("needs ", k, " previous queries");
+    return check;
+  }
+  const std::int64_t slack = options_.tolerance + 1;
+  for (int t = 1; t <= k; ++t) {
+    const std::int64_t place = places_[places_.size() - t];
+    const std::int64_t expected = candidate.frame - t;
+    if (place < 0 || std::llabs(place - expected) > slack) {
+      check.reason = internal::concat("query ", query - t, " was placed at ", place,
+                                      ", not within ", slack, " of frame ", expected);
+      return check;
+    }
+  }
+  check.accepted = true;
+  check.reason = internal::concat(k, " previous queries agree; sequence score ", candidate.score);
+  return check;
+}
+
+void TemporalVerifier::push(std::int64_t query, std::int64_t place) {
+  if (query != last_query_ + 1) places_.clear();  // a gap: earlier places no longer adjacent
+  last_query_ = query;
+  places_.push_back(place);
+  while (places_.size() > static_cast<std::size_t>(std::max(options_.agree, 1))) {
+    places_.pop_front();
+  }
+}
+
+}  // namespace lsgd

@@ -152,7 +152,9 @@ TEST(DetectorVerification, NoneIsTheFaithfulBaseline) {
   const auto a = run(options);
   for (const Result& r : a) {
     EXPECT_TRUE(r.verification.empty());
-    if (!r.candidates.empty()) EXPECT_EQ(r.best.frame, r.candidates.front().frame);
+    if (!r.candidates.empty()) {
+      EXPECT_EQ(r.best.frame, r.candidates.front().frame);
+    }
   }
 }
 
@@ -191,7 +193,9 @@ TEST(DetectorVerification, GeometricAddsAVerdictPerExaminedCandidate) {
       ASSERT_FALSE(r.verification.empty());
       EXPECT_TRUE(r.verification.back().accepted);
     }
-    if (i >= 30) EXPECT_EQ(r.best.frame, i - 30) << "identical image must pass geometry";
+    if (i >= 30) {
+      EXPECT_EQ(r.best.frame, i - 30) << "identical image must pass geometry";
+    }
   }
 }
 

@@ -1,8 +1,16 @@
 // Geometric verification of a loop candidate (beyond the paper): ORB features
-// matched between the query and the candidate frame, a fundamental matrix and
-// a homography fitted with RANSAC, accepted on the inlier count of the better
-// model. Features of every frame are computed once, when the frame is added,
-// and kept, so a query never recomputes a stored frame's features.
+// matched between the query and the candidate frame (mutual nearest
+// neighbours in Hamming distance that pass Lowe's ratio test), a fundamental
+// matrix and a homography fitted with RANSAC (OpenCV's USAC), accepted on the
+// inlier count of the better model. Features of every frame are computed once,
+// when the frame is added, and kept (contiguously, about 40 bytes a keypoint),
+// so a query never recomputes a stored frame's features.
+//
+// Degenerate geometry is a verdict, not an error: identical frames, pure
+// rotations and planar scenes are explained by the homography (H wins ties),
+// fewer than 8 matches are rejected as "too few matches (N < 8)", a model
+// whose inliers lie on one line is discarded, and an OpenCV failure becomes a
+// rejection with OpenCV's message in the reason.
 #pragma once
 
 #include <cstddef>
@@ -35,17 +43,18 @@ struct GeometricOptions {
 // What the geometric check found for one (query, candidate) pair.
 struct GeometricCheck {
   bool accepted = false;
-  int matches = 0;         // ratio-test matches
-  int inliers = 0;         // inliers of the better model
-  std::string model;       // "fundamental", "homography" or "" when none was fitted
-  std::string reason;      // why it was accepted or rejected, for the Result
-  double ms = 0;           // time spent in verify()
+  int matches = 0;     // mutual matches that passed the ratio test
+  int inliers = 0;     // inliers of the better model
+  std::string model;   // "fundamental", "homography" or "" when none was fitted
+  std::string reason;  // why it was accepted or rejected, for the Result
+  double ms = 0;       // time spent in verify()
 };
 
 // Thread safety: verify() and the other const members only read the stored
-// features and may run concurrently; add() is not (it appends to the stores
-// and runs the ORB detector, which OpenCV does not document as thread-safe).
-// A copy gets its own ORB detector.
+// features and may run concurrently with each other; add() may not run
+// concurrently with anything (it appends to the stores and runs the ORB
+// detector, which OpenCV does not document as thread-safe). A copy gets its
+// own ORB detector; a moved-from verifier may only be assigned or destroyed.
 class GeometricVerifier {
  public:
   // Validates the options (throws InvalidArgument naming the field).
@@ -71,9 +80,10 @@ class GeometricVerifier {
 
   std::int64_t size() const;
   const GeometricOptions& options() const { return options_; }
-  // Keypoints stored for frame i.
+  // Keypoints stored for frame i; throws InvalidArgument for ids not added.
   int keypoints(std::int64_t frame) const;
-  // Mean bytes of feature data held per added frame.
+  // Mean bytes of feature data held per added frame (0 before the first):
+  // 8 (x, y) + 32 (descriptor) per keypoint, plus the frame's offset.
   std::size_t bytes_per_frame() const;
 
  private:
@@ -82,10 +92,10 @@ class GeometricVerifier {
   GeometricOptions options_;
   // Contiguous storage: frame i owns keypoints [offsets_[i], offsets_[i+1]).
   std::vector<std::int64_t> offsets_{0};
-  std::vector<float> points_;               // x, y per keypoint, original image pixels
-  std::vector<std::uint8_t> descriptors_;   // 32 bytes per keypoint (ORB)
-  struct Orb;                               // cv::ORB, kept out of this header
-  std::unique_ptr<Orb> orb_;                // created once, in the constructor
+  std::vector<float> points_;              // x, y per keypoint, original image pixels
+  std::vector<std::uint8_t> descriptors_;  // 32 bytes per keypoint (ORB)
+  struct Orb;                              // cv::ORB, kept out of this header
+  std::unique_ptr<Orb> orb_;               // created once, in the constructor
 };
 
 }  // namespace lsgd

@@ -84,13 +84,8 @@ void demo(const DemoArgs& args) {
     if (!args.output.empty()) {
       csv = std::make_unique<CsvWriter>((dir / (std::string("results-") + to_string(mode) + ".csv")).string());
     }
-    Progress progress(source.frames, std::string("demo ") + to_string(mode));
-    double total_ms = 0;
-    const auto records = eval::run_detector(detector, source, [&](const Result& r, double) {
-      if (csv) csv->write(r, source.name(r.frame));
-      total_ms += r.timings.total_ms;
-      progress.update(r.frame + 1, total_ms / static_cast<double>(r.frame + 1));
-    });
+    const auto records =
+        run_with_progress(detector, source, std::string("demo ") + to_string(mode), csv.get());
     const auto metrics = eval::evaluate(records, world.ground_truth(), options.search.min_gap);
     std::cout << "\n" << to_string(mode) << " search:\n";
     print_metrics(metrics, detector.nodes(), std::cout);

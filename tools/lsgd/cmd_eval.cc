@@ -32,13 +32,7 @@ void evaluate(const EvalArgs& args) {
   std::unique_ptr<CsvWriter> csv;
   if (!args.output.empty()) csv = std::make_unique<CsvWriter>(args.output);
   Detector detector(options);
-  Progress progress(frames, "eval");
-  double total_ms = 0;
-  const auto records = eval::run_detector(detector, source, [&](const Result& r, double) {
-    if (csv) csv->write(r, source.name(r.frame));
-    total_ms += r.timings.total_ms;
-    progress.update(r.frame + 1, total_ms / static_cast<double>(r.frame + 1));
-  });
+  const auto records = run_with_progress(detector, source, "eval", csv.get());
   const eval::Metrics metrics = eval::evaluate(records, gt, options.search.min_gap);
 
   nlohmann::json json = metrics_json(metrics);

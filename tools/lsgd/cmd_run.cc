@@ -24,16 +24,10 @@ void run(const RunArgs& args) {
   const eval::FrameSource source = eval::sequence_source(sequence);
   CsvWriter csv(args.output);
   Detector detector(options);
-  Progress progress(source.frames, "run");
-  std::int64_t loops = 0;
+  const auto records = run_with_progress(detector, source, "run", &csv);
   double total_ms = 0;
-  const auto records = eval::run_detector(detector, source, [&](const Result& r, double) {
-    csv.write(r, source.name(r.frame));
-    loops += r.loop ? 1 : 0;
-    total_ms += r.timings.total_ms;
-    progress.update(r.frame + 1, total_ms / static_cast<double>(r.frame + 1));
-  });
-  std::cerr << "processed " << records.size() << " frames, " << loops << " loops, "
+  for (const auto& r : records) total_ms += r.timings.total_ms;
+  std::cerr << "processed " << records.size() << " frames, " << csv.loops() << " loops, "
             << total_ms / static_cast<double>(records.size()) << " ms/frame mean"
             << (args.output.empty() ? "" : ", rows in " + args.output) << "\n";
 }

@@ -87,6 +87,19 @@ void CsvWriter::write(const Result& r, const std::string& image) {
         << r.timings.total_ms << '\n'
         << std::flush;
   if (!*out_) throw IoError("error while writing the CSV output");
+  loops_ += r.loop ? 1 : 0;
+}
+
+std::vector<eval::FrameRecord> run_with_progress(Detector& detector,
+                                                 const eval::FrameSource& source,
+                                                 const std::string& label, CsvWriter* csv) {
+  Progress progress(source.frames, label);
+  double total_ms = 0;
+  return eval::run_detector(detector, source, [&](const Result& r, double) {
+    if (csv) csv->write(r, source.name(r.frame));
+    total_ms += r.timings.total_ms;
+    progress.update(r.frame + 1, total_ms / static_cast<double>(r.frame + 1));
+  });
 }
 
 nlohmann::json metrics_json(const eval::Metrics& m) {

@@ -12,6 +12,7 @@
 
 #include "lsgd/detector.h"
 #include "lsgd/eval/metrics.h"
+#include "lsgd/eval/runner.h"
 
 namespace CLI {
 class App;
@@ -52,11 +53,19 @@ class CsvWriter {
  public:
   explicit CsvWriter(const std::string& path);  // empty path: stdout
   void write(const Result& result, const std::string& image);
+  std::int64_t loops() const { return loops_; }  // rows written with a loop
 
  private:
+  std::int64_t loops_ = 0;
   std::unique_ptr<std::ofstream> file_;
   std::ostream* out_;
 };
+
+// Runs the detector over the source with a progress bar labelled `label`,
+// writing each frame's CSV row to `csv` when given.
+std::vector<eval::FrameRecord> run_with_progress(Detector& detector,
+                                                 const eval::FrameSource& source,
+                                                 const std::string& label, CsvWriter* csv);
 
 nlohmann::json metrics_json(const eval::Metrics& m);
 // Prints the headline numbers of an evaluation, one per line.

@@ -14,8 +14,14 @@
 //     min_gap: 50              # frames
 //     top_n: 10
 //     nodes: {threshold_0: 0.9, alpha: 0.8, beta: 1.0}
+//   verification:
+//     stages: temporal         # none | temporal | geometric | temporal,geometric
+//     max_candidates: 3
+//     temporal: {frames: 8, tolerance: 2, agree: 1}
+//     geometric: {max_features: 500, min_side: 240, ratio: 0.8, ransac_threshold: 3.0,
+//                 min_inliers: 20}
 //   decision:
-//     threshold: 0.87
+//     threshold: 0.855
 #pragma once
 
 #include <string>

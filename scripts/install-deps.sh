@@ -9,6 +9,7 @@ packages=(
   libopencv-features2d-dev libopencv-calib3d-dev
   libcli11-dev libyaml-cpp-dev nlohmann-json3-dev
   libgtest-dev libgmock-dev
+  libbenchmark-dev
 )
 
 missing=()

@@ -199,6 +199,7 @@ void GeometricOptions::check() const {
   internal::check_range_open_low("geometric.ransac_threshold", ransac_threshold, 0.0, 100.0,
                                  "pixels");
   internal::check_range("geometric.min_inliers", min_inliers, 8, 10000);
+  internal::check_range("geometric.min_inlier_ratio", min_inlier_ratio, 0.0, 1.0);
 }
 
 // ---- GeometricVerifier ---------------------------------------------------------------
@@ -352,7 +353,9 @@ GeometricCheck GeometricVerifier::verify(std::int64_t query, std::int64_t candid
   const bool use_h = h.inliers >= f.inliers;
   const ModelFit& best = use_h ? h : f;
   check.inliers = best.inliers;
-  check.accepted = best.inliers >= options_.min_inliers;
+  const bool enough = best.inliers >= options_.min_inliers;
+  const bool dense = best.inliers >= options_.min_inlier_ratio * check.matches;
+  check.accepted = enough && dense;
   if (best.inliers == 0) {
     std::string notes = h.note;
     if (!f.note.empty()) notes += (notes.empty() ? "" : "; ") + f.note;
@@ -360,9 +363,10 @@ GeometricCheck GeometricVerifier::verify(std::int64_t query, std::int64_t candid
                                     notes.empty() ? " (degenerate points)" : ": " + notes);
   } else {
     check.model = use_h ? "homography" : "fundamental";
-    check.reason =
-        internal::concat(check.model, ": ", check.inliers, " inliers of ", check.matches,
-                         " matches ", check.accepted ? ">=" : "<", " ", options_.min_inliers);
+    check.reason = internal::concat(
+        check.model, ": ", check.inliers, " inliers of ", check.matches, " matches ",
+        enough ? ">=" : "<", " ", options_.min_inliers,
+        dense ? "" : internal::concat(", below ", options_.min_inlier_ratio, " of the matches"));
   }
   check.ms = ms_since(start);
   return check;

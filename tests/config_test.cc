@@ -42,6 +42,7 @@ void expect_equal(const DetectorOptions& a, const DetectorOptions& b) {
   EXPECT_EQ(ga.ratio, gb.ratio);
   EXPECT_EQ(ga.ransac_threshold, gb.ransac_threshold);
   EXPECT_EQ(ga.min_inliers, gb.min_inliers);
+  EXPECT_EQ(ga.min_inlier_ratio, gb.min_inlier_ratio);
   EXPECT_EQ(a.decision.threshold, b.decision.threshold);
 }
 
@@ -68,6 +69,7 @@ DetectorOptions custom_options() {
   o.verification.geometric_options.ratio = 0.77;
   o.verification.geometric_options.ransac_threshold = 2.5;
   o.verification.geometric_options.min_inliers = 33;
+  o.verification.geometric_options.min_inlier_ratio = 0.4;
   o.decision.threshold = 0.7000000000000001;
   return o;
 }

@@ -111,6 +111,9 @@ TEST(GeometricOptions, EachFieldIsRangeChecked) {
       {"geometric.ransac_threshold = 101", [](GeometricOptions& o) { o.ransac_threshold = 101; }},
       {"geometric.min_inliers = 7", [](GeometricOptions& o) { o.min_inliers = 7; }},
       {"geometric.min_inliers = 10001", [](GeometricOptions& o) { o.min_inliers = 10001; }},
+      {"geometric.min_inlier_ratio = -0.1",
+       [](GeometricOptions& o) { o.min_inlier_ratio = -0.1; }},
+      {"geometric.min_inlier_ratio = 1.1", [](GeometricOptions& o) { o.min_inlier_ratio = 1.1; }},
   };
   for (const Case& c : cases) {
     GeometricOptions o;
@@ -196,6 +199,35 @@ TEST(GeometricVerifier, UnrelatedImagesAreRejected) {
     EXPECT_LT(c.inliers, GeometricOptions{}.min_inliers) << c.reason;
     EXPECT_FALSE(c.reason.empty());
   }
+}
+
+// With the ratio test relaxed, unrelated images give many matches, and RANSAC
+// finds a model for a small fraction of them: the inlier-fraction guard must
+// reject what the inlier count alone would accept.
+TEST(GeometricVerifier, SparseInliersAmongManyMatchesAreRejected) {
+  GeometricOptions loose;
+  loose.ratio = 1.0;
+  loose.min_inliers = 8;
+  loose.min_inlier_ratio = 0.0;
+  GeometricOptions guarded = loose;
+  guarded.min_inlier_ratio = 0.5;
+  int sparse = 0;
+  for (std::uint64_t seed = 20; seed < 26; ++seed) {
+    const cv::Mat a = texture(320, 240, seed), b = texture(320, 240, seed + 100);
+    const GeometricCheck unguarded = check_pair(a, b, loose);
+    const GeometricCheck c = check_pair(a, b, guarded);
+    EXPECT_EQ(c.inliers, unguarded.inliers);  // same fit, only the decision differs
+    if (unguarded.inliers >= 8 && unguarded.inliers < 0.5 * unguarded.matches) {
+      ++sparse;
+      EXPECT_TRUE(unguarded.accepted) << unguarded.reason;
+      EXPECT_FALSE(c.accepted) << c.reason;
+      EXPECT_NE(c.reason.find("below 0.5 of the matches"), std::string::npos) << c.reason;
+    }
+  }
+  EXPECT_GT(sparse, 0) << "no unrelated pair produced a sparse model: the test checks nothing";
+  // The same place keeps almost every match as an inlier and passes the guard.
+  const cv::Mat a = texture(320, 240, 30);
+  EXPECT_TRUE(check_pair(a, a, guarded).accepted);
 }
 
 TEST(GeometricVerifier, FlatImageHasNoKeypointsAndIsRejected) {

@@ -276,7 +276,10 @@ void read_geometric(const YAML::Node& node, const std::string& source, Geometric
         [&](const YAML::Node& v,
             const std::string& k) { o.ransac_threshold = read_double(v, source, k); }},
        {"min_inliers",
-        [&](const YAML::Node& v, const std::string& k) { o.min_inliers = read_int(v, source, k); }}});
+        [&](const YAML::Node& v, const std::string& k) { o.min_inliers = read_int(v, source, k); }},
+       {"min_inlier_ratio", [&](const YAML::Node& v, const std::string& k) {
+          o.min_inlier_ratio = read_double(v, source, k);
+        }}});
 }
 
 void read_verification(const YAML::Node& node, const std::string& source,
@@ -411,7 +414,8 @@ std::string to_yaml(const DetectorOptions& options) {
       << "  geometric: {max_features: " << geo.max_features << ", min_side: " << geo.min_side
       << ", ratio: " << format_double(geo.ratio)
       << ", ransac_threshold: " << format_double(geo.ransac_threshold)
-      << ", min_inliers: " << geo.min_inliers << "}\n"
+      << ", min_inliers: " << geo.min_inliers
+      << ", min_inlier_ratio: " << format_double(geo.min_inlier_ratio) << "}\n"
       << "decision:\n"
       << "  threshold: " << format_double(options.decision.threshold) << "\n";
   return out.str();

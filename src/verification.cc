@@ -72,13 +72,21 @@ void TemporalVerifier::rescore(const FrameStore& store, const DescriptorView& de
                                std::int64_t min_gap, SimilarityMetric metric, int top_n,
                                std::vector<Candidate>& out) const {
   out.clear();
+  scored_.clear();
+  const auto score_of = [&](std::int64_t j) {
+    for (const Candidate& s : scored_) {
+      if (s.frame == j) return s;
+    }
+    scored_.push_back({j, sequence_score(store, descriptor, query, j, metric)});
+    return scored_.back();
+  };
   const std::int64_t limit = std::min(store.size(), query - min_gap);  // candidates j < limit
   for (const Candidate& c : raw) {
     Candidate aligned{-1, -1.0};
     const std::int64_t lo = std::max<std::int64_t>(0, c.frame - options_.tolerance);
     const std::int64_t hi = std::min(limit - 1, c.frame + options_.tolerance);
     for (std::int64_t j = lo; j <= hi; ++j) {
-      const Candidate s{j, sequence_score(store, descriptor, query, j, metric)};
+      const Candidate s = score_of(j);
       if (better(s, aligned)) aligned = s;
     }
     const bool seen = std::any_of(out.begin(), out.end(),

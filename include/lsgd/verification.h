@@ -71,7 +71,7 @@ class TemporalVerifier {
   explicit TemporalVerifier(const TemporalOptions& options = {});
 
   // Re-ranks `raw` (query's candidates by similarity) by sequence score and
-  // writes the best top_n, best first, to `out`. `query` is the frame being
+  // writes the best top_n, best first, to `out`. Not thread-safe (scratch). `query` is the frame being
   // processed (descriptor `descriptor`, not stored yet); every earlier frame
   // is in `store`. Candidates stay outside the temporal window.
   void rescore(const FrameStore& store, const DescriptorView& descriptor, std::int64_t query,
@@ -95,6 +95,9 @@ class TemporalVerifier {
                         std::int64_t query, std::int64_t j, SimilarityMetric metric) const;
 
   TemporalOptions options_;
+  // Sequence scores computed in the current rescore() call: the windows of
+  // neighbouring candidates overlap, so each frame is scored once.
+  mutable std::vector<Candidate> scored_;
   std::deque<std::int64_t> places_;  // best place of the previous queries, newest last
   std::int64_t last_query_ = -1;
 };

@@ -155,19 +155,19 @@ void route_frame(const std::vector<lsgd::Descriptor>& base, std::int64_t j, std:
   out.hist.resize(a.hist.size());
   out.pixels.assign(static_cast<std::size_t>(cells), 0);
   for (std::size_t i = 0; i < a.hist.size(); ++i) {
-    out.hist[i] = static_cast<lsgd::Count>(std::lround((1 - t) * a.hist[i] + t * b.hist[i]));
+    out.hist[i] = static_cast<lsgd::Bin>(std::lround((1 - t) * a.hist[i] + t * b.hist[i]));
   }
   std::uniform_int_distribution<int> bin(0, lsgd::kBins - 1), delta(-3, 3);
   for (int c = 0; c < cells; ++c) {
-    lsgd::Count* h = out.hist.data() + static_cast<std::size_t>(c) * lsgd::kBins;
+    lsgd::Bin* h = out.hist.data() + static_cast<std::size_t>(c) * lsgd::kBins;
     for (int m = 0; m < 24; ++m) {
       const int from = bin(rng);
       if (h[from] == 0) continue;
       const int to = std::clamp(from + delta(rng), 0, lsgd::kBins - 1);
-      const lsgd::Count moved = 1 + static_cast<lsgd::Count>(rng() % (h[from] / 4 + 1));
-      const lsgd::Count n = std::min(moved, h[from]);
-      h[from] -= n;
-      h[to] += n;
+      const lsgd::Bin moved = static_cast<lsgd::Bin>(1 + rng() % (h[from] / 4 + 1));
+      const lsgd::Bin n = std::min(moved, h[from]);
+      h[from] = static_cast<lsgd::Bin>(h[from] - n);
+      h[to] = static_cast<lsgd::Bin>(h[to] + n);
     }
     lsgd::Count sum = 0;
     for (int k = 0; k < lsgd::kBins; ++k) sum += h[k];
@@ -227,7 +227,7 @@ void BM_ToGray(benchmark::State& state, Size size) {
 
 void BM_Segment(benchmark::State& state, Size size) {
   const lsgd::GrayImage gray = lsgd::to_gray(make_bgr(size.width, size.height, 1));
-  lsgd::Segmenter segmenter;  // default options: S_p 40, 10 iterations
+  lsgd::Segmenter segmenter;  // default options: S_p 40, 3 iterations
   lsgd::Segmentation seg;     // reused across frames, as the detector does
   for (auto _ : state) {
     segmenter.segment(gray, seg);

@@ -10,6 +10,7 @@ packages=(
   libcli11-dev libyaml-cpp-dev nlohmann-json3-dev
   libgtest-dev libgmock-dev
   libbenchmark-dev
+  libhwy-dev
 )
 
 missing=()

@@ -32,7 +32,7 @@ DescriptorView FrameStore::view(std::int64_t frame) const {
 }
 
 std::size_t FrameStore::bytes_per_frame() const {
-  return static_cast<std::size_t>(grid_.cells()) * (kBins + 1) * sizeof(Count);
+  return static_cast<std::size_t>(grid_.cells()) * (kBins * sizeof(Bin) + sizeof(Count));
 }
 
 void FrameStore::reserve(std::int64_t frames) {

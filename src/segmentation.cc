@@ -5,6 +5,7 @@
 #include <limits>
 
 #include "internal/check.h"
+#include "internal/kernels.h"
 
 namespace lsgd {
 
@@ -45,12 +46,9 @@ void Segmenter::segment(const GrayImage& image, Segmentation& out) {
   out.height = image.height;
   out.grid = grid_size(image.width, image.height, options_.superpixel_size);
   out.labels.resize(static_cast<std::size_t>(image.width) * image.height);
-  distance_.resize(out.labels.size());
+  distance_.resize(static_cast<std::size_t>(image.width));
   seed(image, out);
-  for (int it = 0; it < options_.iterations; ++it) {
-    assign(image, out);
-    update(image, out);
-  }
+  for (int it = 0; it < options_.iterations; ++it) iterate(image, out);
 }
 
 // Grid seeds at ((i + 0.5) W / cols, (j + 0.5) H / rows), truncated to whole
@@ -91,83 +89,104 @@ void Segmenter::seed(const GrayImage& image, Segmentation& out) const {
   }
 }
 
-// Each centre claims the pixels of its window (+- one cell size, as the
-// reference's search range) whose fuse distance
-// F_d^2 = d_i^2 / intensity_scale + d_e^2 / distance_scale is the smallest so far.
-void Segmenter::assign(const GrayImage& image, Segmentation& out) {
-  std::fill(distance_.begin(), distance_.end(), std::numeric_limits<float>::infinity());
-  std::fill(out.labels.begin(), out.labels.end(), -1);
+// One k-means iteration, row by row so that the working set (one row of
+// distances and labels) stays in the L1 cache:
+// - assignment: each centre claims the pixels of its window (+- one cell size,
+//   as the reference's search range) whose fuse distance
+//   F_d^2 = d_i^2 / intensity_scale + d_e^2 / distance_scale is the smallest
+//   so far, centres in index order (ties keep the earlier centre); a SIMD
+//   kernel does one row for all centres whose window covers it;
+// - a pixel no window reached (centres move between iterations) joins the
+//   centre nearest in position (the reference would index -1);
+// - update: every centre moves to the mean position and intensity of its
+//   pixels; an empty cluster keeps its previous centre (no division by zero).
+//   Labels come in runs along a row (cells are ~2 S_p wide), so the sums are
+//   taken per run, x sums by the arithmetic series, exact in 64-bit integers.
+// The result equals assigning the whole image, then updating.
+void Segmenter::iterate(const GrayImage& image, Segmentation& out) {
   const GridSize g = out.grid;
+  const int cells = g.cells();
   const int half_w = image.width / g.cols;
   const int half_h = image.height / g.rows;
   const float inv_ds = static_cast<float>(1.0 / options_.distance_scale);
-  const float inv_is = static_cast<float>(1.0 / options_.intensity_scale);
-  for (int k = 0; k < g.cells(); ++k) {
-    const Centre& centre = out.centres[k];
-    const int cx = static_cast<int>(std::lround(centre.x));
-    const int cy = static_cast<int>(std::lround(centre.y));
-    const int x0 = std::max(0, cx - half_w), x1 = std::min(image.width - 1, cx + half_w);
-    const int y0 = std::max(0, cy - half_h), y1 = std::min(image.height - 1, cy + half_h);
-    for (int y = y0; y <= y1; ++y) {
-      const float dy = y - centre.y;
-      const float row_term = dy * dy * inv_ds;
-      const std::size_t row = static_cast<std::size_t>(y) * image.width;
-      for (int x = x0; x <= x1; ++x) {
-        const float dx = x - centre.x;
-        const float di = image.pixels[row + x] - centre.intensity;
-        const float d = di * di * inv_is + dx * dx * inv_ds + row_term;
-        if (d < distance_[row + x]) {
-          distance_[row + x] = d;
-          out.labels[row + x] = k;
-        }
-      }
-    }
-  }
-  assign_unreached(out);
-}
 
-// Centres move between iterations, so a pixel can fall outside every window;
-// it joins the centre nearest in position (the reference would index -1).
-void Segmenter::assign_unreached(Segmentation& out) const {
-  for (int y = 0; y < out.height; ++y) {
-    for (int x = 0; x < out.width; ++x) {
-      std::int32_t& label = out.labels[static_cast<std::size_t>(y) * out.width + x];
-      if (label >= 0) continue;
-      float best = std::numeric_limits<float>::infinity();
-      for (int k = 0; k < out.grid.cells(); ++k) {
-        const float dx = x - out.centres[k].x, dy = y - out.centres[k].y;
-        const float d = dx * dx + dy * dy;
-        if (d < best) best = d, label = k;
-      }
-    }
+  // Windows, and for every row the centres whose window covers it, in index
+  // order (a counting sort by row).
+  windows_.resize(static_cast<std::size_t>(cells));
+  row_start_.assign(static_cast<std::size_t>(image.height) + 1, 0);
+  for (int k = 0; k < cells; ++k) {
+    const int cx = static_cast<int>(std::lround(out.centres[k].x));
+    const int cy = static_cast<int>(std::lround(out.centres[k].y));
+    Window& w = windows_[k];
+    w.x0 = std::max(0, cx - half_w), w.x1 = std::min(image.width - 1, cx + half_w);
+    w.y0 = std::max(0, cy - half_h), w.y1 = std::min(image.height - 1, cy + half_h);
+    for (int y = w.y0; y <= w.y1; ++y) ++row_start_[static_cast<std::size_t>(y) + 1];
   }
-}
+  for (int y = 0; y < image.height; ++y) row_start_[y + 1] += row_start_[y];
+  row_items_.resize(static_cast<std::size_t>(row_start_[image.height]));
+  row_fill_.assign(row_start_.begin(), row_start_.end() - 1);
+  for (int k = 0; k < cells; ++k) {
+    for (int y = windows_[k].y0; y <= windows_[k].y1; ++y) row_items_[row_fill_[y]++] = k;
+  }
 
-// k-means update: every centre moves to the mean position and intensity of its
-// pixels; an empty cluster keeps its previous centre (no division by zero).
-void Segmenter::update(const GrayImage& image, Segmentation& out) {
-  const int cells = out.grid.cells();
-  sums_.assign(static_cast<std::size_t>(cells) * 3, 0.0);
-  for (auto& centre : out.centres) centre.pixels = 0;
+  sums_.assign(static_cast<std::size_t>(cells) * 4, 0);
+  internal::AssignRow r;
+  r.distance = distance_.data();
+  r.inv_distance = inv_ds;
+  r.inv_intensity = static_cast<float>(1.0 / options_.intensity_scale);
   for (int y = 0; y < image.height; ++y) {
     const std::size_t row = static_cast<std::size_t>(y) * image.width;
-    for (int x = 0; x < image.width; ++x) {
-      const std::int32_t k = out.labels[row + x];
-      double* s = &sums_[static_cast<std::size_t>(k) * 3];
-      s[0] += x;
-      s[1] += y;
-      s[2] += image.pixels[row + x];
-      ++out.centres[k].pixels;
+    const std::uint8_t* p = image.pixels.data() + row;
+    std::int32_t* labels = out.labels.data() + row;
+    segments_.resize(static_cast<std::size_t>(row_start_[y + 1] - row_start_[y]));
+    for (std::int64_t i = row_start_[y]; i < row_start_[y + 1]; ++i) {
+      const std::int32_t k = row_items_[i];
+      const Centre& c = out.centres[k];
+      const float dy = static_cast<float>(y) - c.y;
+      internal::RowSegment& seg = segments_[static_cast<std::size_t>(i - row_start_[y])];
+      seg.x0 = windows_[k].x0;
+      seg.x1 = windows_[k].x1;
+      seg.cx = c.x;
+      seg.intensity = c.intensity;
+      seg.row_term = (dy * dy) * inv_ds;
+      seg.label = k;
+    }
+    std::fill(distance_.begin(), distance_.end(), std::numeric_limits<float>::infinity());
+    std::fill(labels, labels + image.width, -1);
+    r.pixels = p;
+    r.labels = labels;
+    r.segments = segments_.data();
+    r.count = static_cast<int>(segments_.size());
+    internal::assign_row(r);
+
+    int x = internal::row_sums(labels, p, image.width, y, sums_.data());
+    while (x < image.width) {  // an unreached pixel: label it, go on from there
+      labels[x] = nearest_centre(out, x, y);
+      x = internal::row_sums(labels, p, image.width, y, sums_.data(), x);
     }
   }
   for (int k = 0; k < cells; ++k) {
     Centre& centre = out.centres[k];
-    if (centre.pixels == 0) continue;
-    const double n = centre.pixels;
-    centre.x = static_cast<float>(sums_[k * 3] / n);
-    centre.y = static_cast<float>(sums_[k * 3 + 1] / n);
-    centre.intensity = static_cast<float>(sums_[k * 3 + 2] / n);
+    const std::int64_t* s = &sums_[static_cast<std::size_t>(k) * 4];
+    centre.pixels = static_cast<std::int32_t>(s[3]);
+    if (s[3] == 0) continue;
+    const double n = static_cast<double>(s[3]);
+    centre.x = static_cast<float>(static_cast<double>(s[0]) / n);
+    centre.y = static_cast<float>(static_cast<double>(s[1]) / n);
+    centre.intensity = static_cast<float>(static_cast<double>(s[2]) / n);
   }
+}
+
+// The centre nearest in position to pixel (x, y), for pixels outside every window.
+std::int32_t Segmenter::nearest_centre(const Segmentation& out, int x, int y) const {
+  float best = std::numeric_limits<float>::infinity();
+  std::int32_t label = 0;
+  for (int k = 0; k < out.grid.cells(); ++k) {
+    const float dx = x - out.centres[k].x, dy = y - out.centres[k].y;
+    const float d = dx * dx + dy * dy;
+    if (d < best) best = d, label = k;
+  }
+  return label;
 }
 
 }  // namespace lsgd

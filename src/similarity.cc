@@ -1,28 +1,36 @@
 #include "lsgd/similarity.h"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdlib>
 #include <cstring>
 
 #include "internal/check.h"
+#include "internal/kernels.h"
 
 namespace lsgd {
 namespace {
 
-std::uint64_t cell_l1(const Count* a, const Count* b) {
-  std::uint64_t sum = 0;
-  for (int i = 0; i < kBins; ++i) {
-    sum += a[i] > b[i] ? a[i] - b[i] : b[i] - a[i];
-  }
-  return sum;
-}
-
-double normalized_cell_l1(const Count* a, Count na, const Count* b, Count nb) {
+double normalized_cell_l1(const Bin* a, Count na, const Bin* b, Count nb) {
   if (na == 0 || nb == 0) return na == nb ? 0.0 : 2.0;
   const double sa = 1.0 / na, sb = 1.0 / nb;
   double sum = 0;
   for (int i = 0; i < kBins; ++i) sum += std::fabs(a[i] * sa - b[i] * sb);
   return sum;
+}
+
+// Calls f(k, L1 of cell k) for every cell, the L1s computed by the SIMD
+// kernel a block of cells at a time.
+template <typename F>
+void for_each_cell_l1(const DescriptorView& a, const DescriptorView& b, F&& f) {
+  constexpr int kBlock = 128;
+  std::uint32_t l1[kBlock];
+  for (int k0 = 0; k0 < a.cells; k0 += kBlock) {
+    const int n = std::min(kBlock, a.cells - k0);
+    const std::size_t off = static_cast<std::size_t>(k0) * kBins;
+    internal::cell_l1(a.hist + off, b.hist + off, n, l1);
+    for (int i = 0; i < n; ++i) f(k0 + i, l1[i]);
+  }
 }
 
 }  // namespace
@@ -61,19 +69,17 @@ double similarity(const DescriptorView& a, const DescriptorView& b, SimilarityMe
   switch (metric) {
     case SimilarityMetric::kReference: {
       double sum = 0;
-      for (int k = 0; k < cells; ++k) {
-        const std::size_t off = static_cast<std::size_t>(k) * kBins;
-        sum += std::sqrt(static_cast<double>(cell_l1(a.hist + off, b.hist + off))) / kBins;
-      }
+      for_each_cell_l1(a, b, [&](int, std::uint32_t l1) {
+        sum += std::sqrt(static_cast<double>(l1)) / kBins;
+      });
       return 1.0 / (1.0 + sum / cells);
     }
     case SimilarityMetric::kL1: {
       std::uint64_t l1 = 0, mass = 0;
-      for (int k = 0; k < cells; ++k) {
-        const std::size_t off = static_cast<std::size_t>(k) * kBins;
-        l1 += cell_l1(a.hist + off, b.hist + off);
+      for_each_cell_l1(a, b, [&](int k, std::uint32_t cell) {
+        l1 += cell;
         mass += static_cast<std::uint64_t>(a.pixels[k]) + b.pixels[k];
-      }
+      });
       return mass == 0 ? 1.0 : 1.0 - static_cast<double>(l1) / static_cast<double>(mass);
     }
     case SimilarityMetric::kNormalizedL1: {

@@ -137,7 +137,7 @@ TEST(ParseConfig, ToYamlRoundTrips) {
   expect_equal(parse_config(to_yaml(DetectorOptions{}), kSource, custom), DetectorOptions{});
   const std::string text = to_yaml(DetectorOptions{});
   for (const char* key :
-       {"segmentation:", "superpixel_size: 40", "iterations: 10", "intensity_scale: 20",
+       {"segmentation:", "superpixel_size: 40", "iterations: 3", "intensity_scale: 20",
         "distance_scale: 1.0", "metric: reference", "mode: exhaustive", "min_gap: 50", "top_n: 10",
         "threshold_0: 0.9", "alpha: 0.8", "beta: 1.0", "decision:", "threshold: 0.855", "stages: temporal"}) {
     EXPECT_NE(text.find(key), std::string::npos) << key << " missing in:\n" << text;

@@ -32,7 +32,7 @@ void expect_consistent(const GrayImage& image, const Segmentation& seg, const De
   ASSERT_EQ(d.hist.size(), static_cast<std::size_t>(cells) * kBins);
   ASSERT_EQ(d.pixels.size(), static_cast<std::size_t>(cells));
   // Recompute by brute force from the labels.
-  std::vector<Count> hist(static_cast<std::size_t>(cells) * kBins, 0);
+  std::vector<Bin> hist(static_cast<std::size_t>(cells) * kBins, 0);
   std::vector<Count> pixels(cells, 0);
   for (std::size_t i = 0; i < image.pixels.size(); ++i) {
     ++hist[static_cast<std::size_t>(seg.labels[i]) * kBins + image.pixels[i]];
@@ -42,7 +42,7 @@ void expect_consistent(const GrayImage& image, const Segmentation& seg, const De
   EXPECT_EQ(d.pixels, pixels);
   std::uint64_t total = 0;
   for (int k = 0; k < cells; ++k) {
-    const Count* h = &d.hist[static_cast<std::size_t>(k) * kBins];
+    const Bin* h = &d.hist[static_cast<std::size_t>(k) * kBins];
     const std::uint64_t sum = std::accumulate(h, h + kBins, std::uint64_t{0});
     EXPECT_EQ(sum, d.pixels[k]) << "cell " << k;
     EXPECT_EQ(static_cast<std::int64_t>(d.pixels[k]), seg.centres[k].pixels) << "cell " << k;
@@ -71,7 +71,7 @@ TEST(Descriptor, ConstantImagePutsAllMassInOneBin) {
     const Descriptor d = describe(img, seg);
     expect_consistent(img, seg, d);
     for (int k = 0; k < d.grid.cells(); ++k) {
-      const Count* h = &d.hist[static_cast<std::size_t>(k) * kBins];
+      const Bin* h = &d.hist[static_cast<std::size_t>(k) * kBins];
       EXPECT_EQ(h[v], d.pixels[k]) << "cell " << k;
       EXPECT_GT(d.pixels[k], 0u) << "cell " << k;
     }
@@ -104,6 +104,31 @@ TEST(Descriptor, HandMadeSegmentation) {
   EXPECT_EQ(v.cells, 2);
   EXPECT_EQ(v.hist, d.hist.data());
   EXPECT_EQ(v.pixels, d.pixels.data());
+}
+
+// Bins are 16-bit: a cell of more than 65535 pixels is still counted exactly
+// while no bin passes 65535, and a fuller bin saturates instead of wrapping.
+TEST(Descriptor, LargeCellsCountExactlyAndSaturate) {
+  GrayImage img;
+  img.width = 300;
+  img.height = 300;  // 90000 pixels in one cell
+  img.pixels.resize(90000);
+  for (std::size_t i = 0; i < img.pixels.size(); ++i) img.pixels[i] = static_cast<std::uint8_t>(i % 256);
+  Segmentation seg;
+  seg.grid = {1, 1};
+  seg.width = img.width;
+  seg.height = img.height;
+  seg.labels.assign(img.pixels.size(), 0);
+  seg.centres.resize(1);
+  Descriptor d = describe(img, seg);
+  EXPECT_EQ(d.pixels[0], 90000u);
+  EXPECT_EQ(d.hist[0], 352u);    // 90000 = 351 * 256 + 144: bins 0..143 hold 352
+  EXPECT_EQ(d.hist[255], 351u);
+  std::fill(img.pixels.begin(), img.pixels.end(), 7);
+  d = describe(img, seg);
+  EXPECT_EQ(d.pixels[0], 90000u);
+  EXPECT_EQ(d.hist[7], 65535u);  // saturated, not 90000 mod 65536
+  EXPECT_EQ(d.hist[6], 0u);
 }
 
 TEST(Descriptor, ReusesOutputAndResets) {

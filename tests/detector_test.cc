@@ -371,14 +371,15 @@ TEST(Detector, MemoryPerFrame) {
   const GridSize g = grid_size(kW, kH, 16);
   EXPECT_EQ(g, (GridSize{3, 4}));
   EXPECT_EQ(det.store().grid(), g);
-  EXPECT_EQ(det.bytes_per_frame(), static_cast<std::size_t>(g.cells()) * (256 + 1) * 4);
-  EXPECT_EQ(det.bytes_per_frame(), 12u * 257u * 4u);
+  // 16-bit bins and a 32-bit pixel count per cell.
+  EXPECT_EQ(det.bytes_per_frame(), static_cast<std::size_t>(g.cells()) * (256 * 2 + 4));
+  EXPECT_EQ(det.bytes_per_frame(), 12u * 516u);
   // KITTI-sized frames at S_p = 40: 80 cells.
   DetectorOptions ko;
   ko.segmentation.superpixel_size = 40;
   Detector kitti(ko);
   kitti.process(cv::Mat(376, 1241, CV_8UC1, cv::Scalar(90)));
-  EXPECT_EQ(kitti.bytes_per_frame(), 80u * 257u * 4u);
+  EXPECT_EQ(kitti.bytes_per_frame(), 80u * 516u);  // 41,280 bytes
 }
 
 TEST(Detector, SimilarityAccessor) {

@@ -30,8 +30,8 @@ Descriptor line_descriptor(int t, int mass = 100) {
   Descriptor d;
   d.grid = {1, 1};
   d.hist.assign(kBins, 0);
-  d.hist[0] = static_cast<Count>(mass - t);
-  d.hist[1] = static_cast<Count>(t);
+  d.hist[0] = static_cast<Bin>(mass - t);
+  d.hist[1] = static_cast<Bin>(t);
   d.pixels = {static_cast<Count>(mass)};
   return d;
 }

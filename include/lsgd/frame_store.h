@@ -31,7 +31,7 @@ class FrameStore {
  private:
   GridSize grid_;
   std::int64_t size_ = 0;
-  std::vector<Count> hist_;
+  std::vector<Bin> hist_;
   std::vector<Count> pixels_;
 };
 

@@ -32,7 +32,8 @@ struct SimilarityOptions {
   void check() const;
 };
 
-// Scalar reference kernel. Both descriptors must have the same number of
+// Per-cell L1 by a SIMD kernel chosen at run time (identical to the scalar
+// reference, see src/internal/kernels.h). Both descriptors must have the same number of
 // cells (throws InvalidArgument otherwise).
 double similarity(const DescriptorView& a, const DescriptorView& b, SimilarityMetric metric);
 

@@ -4,7 +4,7 @@
 //
 //   segmentation:
 //     superpixel_size: 40      # S_p, pixels
-//     iterations: 10
+//     iterations: 3
 //     intensity_scale: 20.0
 //     distance_scale: 1.0
 //   similarity:

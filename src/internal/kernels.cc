@@ -1,0 +1,212 @@
+// SIMD kernels (see kernels.h). Highway compiles the code between
+// HWY_BEFORE_NAMESPACE and HWY_AFTER_NAMESPACE once per target; the
+// HWY_ONCE part dispatches to the best target at run time.
+#undef HWY_TARGET_INCLUDE
+#define HWY_TARGET_INCLUDE "internal/kernels.cc"
+#include "hwy/foreach_target.h"  // IWYU pragma: keep
+#include "hwy/highway.h"
+
+#include "internal/kernels.h"
+
+HWY_BEFORE_NAMESPACE();
+namespace lsgd::internal {
+namespace HWY_NAMESPACE {
+namespace hn = hwy::HWY_NAMESPACE;
+
+void AssignRowSimd(const AssignRow& r) {
+  const hn::ScalableTag<float> df;
+  const hn::RebindToSigned<decltype(df)> di;
+  const hn::Rebind<std::uint8_t, decltype(df)> d8;
+  const int lanes = static_cast<int>(hn::Lanes(df));
+  const auto inv_i = hn::Set(df, r.inv_intensity);
+  const auto inv_d = hn::Set(df, r.inv_distance);
+  const auto iota = hn::Iota(df, 0.0f);
+  for (int s = 0; s < r.count; ++s) {
+    const RowSegment& seg = r.segments[s];
+    const auto intensity = hn::Set(df, seg.intensity);
+    const auto cx = hn::Set(df, seg.cx);
+    const auto row_term = hn::Set(df, seg.row_term);
+    const auto label = hn::Set(di, seg.label);
+    const auto step = [&](int x) {
+      const auto pix = hn::ConvertTo(df, hn::PromoteTo(di, hn::LoadU(d8, r.pixels + x)));
+      const auto dx = hn::Sub(hn::Add(iota, hn::Set(df, static_cast<float>(x))), cx);
+      const auto dI = hn::Sub(pix, intensity);
+      const auto d = hn::Add(hn::Add(hn::Mul(hn::Mul(dI, dI), inv_i), hn::Mul(hn::Mul(dx, dx), inv_d)),
+                             row_term);
+      const auto old = hn::LoadU(df, r.distance + x);
+      const auto closer = hn::Lt(d, old);
+      hn::StoreU(hn::IfThenElse(closer, d, old), df, r.distance + x);
+      const auto old_label = hn::LoadU(di, r.labels + x);
+      hn::StoreU(hn::IfThenElse(hn::RebindMask(di, closer), label, old_label), di, r.labels + x);
+    };
+    int x = seg.x0;
+    for (; x + lanes <= seg.x1 + 1; x += lanes) step(x);
+    if (x <= seg.x1 && seg.x1 + 1 - lanes >= seg.x0) {
+      // The tail as one vector ending at x1: its first lanes were done above
+      // and give exactly the same d again, which is not < the stored d.
+      step(seg.x1 + 1 - lanes);
+      continue;
+    }
+    for (; x <= seg.x1; ++x) {  // tail, same operations in the same order
+      const float dx = static_cast<float>(x) - seg.cx;
+      const float dI = static_cast<float>(r.pixels[x]) - seg.intensity;
+      const float d = ((dI * dI) * r.inv_intensity + (dx * dx) * r.inv_distance) + seg.row_term;
+      if (d < r.distance[x]) {
+        r.distance[x] = d;
+        r.labels[x] = seg.label;
+      }
+    }
+  }
+}
+
+int RowSumsSimd(const std::int32_t* labels, const std::uint8_t* pixels, int width, int y,
+                std::int64_t* sums, int x) {
+  const hn::ScalableTag<std::int32_t> di;
+  const hn::Rebind<std::uint8_t, decltype(di)> d8;
+  const int lanes = static_cast<int>(hn::Lanes(di));
+  while (x < width) {
+    const std::int32_t k = labels[x];
+    if (k < 0) return x;
+    const auto vk = hn::Set(di, k);
+    auto acc = hn::Zero(di);  // at most 4096 * 255 per lane: no overflow
+    const int start = x;
+    std::int64_t tail = 0;
+    for (;;) {
+      if (x + lanes > width) {  // the row's last few pixels
+        for (; x < width && labels[x] == k; ++x) tail += pixels[x];
+        break;
+      }
+      const auto same = hn::Eq(hn::LoadU(di, labels + x), vk);
+      const auto pix = hn::PromoteTo(di, hn::LoadU(d8, pixels + x));
+      if (hn::AllTrue(di, same)) {
+        acc = hn::Add(acc, pix);
+        x += lanes;
+        continue;
+      }
+      const auto n = static_cast<std::size_t>(hn::FindFirstTrue(di, hn::Not(same)));
+      acc = hn::Add(acc, hn::IfThenElseZero(hn::FirstN(di, n), pix));
+      x += static_cast<int>(n);
+      break;
+    }
+    const std::int64_t n = x - start;
+    std::int64_t* s = sums + static_cast<std::size_t>(k) * 4;
+    s[0] += n * (start + x - 1) / 2;  // sum of start .. x-1 (n * (a + b) is even)
+    s[1] += n * y;
+    s[2] += hn::GetLane(hn::SumOfLanes(di, acc)) + tail;
+    s[3] += n;
+  }
+  return width;
+}
+
+void CellL1Simd(const Bin* a, const Bin* b, int cells, std::uint32_t* out) {
+  const hn::ScalableTag<std::uint32_t> d32;
+  const hn::Rebind<std::uint16_t, decltype(d32)> d16;  // half-width loads, promoted
+  const std::size_t lanes = hn::Lanes(d32);
+  for (int k = 0; k < cells; ++k) {
+    const Bin* pa = a + static_cast<std::size_t>(k) * kBins;
+    const Bin* pb = b + static_cast<std::size_t>(k) * kBins;
+    auto acc0 = hn::Zero(d32);
+    auto acc1 = hn::Zero(d32);
+    std::size_t i = 0;
+    for (; i + 2 * lanes <= static_cast<std::size_t>(kBins); i += 2 * lanes) {
+      const auto a0 = hn::PromoteTo(d32, hn::LoadU(d16, pa + i));
+      const auto b0 = hn::PromoteTo(d32, hn::LoadU(d16, pb + i));
+      const auto a1 = hn::PromoteTo(d32, hn::LoadU(d16, pa + i + lanes));
+      const auto b1 = hn::PromoteTo(d32, hn::LoadU(d16, pb + i + lanes));
+      acc0 = hn::Add(acc0, hn::Sub(hn::Max(a0, b0), hn::Min(a0, b0)));
+      acc1 = hn::Add(acc1, hn::Sub(hn::Max(a1, b1), hn::Min(a1, b1)));
+    }
+    std::uint32_t sum = hn::GetLane(hn::SumOfLanes(d32, hn::Add(acc0, acc1)));
+    for (; i < static_cast<std::size_t>(kBins); ++i) {  // only when 2 * lanes does not divide 256
+      sum += pa[i] > pb[i] ? pa[i] - pb[i] : pb[i] - pa[i];
+    }
+    out[k] = sum;
+  }
+}
+
+std::int64_t TargetOf() { return HWY_TARGET; }
+
+}  // namespace HWY_NAMESPACE
+}  // namespace lsgd::internal
+HWY_AFTER_NAMESPACE();
+
+#if HWY_ONCE
+namespace lsgd::internal {
+
+HWY_EXPORT(AssignRowSimd);
+HWY_EXPORT(CellL1Simd);
+HWY_EXPORT(RowSumsSimd);
+HWY_EXPORT(TargetOf);
+
+void assign_row(const AssignRow& row) { HWY_DYNAMIC_DISPATCH(AssignRowSimd)(row); }
+
+void assign_row_scalar(const AssignRow& r) {
+  for (int s = 0; s < r.count; ++s) {
+    const RowSegment& seg = r.segments[s];
+    for (int x = seg.x0; x <= seg.x1; ++x) {
+      const float dx = static_cast<float>(x) - seg.cx;
+      const float dI = static_cast<float>(r.pixels[x]) - seg.intensity;
+      const float d = ((dI * dI) * r.inv_intensity + (dx * dx) * r.inv_distance) + seg.row_term;
+      if (d < r.distance[x]) {
+        r.distance[x] = d;
+        r.labels[x] = seg.label;
+      }
+    }
+  }
+}
+
+int row_sums(const std::int32_t* labels, const std::uint8_t* pixels, int width, int y,
+             std::int64_t* sums, int start) {
+  return HWY_DYNAMIC_DISPATCH(RowSumsSimd)(labels, pixels, width, y, sums, start);
+}
+
+int row_sums_scalar(const std::int32_t* labels, const std::uint8_t* pixels, int width, int y,
+                    std::int64_t* sums, int start) {
+  int x = start;
+  while (x < width) {
+    const std::int32_t k = labels[x];
+    if (k < 0) return x;
+    const int run_start = x;
+    std::int64_t intensity = 0;
+    for (; x < width && labels[x] == k; ++x) intensity += pixels[x];
+    const std::int64_t n = x - run_start;
+    std::int64_t* s = sums + static_cast<std::size_t>(k) * 4;
+    s[0] += n * (run_start + x - 1) / 2;
+    s[1] += n * y;
+    s[2] += intensity;
+    s[3] += n;
+  }
+  return width;
+}
+
+void cell_l1(const Bin* a, const Bin* b, int cells, std::uint32_t* out) {
+  HWY_DYNAMIC_DISPATCH(CellL1Simd)(a, b, cells, out);
+}
+
+void cell_l1_scalar(const Bin* a, const Bin* b, int cells, std::uint32_t* out) {
+  for (int k = 0; k < cells; ++k) {
+    const Bin* pa = a + static_cast<std::size_t>(k) * kBins;
+    const Bin* pb = b + static_cast<std::size_t>(k) * kBins;
+    std::uint32_t sum = 0;
+    for (int i = 0; i < kBins; ++i) sum += pa[i] > pb[i] ? pa[i] - pb[i] : pb[i] - pa[i];
+    out[k] = sum;
+  }
+}
+
+std::vector<std::int64_t> simd_targets() {
+  std::vector<std::int64_t> out;
+  const std::int64_t supported = hwy::SupportedTargets() & HWY_TARGETS;
+  for (std::int64_t bit = 1; bit != 0 && bit <= supported; bit <<= 1) {
+    if (supported & bit) out.push_back(bit);
+  }
+  return out;  // lower bits are the better targets on x86
+}
+
+std::string simd_target_name(std::int64_t target) { return hwy::TargetName(target); }
+
+void force_simd_target(std::int64_t target) { hwy::SetSupportedTargetsForTest(target); }
+
+std::string active_simd_target() { return hwy::TargetName(HWY_DYNAMIC_DISPATCH(TargetOf)()); }
+
+}  // namespace lsgd::internal
+#endif  // HWY_ONCE

@@ -11,6 +11,7 @@ packages=(
   libgtest-dev libgmock-dev
   libbenchmark-dev
   libhwy-dev
+  libmatio-dev  # MATLAB .mat ground truth (lsgd gt); brings zlib1g-dev
 )
 
 missing=()

@@ -1,5 +1,5 @@
-// Tests of the strict evaluation protocol (eval/metrics.h), on hand-made
-// reports whose metrics can be computed by hand.
+// Tests of the strict evaluation protocol and the LSGDDN authors' lenient one
+// (eval/metrics.h), on hand-made reports whose metrics can be computed by hand.
 #include "lsgd/eval/metrics.h"
 
 #include <gtest/gtest.h>
@@ -131,6 +131,117 @@ TEST(Evaluate, EmptyAndInvalidInput) {
   EXPECT_THROW(lsgd::eval::evaluate({report(3, {}), report(3, {})}, small_gt(), 2),
                lsgd::InvalidArgument);
   EXPECT_THROW(lsgd::eval::evaluate({}, small_gt(), -1), lsgd::InvalidArgument);
+}
+
+// ---------------------------------------------------------------- lsgddn-reference
+
+using lsgd::eval::evaluate_lsgddn_reference;
+using lsgd::eval::ReferenceProtocolOptions;
+
+// 300 frames; queries 200, 201, 202 revisit frames 10, 11, 12.
+GroundTruth far_gt() {
+  GroundTruth gt(300);
+  gt.add(200, 10);
+  gt.add(201, 11);
+  gt.add(202, 12);
+  return gt;
+}
+
+TEST(ReferenceProtocol, FalsePositiveOnALoopFreeQueryIsInvisible) {
+  // Query 250 has no GT loop; its false report has the best score.
+  std::vector<FrameRecord> r = {report(200, {{10, 0.9}}), report(201, {{11, 0.8}}),
+                                report(202, {{12, 0.7}}), report(250, {{100, 0.95}})};
+  const auto strict = lsgd::eval::evaluate(r, far_gt(), 50);
+  EXPECT_DOUBLE_EQ(strict.recall_at_100_precision, 0.0);
+  // 0.95 F, 0.9 T (1/2, 1/3), 0.8 T (2/3, 2/3), 0.7 T (3/4, 1).
+  EXPECT_DOUBLE_EQ(strict.average_precision, (0.5 + 2.0 / 3.0 + 0.75) / 3.0);
+  const auto lenient = evaluate_lsgddn_reference(r, far_gt());
+  EXPECT_EQ(lenient.positives, 3);
+  EXPECT_DOUBLE_EQ(lenient.recall_at_100_precision, 1.0);
+  EXPECT_DOUBLE_EQ(lenient.threshold_at_100_precision, 0.7);
+  EXPECT_DOUBLE_EQ(lenient.average_precision, 1.0);
+  EXPECT_EQ(lenient.curve.size(), 3u);  // the 0.95 report never enters the sweep
+  EXPECT_EQ(lenient.frames, 4);
+}
+
+TEST(ReferenceProtocol, AcceptsAMatchWithinTheTolerance) {
+  // One query (one positive) whose report is 30 frames off GT frame 10.
+  std::vector<FrameRecord> r = {report(200, {{40, 0.9}})};
+  EXPECT_DOUBLE_EQ(lsgd::eval::evaluate(r, far_gt(), 50).recall_at_100_precision, 0.0);
+  EXPECT_DOUBLE_EQ(evaluate_lsgddn_reference(r, far_gt()).recall_at_100_precision, 1.0);
+  EXPECT_DOUBLE_EQ(evaluate_lsgddn_reference(r, far_gt()).recall_at_1, 1.0);
+  ReferenceProtocolOptions tight;
+  tight.tolerance = 30;  // |40 - 10| < 30 is false
+  EXPECT_DOUBLE_EQ(evaluate_lsgddn_reference(r, far_gt(), tight).recall_at_100_precision, 0.0);
+  tight.tolerance = 31;
+  EXPECT_DOUBLE_EQ(evaluate_lsgddn_reference(r, far_gt(), tight).recall_at_100_precision, 1.0);
+  // 50 off is outside the default tolerance: the evaluator tests |j - g| < 50.
+  std::vector<FrameRecord> off = {report(200, {{60, 0.9}})};
+  EXPECT_DOUBLE_EQ(evaluate_lsgddn_reference(off, far_gt()).recall_at_100_precision, 0.0);
+  EXPECT_EQ(evaluate_lsgddn_reference(off, far_gt()).curve.at(0).false_positives, 1);
+}
+
+TEST(ReferenceProtocol, ReportsInsideTheExclusionAreDropped) {
+  std::vector<FrameRecord> r = {report(200, {{150, 0.9}})};           // |i - j| = 50: excluded
+  EXPECT_EQ(lsgd::eval::evaluate(r, far_gt(), 50).curve.size(), 1u);  // strict: a false positive
+  const auto lenient = evaluate_lsgddn_reference(r, far_gt());
+  EXPECT_TRUE(lenient.curve.empty());
+  EXPECT_EQ(lenient.min_gap, 50);
+}
+
+TEST(ReferenceProtocol, GroundTruthNeighboursInsideTheWindowDoNotCount) {
+  GroundTruth gt = far_gt();
+  gt.add(200, 198);  // a temporal neighbour, as pose-derived ground truth has
+  std::vector<FrameRecord> r = {report(200, {{149, 0.9}})};  // 49 from 198, far from 10
+  EXPECT_DOUBLE_EQ(evaluate_lsgddn_reference(r, gt).recall_at_100_precision, 0.0);
+}
+
+TEST(ReferenceProtocol, RecallCountsAnyReportOnALoopQuery) {
+  // 0.9 correct, 0.8 wrong (129 off), query 202 reports nothing.
+  std::vector<FrameRecord> r = {report(200, {{10, 0.9}}), report(201, {{140, 0.8}}),
+                                report(202, {})};
+  const auto m = evaluate_lsgddn_reference(r, far_gt());
+  ASSERT_EQ(m.curve.size(), 2u);
+  EXPECT_DOUBLE_EQ(m.curve[1].recall, 2.0 / 3.0);  // the wrong report counts for recall
+  EXPECT_DOUBLE_EQ(m.curve[1].precision, 0.5);
+  EXPECT_DOUBLE_EQ(m.recall_at_100_precision, 1.0 / 3.0);
+  EXPECT_DOUBLE_EQ(m.average_precision, 1.0 / 3.0 + (1.0 / 3.0) * 0.5);
+  ReferenceProtocolOptions correct_only;
+  correct_only.recall_counts_any_report = false;
+  const auto c = evaluate_lsgddn_reference(r, far_gt(), correct_only);
+  EXPECT_DOUBLE_EQ(c.curve[1].recall, 1.0 / 3.0);
+  EXPECT_DOUBLE_EQ(c.average_precision, 1.0 / 3.0);
+}
+
+TEST(ReferenceProtocol, RecallAtNUsesTheSameTolerance) {
+  std::vector<FrameRecord> r = {report(200, {{120, 0.9}, {100, 0.8}, {30, 0.7}})};
+  const auto m = evaluate_lsgddn_reference(r, far_gt());
+  EXPECT_DOUBLE_EQ(m.recall_at_1, 0.0);
+  EXPECT_DOUBLE_EQ(m.recall_at_5, 1.0);  // 30 is 20 off frame 10 (one positive query)
+}
+
+TEST(ReferenceProtocol, SaysWhichProtocolItIs) {
+  const auto strict = lsgd::eval::evaluate({}, far_gt(), 50);
+  EXPECT_EQ(strict.protocol, "strict");
+  EXPECT_NE(lsgd::eval::describe_protocol(strict).find("strict"), std::string::npos);
+  const auto lenient = evaluate_lsgddn_reference({}, far_gt());
+  EXPECT_EQ(lenient.protocol, "lsgddn-reference");
+  EXPECT_EQ(lenient.tolerance, 50);
+  const std::string text = lsgd::eval::describe_protocol(lenient);
+  EXPECT_NE(text.find("lenient"), std::string::npos) << text;
+  EXPECT_NE(text.find("49 frames"), std::string::npos) << text;
+}
+
+TEST(ReferenceProtocol, InvalidInput) {
+  ReferenceProtocolOptions bad;
+  bad.tolerance = 0;
+  EXPECT_THROW(evaluate_lsgddn_reference({}, far_gt(), bad), lsgd::InvalidArgument);
+  bad = {};
+  bad.min_gap = -1;
+  EXPECT_THROW(evaluate_lsgddn_reference({}, far_gt(), bad), lsgd::InvalidArgument);
+  EXPECT_THROW(evaluate_lsgddn_reference({report(300, {})}, far_gt()), lsgd::InvalidArgument);
+  EXPECT_THROW(evaluate_lsgddn_reference({report(3, {}), report(3, {})}, far_gt()),
+               lsgd::InvalidArgument);
 }
 
 TEST(Percentile, NearestRank) {

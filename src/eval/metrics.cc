@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdlib>
 #include <numeric>
 
 #include "internal/check.h"
@@ -12,6 +13,7 @@ namespace {
 struct Report {
   double score;
   bool correct;
+  bool recalled;  // counts towards recall (strict: iff correct)
 };
 
 bool correct_loop(const GroundTruth& gt, std::int64_t query, const Candidate& c,
@@ -19,38 +21,68 @@ bool correct_loop(const GroundTruth& gt, std::int64_t query, const Candidate& c,
   return c.frame >= 0 && c.frame < query - min_gap && gt.is_loop(query, c.frame);
 }
 
+// True when some ground-truth loop g < query - min_gap of the query lies
+// within tolerance of the candidate: |c - g| < tolerance.
+bool near_loop(const GroundTruth& gt, std::int64_t query, const Candidate& c, std::int64_t min_gap,
+               std::int64_t tolerance) {
+  if (c.frame < 0 || std::abs(query - c.frame) <= min_gap) return false;
+  const auto& loops = gt.matches(query);  // ascending
+  const auto end = std::lower_bound(loops.begin(), loops.end(), query - min_gap);
+  const auto near = std::lower_bound(loops.begin(), end, c.frame - tolerance + 1);
+  return near != end && *near < c.frame + tolerance;
+}
+
+// Frame ids inside the ground truth, each at most once.
+void check_records(const std::vector<FrameRecord>& records, const GroundTruth& gt,
+                   const char* who) {
+  std::vector<char> seen(static_cast<std::size_t>(gt.frames()), 0);
+  for (const auto& r : records) {
+    if (r.frame < 0 || r.frame >= gt.frames()) {
+      internal::throw_invalid(who, ": frame ", r.frame, " is outside the ground truth's ",
+                              gt.frames(), " frames");
+    }
+    if (seen[static_cast<std::size_t>(r.frame)]++) {
+      internal::throw_invalid(who, ": frame ", r.frame, " is reported twice");
+    }
+  }
+}
+
 // Fills the threshold sweep, R@100P, P@100R and AP from the best reports.
 void sweep(std::vector<Report> reports, Metrics& m) {
   std::sort(reports.begin(), reports.end(),
             [](const Report& a, const Report& b) { return a.score > b.score; });
-  std::int64_t tp = 0, fp = 0;
+  std::int64_t tp = 0, fp = 0, recalled = 0;
   double previous_recall = 0;
   for (std::size_t i = 0; i < reports.size();) {
     const double threshold = reports[i].score;
     for (; i < reports.size() && reports[i].score == threshold; ++i) {
       (reports[i].correct ? tp : fp) += 1;
+      recalled += reports[i].recalled ? 1 : 0;
     }
     PrPoint p;
     p.threshold = threshold;
     p.true_positives = tp;
     p.false_positives = fp;
     p.precision = static_cast<double>(tp) / static_cast<double>(tp + fp);
-    p.recall = m.positives > 0 ? static_cast<double>(tp) / static_cast<double>(m.positives) : 0.0;
+    p.recall =
+        m.positives > 0 ? static_cast<double>(recalled) / static_cast<double>(m.positives) : 0.0;
     m.average_precision += (p.recall - previous_recall) * p.precision;
     previous_recall = p.recall;
     if (fp == 0 && p.recall > m.recall_at_100_precision) {
       m.recall_at_100_precision = p.recall;
       m.threshold_at_100_precision = threshold;
     }
-    if (m.positives > 0 && tp == m.positives) {
+    if (m.positives > 0 && recalled == m.positives) {
       m.precision_at_100_recall = std::max(m.precision_at_100_recall, p.precision);
     }
     m.curve.push_back(p);
   }
 }
 
+// Recall@1/5/10 over the positive queries; correct(query, candidate) decides a hit.
+template <typename Correct>
 void fill_recall_at_n(const std::vector<FrameRecord>& records, const GroundTruth& gt,
-                      std::int64_t min_gap, Metrics& m) {
+                      std::int64_t min_gap, const Correct& correct, Metrics& m) {
   std::int64_t hits[3] = {0, 0, 0};
   const std::size_t ns[3] = {1, 5, 10};
   for (const auto& r : records) {
@@ -58,7 +90,7 @@ void fill_recall_at_n(const std::vector<FrameRecord>& records, const GroundTruth
     for (int k = 0; k < 3; ++k) {
       const std::size_t n = std::min(ns[k], r.candidates.size());
       for (std::size_t c = 0; c < n; ++c) {
-        if (correct_loop(gt, r.frame, r.candidates[c], min_gap)) {
+        if (correct(r.frame, r.candidates[c])) {
           ++hits[k];
           break;
         }
@@ -114,25 +146,69 @@ Metrics evaluate(const std::vector<FrameRecord>& records, const GroundTruth& gt,
   Metrics m;
   m.min_gap = min_gap;
   m.frames = static_cast<std::int64_t>(records.size());
-  std::vector<char> seen(static_cast<std::size_t>(gt.frames()), 0);
+  check_records(records, gt, "evaluate");
   std::vector<Report> reports;
   for (const auto& r : records) {
-    if (r.frame < 0 || r.frame >= gt.frames()) {
-      internal::throw_invalid("evaluate: frame ", r.frame, " is outside the ground truth's ",
-                              gt.frames(), " frames");
-    }
-    if (seen[static_cast<std::size_t>(r.frame)]++) {
-      internal::throw_invalid("evaluate: frame ", r.frame, " is reported twice");
-    }
     if (gt.has_loop(r.frame, min_gap)) ++m.positives;
     if (r.reported.frame >= 0) {
-      reports.push_back({r.reported.score, correct_loop(gt, r.frame, r.reported, min_gap)});
+      const bool correct = correct_loop(gt, r.frame, r.reported, min_gap);
+      reports.push_back({r.reported.score, correct, correct});
     }
   }
   sweep(std::move(reports), m);
-  fill_recall_at_n(records, gt, min_gap, m);
+  fill_recall_at_n(
+      records, gt, min_gap,
+      [&](std::int64_t q, const Candidate& c) { return correct_loop(gt, q, c, min_gap); }, m);
   fill_timings(records, m);
   return m;
+}
+
+void ReferenceProtocolOptions::check() const {
+  internal::check_range<std::int64_t>("min_gap", min_gap, 0, 1'000'000'000, "frames");
+  internal::check_range<std::int64_t>("tolerance", tolerance, 1, 1'000'000'000, "frames");
+}
+
+Metrics evaluate_lsgddn_reference(const std::vector<FrameRecord>& records, const GroundTruth& gt,
+                                  const ReferenceProtocolOptions& options) {
+  options.check();
+  Metrics m;
+  m.protocol = "lsgddn-reference";
+  m.tolerance = options.tolerance;
+  m.min_gap = options.min_gap;
+  m.frames = static_cast<std::int64_t>(records.size());
+  check_records(records, gt, "evaluate_lsgddn_reference");
+  const auto correct = [&](std::int64_t q, const Candidate& c) {
+    return near_loop(gt, q, c, options.min_gap, options.tolerance);
+  };
+  std::vector<Report> reports;
+  for (const auto& r : records) {
+    // Queries without a ground-truth loop are never looked at: their reports vanish.
+    if (!gt.has_loop(r.frame, options.min_gap)) continue;
+    ++m.positives;
+    const std::int64_t j = r.reported.frame;
+    if (j < 0 || std::abs(r.frame - j) <= options.min_gap) continue;
+    const bool ok = correct(r.frame, r.reported);
+    reports.push_back({r.reported.score, ok, ok || options.recall_counts_any_report});
+  }
+  sweep(std::move(reports), m);
+  fill_recall_at_n(records, gt, options.min_gap, correct, m);
+  fill_timings(records, m);
+  return m;
+}
+
+std::string describe_protocol(const Metrics& m) {
+  if (m.protocol == "strict") {
+    return internal::concat(
+        "strict (one report per query, exact ground-truth match, false "
+        "positives counted on every query; window ",
+        m.min_gap, " frames)");
+  }
+  return internal::concat(
+      m.protocol,
+      " (lenient: reports on queries without a ground-truth loop are ignored, a "
+      "report within ",
+      m.tolerance - 1, " frames of a ground-truth loop counts as correct, |i - j| <= ", m.min_gap,
+      " excluded; for comparison with the LSGDDN paper only, not with strict numbers)");
 }
 
 }  // namespace lsgd::eval

@@ -99,7 +99,9 @@ std::string trim(const std::string& line) {
   return line.substr(first, last - first + 1);
 }
 
-std::vector<std::string> list_folder(const std::string& path) {
+}  // namespace
+
+std::vector<std::string> list_images(const std::string& path, NameOrder order) {
   std::error_code ec;
   fs::directory_iterator it(path, ec);
   if (ec) throw IoError(concat("cannot read folder '", path, "': ", ec.message()));
@@ -114,14 +116,18 @@ std::vector<std::string> list_folder(const std::string& path) {
     throw FormatError(
         concat("no images in folder '", path, "' (looked for ", extension_list(), ", any case)"));
   }
-  std::sort(names.begin(), names.end(), natural_less);
+  if (order == NameOrder::kNatural) {
+    std::sort(names.begin(), names.end(), natural_less);
+  } else {
+    std::sort(names.begin(), names.end());
+  }
   std::vector<std::string> images;
   images.reserve(names.size());
   for (const std::string& name : names) images.push_back((fs::path(path) / name).string());
   return images;
 }
 
-std::vector<std::string> read_list_file(const std::string& path) {
+std::vector<std::string> read_image_list(const std::string& path) {
   std::ifstream in(path, std::ios::binary);
   if (!in) throw IoError(concat("cannot read list file '", path, "'"));
   const fs::path folder = fs::path(path).parent_path();
@@ -144,6 +150,8 @@ std::vector<std::string> read_list_file(const std::string& path) {
   }
   return images;
 }
+
+namespace {
 
 const char* depth_name(int depth) {
   switch (depth) {
@@ -217,12 +225,12 @@ Sequence open_sequence(const std::string& path) {
   Sequence sequence;
   sequence.source = path;
   if (fs::is_directory(status)) {
-    sequence.images = list_folder(path);
+    sequence.images = list_images(path);
   } else if (has_image_extension(path)) {
     throw FormatError(
         concat("sequence '", path, "' is a single image; give a folder of images or a list file"));
   } else if (fs::is_regular_file(status)) {
-    sequence.images = read_list_file(path);
+    sequence.images = read_image_list(path);
   } else {
     throw IoError(concat("sequence '", path, "' is neither a folder nor a regular file"));
   }

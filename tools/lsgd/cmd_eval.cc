@@ -1,52 +1,251 @@
-// lsgd eval --sequence PATH --gt FILE --min-gap W [--mode M] [--config FILE] --json OUT
+// lsgd eval (--sequence PATH | --detections CSV) --gt FILE --min-gap W --json OUT
+//           [--protocol strict|lsgddn-reference] [--layout L ...] [--every K ...]
+// Runs the detector over a sequence, or reads another system's detections, and
+// scores them against ground truth moved onto the evaluated frames.
+#include <CLI/CLI.hpp>
+#include <fstream>
 #include <iostream>
 #include <memory>
-
-#include <CLI/CLI.hpp>
+#include <optional>
+#include <sstream>
 
 #include "commands.h"
 #include "common.h"
+#include "lsgd/error.h"
+#include "lsgd/eval/detections.h"
 #include "lsgd/eval/groundtruth.h"
+#include "lsgd/eval/gt_formats.h"
+#include "lsgd/eval/gt_remap.h"
+#include "lsgd/eval/report.h"
 #include "lsgd/eval/runner.h"
 #include "lsgd/io/config.h"
-#include "lsgd/io/sequence.h"
+#include "lsgd/io/layouts.h"
 
 namespace lsgd::cli {
 namespace {
 
 struct EvalArgs {
   std::string sequence;
+  std::string detections;
   std::string gt;
   std::string json;
   std::string output;
+  std::optional<std::int64_t> frames;
+  std::string protocol = "strict";
+  std::optional<std::int64_t> tolerance;
+  std::string subsample_match = "exact";
+  std::string gt_rows;
+  std::string gt_format = "auto";
+  std::string report;  // HTML report path
+  std::string poses;   // KITTI poses for the report's trajectory
   DetectorFlags detector;
+  SequenceFlags layout;
+  CLI::App* command = nullptr;  // to tell which flags were given
 };
 
-void evaluate(const EvalArgs& args) {
-  const DetectorOptions options = args.detector.resolve();
-  const io::Sequence sequence = io::open_sequence(args.sequence);
-  const auto frames = static_cast<std::int64_t>(sequence.images.size());
+// The one place the ground truth is read: `rows` frames in the dataset's own
+// numbering, -1 when only the file can say. Any supported format (pairs text,
+// MATLAB .mat, KITTI poses, LSGDDN loopinf), detected from the file unless
+// --gt-format names it.
+eval::GroundTruth read_ground_truth(const EvalArgs& args, std::int64_t rows) {
+  eval::GtOptions options;
+  options.format = eval::parse_gt_format(args.gt_format);
+  options.frames = rows;
+  return eval::load_groundtruth(args.gt, options);
+}
+
+eval::GtRows gt_rows(const EvalArgs& args) {
+  return args.gt_rows.empty() ? eval::GtRows::kPair : eval::parse_gt_rows(args.gt_rows);
+}
+
+// The ground truth of the evaluated frames: `rows` rows in the dataset's own
+// numbering (-1: as many as the file says), moved through the layout's choice
+// of images (FAB-MAP sides), then through --first/--last/--every.
+eval::GroundTruth evaluated_groundtruth(const EvalArgs& args, const io::SequenceOptions& options,
+                                        io::Layout layout, std::int64_t rows) {
+  eval::GroundTruth gt;
+  try {
+    gt = read_ground_truth(args, rows);
+  } catch (const FormatError& e) {
+    if (layout != io::Layout::kFabmap || rows < 0) throw;
+    throw FormatError(std::string(e.what()) + " (FAB-MAP with --gt-rows " +
+                      eval::to_string(gt_rows(args)) + " expects " + std::to_string(rows) +
+                      " rows; is the ground truth given per " +
+                      (gt_rows(args) == eval::GtRows::kPair ? "image? --gt-rows image)"
+                                                            : "pair? --gt-rows pair)"));
+  }
+  if (layout == io::Layout::kFabmap) {
+    const std::int64_t pairs = gt_rows(args) == eval::GtRows::kPair ? gt.frames() : gt.frames() / 2;
+    gt = eval::fabmap_groundtruth(gt, pairs, options.side);
+  }
+  const io::FrameSelection& s = options.selection;
+  if (!s.keeps_all()) {
+    gt = eval::subsample(gt, s.every, s.first, s.last,
+                         eval::parse_subsample_match(args.subsample_match));
+  }
+  return gt;
+}
+
+// Rejects flag combinations that would be silently ignored.
+void check_flags(const EvalArgs& args, io::Layout layout) {
+  const CLI::App& cmd = *args.command;
+  if (args.sequence.empty() == args.detections.empty()) {
+    throw InvalidArgument(
+        "give --sequence (run the detector) or --detections (score a CSV), exactly one");
+  }
+  if (!args.detections.empty()) {
+    for (const char* flag : {"--output", "--config", "--mode", "--threshold", "--verify"}) {
+      if (cmd.count(flag) > 0) {
+        throw InvalidArgument(std::string(flag) +
+                              " applies when the detector runs (--sequence), "
+                              "not to --detections");
+      }
+    }
+  } else if (args.frames) {
+    throw InvalidArgument("--frames applies to --detections; with --sequence the sequence says");
+  }
+  if (args.tolerance && args.protocol != "lsgddn-reference") {
+    throw InvalidArgument("--tolerance applies to --protocol lsgddn-reference only");
+  }
+  if (!args.poses.empty() && args.report.empty()) {
+    throw InvalidArgument("--poses draws the trajectory of --report: give --report too");
+  }
+  if (!args.gt_rows.empty() && layout != io::Layout::kFabmap) {
+    throw InvalidArgument("--gt-rows applies to --layout fabmap only");
+  }
+}
+
+eval::Metrics score(const EvalArgs& args, const std::vector<eval::FrameRecord>& records,
+                    const eval::GroundTruth& gt, std::int64_t min_gap) {
+  if (args.protocol == "strict") return eval::evaluate(records, gt, min_gap);
+  eval::ReferenceProtocolOptions reference;
+  reference.min_gap = min_gap;
+  if (args.tolerance) reference.tolerance = *args.tolerance;
+  return eval::evaluate_lsgddn_reference(records, gt, reference);
+}
+
+void describe_inputs(const EvalArgs& args, const io::SequenceOptions& options, io::Layout layout,
+                     const eval::GroundTruth& gt, nlohmann::json& json) {
+  json["ground_truth"] = args.gt;
+  json["ground_truth_pairs"] = gt.pairs();
+  json["layout"] = io::to_string(layout);
+  if (layout == io::Layout::kFabmap) {
+    json["side"] = io::to_string(options.side);
+    json["gt_rows"] = args.gt_rows.empty() ? "pair" : args.gt_rows;
+  }
+  json["first"] = options.selection.first;
+  json["last"] = options.selection.last;
+  json["every"] = options.selection.every;
+  if (!options.selection.keeps_all()) json["subsample_match"] = args.subsample_match;
+}
+
+// The parts of the HTML report common to both paths; the trajectory comes from
+// --poses (x, z of each evaluated frame's camera centre).
+eval::ReportInput report_input(const EvalArgs& args, const eval::Metrics& metrics,
+                               const std::vector<eval::FrameRecord>& records,
+                               const eval::GroundTruth& gt) {
+  eval::ReportInput input;
+  input.title = "lsgd eval";
+  input.ground_truth = args.gt;
+  input.protocol = metrics.protocol;
+  input.metrics = &metrics;
+  input.records = &records;
+  input.gt = &gt;
+  if (!args.poses.empty()) {
+    const std::vector<eval::Pose> poses = eval::read_kitti_poses(args.poses);
+    if (static_cast<std::int64_t>(poses.size()) != gt.frames()) {
+      throw FormatError("--poses " + args.poses + " has " + std::to_string(poses.size()) +
+                        " poses but " + std::to_string(gt.frames()) +
+                        " frames are evaluated (subsampled sequences: subsample the poses too)");
+    }
+    for (const eval::Pose& p : poses) input.trajectory.push_back({p.x, p.z});
+  }
+  return input;
+}
+
+void evaluate_detections(const EvalArgs& args, const io::SequenceOptions& options) {
+  eval::GroundTruth gt =
+      evaluated_groundtruth(args, options, options.layout, args.frames ? *args.frames : -1);
+  // A pairs file only implies frames up to its largest id; when frame ids map
+  // one to one, detections of later (loop-free) frames extend it.
+  if (!args.frames && options.layout != io::Layout::kFabmap && options.selection.keeps_all()) {
+    const auto extent = static_cast<std::int64_t>(eval::read_detections(args.detections).size());
+    if (extent > gt.frames()) gt = evaluated_groundtruth(args, options, options.layout, extent);
+  }
+  const auto records = eval::read_detections(args.detections, gt.frames());
+  const std::int64_t min_gap = *args.detector.min_gap;
+  const eval::Metrics metrics = score(args, records, gt, min_gap);
+  nlohmann::json json = metrics_json(metrics);
+  json["detections"] = args.detections;
+  describe_inputs(args, options, options.layout, gt, json);
+  write_json(json, args.json);
+  std::cout << args.detections << " (detections read from the file, no detector run)\n";
+  print_metrics(metrics, 0, std::cout);
+  if (!args.report.empty()) {
+    eval::ReportInput input = report_input(args, metrics, records, gt);
+    input.sequence = args.detections + " (detections of another system)";
+    eval::write_report(input, args.report);
+    std::cout << "report: " << args.report << "\n";
+  }
+}
+
+void evaluate_sequence(const EvalArgs& args, const io::SequenceOptions& options) {
+  const DetectorOptions detector_options = args.detector.resolve();
+  const io::Layout layout = io::detect_layout(args.sequence, options);
+  const io::Sequence all = io::open_layout(args.sequence, options);
+  const io::Sequence sequence = io::subsample(all, options.selection);
   // Read the ground truth before the (long) run so a wrong file fails at once.
-  const eval::GroundTruth gt = eval::read_pairs(args.gt, frames);
+  const auto frames = static_cast<std::int64_t>(all.images.size());
+  std::int64_t rows = frames;
+  if (layout == io::Layout::kFabmap) {
+    rows = eval::fabmap_gt_frames(options.side == io::Side::kBoth ? frames / 2 : frames,
+                                  gt_rows(args));
+  }
+  const eval::GroundTruth gt = evaluated_groundtruth(args, options, layout, rows);
   const eval::FrameSource source = eval::sequence_source(sequence);
   std::unique_ptr<CsvWriter> csv;
   if (!args.output.empty()) csv = std::make_unique<CsvWriter>(args.output);
-  Detector detector(options);
+  Detector detector(detector_options);
   const auto records = run_with_progress(detector, source, "eval", csv.get());
-  const eval::Metrics metrics = eval::evaluate(records, gt, options.search.min_gap);
+  const eval::Metrics metrics = score(args, records, gt, detector_options.search.min_gap);
 
   nlohmann::json json = metrics_json(metrics);
-  json["mode"] = to_string(options.search.mode);
-  json["verification"] = verification_stages(options.verification);
+  json["mode"] = to_string(detector_options.search.mode);
+  json["verification"] = verification_stages(detector_options.verification);
   json["nodes"] = detector.nodes();
   json["bytes_per_frame"] = detector.bytes_per_frame();
   json["sequence"] = args.sequence;
-  json["ground_truth"] = args.gt;
-  json["config_yaml"] = io::to_yaml(options);
+  describe_inputs(args, options, layout, gt, json);
+  json["config_yaml"] = io::to_yaml(detector_options);
   write_json(json, args.json);
-  std::cout << args.sequence << " (" << to_string(options.search.mode) << ", verification "
-            << verification_stages(options.verification) << ")\n";
+  std::cout << args.sequence << " (" << to_string(detector_options.search.mode) << ", verification "
+            << verification_stages(detector_options.verification) << ")\n";
   print_metrics(metrics, detector.nodes(), std::cout);
+  if (!args.report.empty()) {
+    eval::ReportInput input = report_input(args, metrics, records, gt);
+    input.sequence = args.sequence;
+    input.mode = to_string(detector_options.search.mode);
+    input.verification = verification_stages(detector_options.verification);
+    input.config_yaml = io::to_yaml(detector_options);
+    input.similarity = [&detector](std::int64_t a, std::int64_t b) {
+      return detector.similarity(a, b);
+    };
+    input.nodes = detector.nodes();
+    input.bytes_per_frame = detector.bytes_per_frame();
+    input.threshold = detector_options.decision.threshold;  // false positives show
+    eval::write_report(input, args.report);
+    std::cout << "report: " << args.report << "\n";
+  }
+}
+
+void evaluate(const EvalArgs& args) {
+  const io::SequenceOptions options = args.layout.resolve();
+  check_flags(args, options.layout);
+  if (args.detections.empty()) {
+    evaluate_sequence(args, options);
+  } else {
+    evaluate_detections(args, options);
+  }
 }
 
 }  // namespace
@@ -54,17 +253,61 @@ void evaluate(const EvalArgs& args) {
 void register_eval(CLI::App& app) {
   auto args = std::make_shared<EvalArgs>();
   CLI::App* cmd = app.add_subcommand(
-      "eval", "detect loops in a sequence and score them against ground truth (strict protocol)");
+      "eval",
+      "detect loops in a sequence (or read another system's detections) and score them against "
+      "ground truth (strict protocol by default)");
+  args->command = cmd;
   cmd->add_option("--sequence", args->sequence,
-                  "folder of images (natural order) or a text file listing image paths")
-      ->required();
-  cmd->add_option("--gt", args->gt, "ground truth, pairs text format: 'q m' per line, 0-based")
+                  "folder of images (natural order), list file, or a dataset layout (--layout)");
+  cmd->add_option("--detections", args->detections,
+                  "score this CSV instead of running the detector: query,match,score per line "
+                  "(match -1: no loop) or the CSV of `lsgd run`")
+      ->check(CLI::ExistingFile);
+  cmd->add_option("--gt", args->gt,
+                  "ground truth: pairs text ('q m' per line, 0-based), MATLAB .mat loop matrix, "
+                  "KITTI poses or LSGDDN loopinf (detected from the file)")
       ->required()
+      ->check(CLI::ExistingFile);
+  cmd->add_option("--gt-format", args->gt_format,
+                  "auto (default), pairs, mat, kitti-poses (10 m, 100 frames; see `lsgd gt "
+                  "convert` for other values) or loopinf")
+      ->check(CLI::IsMember({"auto", "pairs", "mat", "kitti-poses", "loopinf"}));
+  cmd->add_option("--report", args->report,
+                  "write a self-contained HTML report here (PR curve, similarity matrix with "
+                  "ground truth, trajectory with --poses, timings, configuration)");
+  cmd->add_option("--poses", args->poses,
+                  "KITTI poses file (12 or 13 columns) of the evaluated frames: draws the "
+                  "trajectory and the loops found in the --report")
       ->check(CLI::ExistingFile);
   cmd->add_option("--json", args->json, "write the metrics here as JSON")->required();
   cmd->add_option("--output", args->output, "also write the per-frame CSV of `lsgd run` here");
+  cmd->add_option("--frames", args->frames,
+                  "with --detections: frames of the full sequence (ground-truth rows; default: "
+                  "from the ground truth)")
+      ->check(CLI::PositiveNumber);
+  cmd->add_option("--protocol", args->protocol,
+                  "strict (default) or lsgddn-reference: the LSGDDN authors' lenient evaluator, "
+                  "only to compare with their paper")
+      ->check(CLI::IsMember({"strict", "lsgddn-reference"}));
+  cmd->add_option("--tolerance", args->tolerance,
+                  "lsgddn-reference: a report j is correct when |j - g| < T for a ground-truth "
+                  "loop g (default 50)")
+      ->check(CLI::Range(std::int64_t{1}, std::int64_t{1'000'000'000}));
+  cmd->add_option("--subsample-match", args->subsample_match,
+                  "with --every/--first/--last: exact (frames a, b match iff the kept images "
+                  "match; default) or block (iff any frames of their blocks of K match)")
+      ->check(CLI::IsMember({"exact", "block"}));
+  cmd->add_option("--gt-rows", args->gt_rows,
+                  "FAB-MAP ground truth: one row per left/right pair (default; City Centre's "
+                  "1237 rows) or per image (New College's 2146 rows)")
+      ->check(CLI::IsMember({"pair", "image"}));
   args->detector.add_to(*cmd);
-  cmd->get_option("--min-gap")->required();
+  args->layout.add_to(*cmd);
+  cmd->get_option("--min-gap")
+      ->required()
+      ->description(
+          "temporal window in frames (counted after --every): only frames j < i - W "
+          "are candidates and ground-truth loops");
   cmd->callback([args] { evaluate(*args); });
 }
 

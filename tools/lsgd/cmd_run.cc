@@ -7,7 +7,7 @@
 #include "commands.h"
 #include "common.h"
 #include "lsgd/eval/runner.h"
-#include "lsgd/io/sequence.h"
+#include "lsgd/io/layouts.h"
 
 namespace lsgd::cli {
 namespace {
@@ -16,11 +16,12 @@ struct RunArgs {
   std::string sequence;
   std::string output;
   DetectorFlags detector;
+  SequenceFlags layout;
 };
 
 void run(const RunArgs& args) {
   const DetectorOptions options = args.detector.resolve();
-  const io::Sequence sequence = io::open_sequence(args.sequence);
+  const io::Sequence sequence = io::open_sequence(args.sequence, args.layout.resolve());
   const eval::FrameSource source = eval::sequence_source(sequence);
   CsvWriter csv(args.output);
   Detector detector(options);
@@ -38,10 +39,11 @@ void register_run(CLI::App& app) {
   auto args = std::make_shared<RunArgs>();
   CLI::App* cmd = app.add_subcommand("run", "detect loops in an image sequence, one CSV row per frame");
   cmd->add_option("--sequence", args->sequence,
-                  "folder of images (natural order) or a text file listing image paths")
+                  "folder of images (natural order), list file, or a dataset layout (--layout)")
       ->required();
   cmd->add_option("--output", args->output, "CSV file to write (default: standard output)");
   args->detector.add_to(*cmd);
+  args->layout.add_to(*cmd);
   cmd->callback([args] { run(*args); });
 }
 

@@ -46,6 +46,52 @@ DetectorOptions DetectorFlags::resolve() const {
   return options;
 }
 
+void SequenceFlags::add_to(CLI::App& command) {
+  command
+      .add_option("--layout", layout,
+                  "how PATH is laid out: auto (KITTI when it has image_X/ and times.txt, else "
+                  "folder or list), folder, list, kitti, fabmap (left/right images "
+                  "alternating) or neu (folder in byte-wise name order, as the LSGDDN code)")
+      ->check(CLI::IsMember({"auto", "folder", "list", "kitti", "fabmap", "neu"}));
+  command.add_option("--kitti-sequence", kitti_sequence,
+                     "KITTI: PATH is the dataset root and the frames are sequences/NN");
+  command.add_option("--camera", camera, "KITTI: image_0 (default, gray left) .. image_3")
+      ->check(CLI::Range(0, 3));
+  command
+      .add_option("--side", side,
+                  "FAB-MAP: left (files 1, 3, 5, ...; default), right (2, 4, 6, ...) or "
+                  "both (every file)")
+      ->check(CLI::IsMember({"left", "right", "both"}));
+  command.add_option("--first", first, "first frame kept (0-based, before --every)");
+  command.add_option("--last", last, "last frame that may be kept (0-based, inclusive)");
+  command.add_option("--every", every,
+                     "keep frames first, first + K, first + 2K, ...; frame ids, --min-gap and "
+                     "the CSV count kept frames");
+}
+
+io::SequenceOptions SequenceFlags::resolve() const {
+  io::SequenceOptions options;
+  options.layout = io::parse_layout(layout);
+  options.kitti_sequence = kitti_sequence;
+  options.camera = camera;
+  if (!side.empty()) {
+    if (options.layout != io::Layout::kFabmap) {
+      throw InvalidArgument("--side " + side +
+                            " applies to --layout fabmap only (FAB-MAP "
+                            "folders are not detected automatically)");
+    }
+    options.side = io::parse_side(side);
+  }
+  const bool kitti_flags = !kitti_sequence.empty() || camera >= 0;
+  if (kitti_flags && options.layout != io::Layout::kAuto && options.layout != io::Layout::kKitti) {
+    throw InvalidArgument("--kitti-sequence and --camera apply to --layout kitti (or auto), not " +
+                          layout);
+  }
+  options.selection = io::FrameSelection{first, last, every};
+  options.check();
+  return options;
+}
+
 Progress::Progress(std::int64_t total, std::string label)
     : total_(total), label_(std::move(label)), enabled_(isatty(STDERR_FILENO) == 1) {}
 
@@ -104,7 +150,11 @@ std::vector<eval::FrameRecord> run_with_progress(Detector& detector,
 
 nlohmann::json metrics_json(const eval::Metrics& m) {
   nlohmann::json j;
-  j["protocol"] = "strict";
+  j["protocol"] = m.protocol;
+  if (m.protocol != "strict") {
+    j["protocol_note"] = eval::describe_protocol(m);
+    j["tolerance"] = m.tolerance;
+  }
   j["frames"] = m.frames;
   j["positives"] = m.positives;
   j["min_gap"] = m.min_gap;
@@ -129,9 +179,12 @@ nlohmann::json metrics_json(const eval::Metrics& m) {
 }
 
 void print_metrics(const eval::Metrics& m, std::int64_t nodes, std::ostream& out) {
+  if (m.protocol != "strict") {
+    out << "protocol: " << eval::describe_protocol(m) << "\n";
+  }
   out << std::fixed << std::setprecision(3);
-  out << "frames " << m.frames << ", positives " << m.positives << ", min gap " << m.min_gap
-      << " (strict protocol)\n"
+  out << "frames " << m.frames << ", positives " << m.positives << ", min gap " << m.min_gap << " ("
+      << m.protocol << " protocol)\n"
       << "  R@100P " << m.recall_at_100_precision << "  (threshold "
       << m.threshold_at_100_precision << ")\n"
       << "  AP     " << m.average_precision << "\n"

@@ -13,6 +13,7 @@
 #include "lsgd/detector.h"
 #include "lsgd/eval/metrics.h"
 #include "lsgd/eval/runner.h"
+#include "lsgd/io/layouts.h"
 
 namespace CLI {
 class App;
@@ -31,6 +32,23 @@ struct DetectorFlags {
   void add_to(CLI::App& command);
   // Defaults, then the config file, then the flags; validated.
   DetectorOptions resolve() const;
+};
+
+// Flags choosing which images are the frames, shared by run and eval:
+// --layout, --kitti-sequence, --camera, --side, --first, --last, --every.
+struct SequenceFlags {
+  std::string layout = "auto";  // auto | folder | list | kitti | fabmap | neu
+  std::string kitti_sequence;   // KITTI: PATH is the dataset root, this is NN
+  int camera = -1;              // KITTI image_<camera>; -1: 0 or PATH's image_X
+  std::string side;             // FAB-MAP: left | right | both; empty: left
+  std::int64_t first = 0;
+  std::int64_t last = -1;
+  std::int64_t every = 1;
+
+  void add_to(CLI::App& command);
+  // Validated options. InvalidArgument for a flag that does not apply to the
+  // chosen layout (--side without --layout fabmap, --camera with fabmap, ...).
+  io::SequenceOptions resolve() const;
 };
 
 // A one-line progress bar on stderr, drawn only when stderr is a terminal.

@@ -2,9 +2,11 @@
 // most its best candidate j < i - w; a reported loop is a true positive iff
 // GT(i, j) = 1 and a false positive otherwise, also on queries without any
 // ground-truth loop; a threshold sweep over the scores gives the PR curve.
+// Also the LSGDDN authors' lenient protocol, only to compare with their paper.
 #pragma once
 
 #include <cstdint>
+#include <string>
 #include <vector>
 
 #include "lsgd/detector.h"
@@ -30,6 +32,9 @@ struct PrPoint {
 };
 
 struct Metrics {
+  // "strict" (evaluate) or "lsgddn-reference" (evaluate_lsgddn_reference).
+  std::string protocol = "strict";
+  std::int64_t tolerance = 0;  // lsgddn-reference: match tolerance, frames; 0 for strict
   std::int64_t frames = 0;     // query frames evaluated
   std::int64_t positives = 0;  // queries with a GT match j < i - min_gap
   std::int64_t min_gap = 0;    // temporal window w, frames
@@ -70,6 +75,35 @@ struct Metrics {
 // InvalidArgument for a frame id outside the ground truth or a repeated frame.
 Metrics evaluate(const std::vector<FrameRecord>& records, const GroundTruth& gt,
                  std::int64_t min_gap);
+
+// The LSGDDN authors' evaluator (tools/P&R_Evaluator.py of
+// BaoshengZhang0/LSGDDN-LCD), applied to one reported loop per query. It is
+// lenient; use it only to compare with the paper's numbers:
+// - a report on a query without a ground-truth loop j < i - min_gap is ignored
+//   (such false positives are invisible);
+// - a report j with |i - j| <= min_gap is dropped (their |i - j| > 50);
+// - a report is correct when |j - g| < tolerance for some ground-truth loop
+//   g < i - min_gap of the query (their `abs(loopinf - lcd) < 50`);
+// - recall counts a loop query with any report at the threshold, right or
+//   wrong, unless recall_counts_any_report is false.
+struct ReferenceProtocolOptions {
+  std::int64_t min_gap = 50;             // temporal window w, frames, [0, 1e9]
+  std::int64_t tolerance = 50;           // correct when |j - g| < tolerance, frames, [1, 1e9]
+  bool recall_counts_any_report = true;  // the authors' recall; false: only correct reports
+
+  void check() const;  // InvalidArgument naming the field and value
+};
+
+// Scores records as evaluate() does (same checks, same output struct, the
+// same threshold sweep over every distinct score) under the rules above;
+// Recall@N counts a loop query when one of its N best candidates is correct
+// under the same rules. Metrics::protocol is "lsgddn-reference".
+Metrics evaluate_lsgddn_reference(const std::vector<FrameRecord>& records, const GroundTruth& gt,
+                                  const ReferenceProtocolOptions& options = {});
+
+// One line saying which protocol produced `m` and, for the lenient one, how
+// it differs from the strict one.
+std::string describe_protocol(const Metrics& m);
 
 // Value at quantile q in [0, 1] by nearest rank (0 for an empty set).
 double percentile(std::vector<double> values, double q);

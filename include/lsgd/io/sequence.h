@@ -1,5 +1,6 @@
 // Image sequences on disk: a folder of images or a list file, and reading one
-// image with errors that name the file.
+// image with errors that name the file. Dataset layouts (KITTI, FAB-MAP, NEU)
+// and frame subsampling are in layouts.h.
 #pragma once
 
 #include <string>
@@ -24,6 +25,25 @@ struct Sequence {
 // Throws IoError when PATH does not exist or cannot be read, and FormatError
 // when it holds no image.
 Sequence open_sequence(const std::string& path);
+
+// How image files of a folder are ordered.
+enum class NameOrder {
+  kNatural,  // natural_less: "2.jpg" before "10.jpg"
+  kBytewise  // std::string's operator<: "10.jpg" before "2.jpg" (what `ls` and many tools do)
+};
+
+// The image files of `folder` (regular files with an image extension, any
+// case; subfolders are not searched) as paths `folder/name`, in `order`.
+// Throws IoError when the folder cannot be read and FormatError when it holds
+// no image.
+std::vector<std::string> list_images(const std::string& folder,
+                                     NameOrder order = NameOrder::kNatural);
+
+// Reads a list file: one image path per line, relative to the file's own
+// folder unless absolute; blank lines, '#' comments and a UTF-8 BOM skipped.
+// The images are not checked. IoError when unreadable, FormatError when it
+// lists no image.
+std::vector<std::string> read_image_list(const std::string& list_file);
 
 // Natural ordering: digit runs compare by numeric value ("img2" < "img10"),
 // the rest byte-wise; ties are broken byte-wise so the order is total.

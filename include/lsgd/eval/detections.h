@@ -1,0 +1,39 @@
+// Loop detections made by another system (or an earlier `lsgd run`), read
+// from a CSV file so they can be scored with the same evaluate() code.
+//
+// Accepted files (blank lines and lines starting with '#' are skipped; fields
+// are separated by commas, or by white space on lines without a comma;
+// double-quoted fields may hold commas, quotes ("") and line breaks):
+//   query,match,score[,...]   one row per query frame; match -1 = no loop
+//                             (its score may then be empty); further columns
+//                             are ignored; the header line is optional and,
+//                             when present, may name the columns in any order
+//                             (query or frame, match, score)
+//   lsgd run's CSV            frame,image,loop_frame,candidate_frame,score,ms:
+//                             recognised by its header; candidate_frame is the
+//                             match (the reported candidate whatever its score,
+//                             so the threshold sweep sees every report) and ms
+//                             the per-frame time
+// Frame ids are 0-based and must be those of the evaluated sequence (after
+// any --first/--last/--every).
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "lsgd/eval/metrics.h"
+
+namespace lsgd::eval {
+
+// Reads `path` and returns one record per frame 0 .. frames-1, in order: a
+// frame without a row, or with match -1, reports no loop. A reported match is
+// also the record's only candidate, so Recall@1/5/10 of detections read from
+// a file are all the recall of the reported match. frames = -1 takes the
+// largest query + 1. Throws IoError when the file cannot be read, and
+// FormatError naming file:line for a malformed row, a non-integer id, a
+// non-finite score, a query outside [0, frames), a match outside
+// [-1, frames), a query given twice, or a file with no row.
+std::vector<FrameRecord> read_detections(const std::string& path, std::int64_t frames = -1);
+
+}  // namespace lsgd::eval

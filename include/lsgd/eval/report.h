@@ -1,0 +1,73 @@
+// A self-contained HTML report of one evaluation run (`lsgd eval --report`):
+// one file with inline CSS, inline SVG charts and the similarity matrix as a
+// PNG data: URI; no JavaScript and no external resource, so it opens offline
+// and can be mailed or archived as is.
+//
+// Sections: a header (sequence, ground truth, protocol, window, mode,
+// verification, counts and the headline metrics), the precision-recall curve,
+// the similarity matrix with the ground-truth loops outlined and the reported
+// loops marked, the trajectory with the loops found (when poses are given),
+// per-stage timings and resources, and the exact configuration.
+#pragma once
+
+#include <array>
+#include <cstddef>
+#include <cstdint>
+#include <functional>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "lsgd/eval/groundtruth.h"
+#include "lsgd/eval/metrics.h"
+
+namespace lsgd::eval {
+
+struct ReportInput {
+  std::string title;                // page title; empty: "lsgd evaluation: <sequence>"
+  std::string sequence;             // sequence path or name, shown as given
+  std::string ground_truth;         // ground-truth file, shown as given
+  std::string protocol = "strict";  // evaluation protocol the metrics were computed with
+  std::string mode;                 // search mode, e.g. "exhaustive" or "nodes"
+  std::string verification;         // verification stages, e.g. "temporal"
+  std::string config_yaml;          // the exact configuration (io::to_yaml); empty: omitted
+
+  // Required (not owned; must outlive the call). The temporal window is metrics->min_gap.
+  const Metrics* metrics = nullptr;
+  const std::vector<FrameRecord>* records = nullptr;
+  const GroundTruth* gt = nullptr;
+
+  // Similarity of two frames in [0, frames), e.g. Detector::similarity; empty
+  // (detections from another system): the report has no similarity matrix.
+  std::function<double(std::int64_t, std::int64_t)> similarity;
+  // The similarity matrix samples at most this many frames uniformly, in [2, 4000]
+  // (n^2 / 2 similarity calls: 600 frames take ~1.5 s at ~8 us per call).
+  int max_matrix_frames = 600;
+
+  std::int64_t nodes = 0;           // dynamic nodes at the end of the run (0: exhaustive)
+  std::size_t bytes_per_frame = 0;  // descriptor storage per frame (0: unknown, not shown)
+  // Camera position (x, z) per frame, any unit (e.g. KITTI metres); empty: no
+  // trajectory; otherwise exactly gt->frames() entries.
+  std::vector<std::array<double, 2>> trajectory;
+
+  // Operating threshold for the loops marked on the matrix and the trajectory
+  // (reported loops with score >= threshold). Empty: the R@100P threshold
+  // (metrics->threshold_at_100_precision), where every marked loop is a true
+  // positive by construction; no loop is marked when R@100P is 0.
+  std::optional<double> threshold;
+  std::string threshold_name = "decision threshold";  // what `threshold` is, when given
+
+  // Throws InvalidArgument naming the first missing or inconsistent field.
+  void check() const;
+};
+
+// The HTML text of the report. Validates the input (InvalidArgument) and
+// calls input.similarity for the sampled pairs.
+std::string render_report(const ReportInput& input);
+
+// Renders and writes the report to `path` atomically (a temporary file beside
+// it, then rename): a failed write never leaves a truncated report. Throws
+// IoError naming the path when it cannot be written.
+void write_report(const ReportInput& input, const std::string& path);
+
+}  // namespace lsgd::eval

@@ -1,0 +1,259 @@
+#include "lsgd/eval/detections.h"
+
+#include <algorithm>
+#include <cctype>
+#include <charconv>
+#include <cmath>
+#include <fstream>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "internal/check.h"
+#include "lsgd/error.h"
+
+namespace lsgd::eval {
+namespace {
+
+using internal::concat;
+
+std::string trim(const std::string& s) {
+  const char* kSpace = " \t\r\n";
+  const std::size_t b = s.find_first_not_of(kSpace);
+  if (b == std::string::npos) return {};
+  return s.substr(b, s.find_last_not_of(kSpace) - b + 1);
+}
+
+std::string lower(std::string s) {
+  for (char& c : s) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  return s;
+}
+
+// Splits one record: commas (quotes honoured) when it has any, else white space.
+std::vector<std::string> split_fields(const std::string& record) {
+  std::vector<std::string> fields;
+  if (record.find(',') == std::string::npos && record.find('"') == std::string::npos) {
+    std::size_t i = 0;
+    while ((i = record.find_first_not_of(" \t\r", i)) != std::string::npos) {
+      const std::size_t end = std::min(record.find_first_of(" \t\r", i), record.size());
+      fields.push_back(record.substr(i, end - i));
+      i = end;
+    }
+    return fields;
+  }
+  std::string field;
+  bool quoted = false;
+  for (std::size_t i = 0; i < record.size(); ++i) {
+    const char c = record[i];
+    if (quoted) {
+      if (c == '"' && i + 1 < record.size() && record[i + 1] == '"') {
+        field += '"';
+        ++i;
+      } else if (c == '"') {
+        quoted = false;
+      } else {
+        field += c;
+      }
+    } else if (c == '"') {
+      quoted = true;
+    } else if (c == ',') {
+      fields.push_back(trim(field));
+      field.clear();
+    } else {
+      field += c;
+    }
+  }
+  fields.push_back(trim(field));
+  return fields;
+}
+
+std::optional<std::int64_t> parse_int(const std::string& s) {
+  std::int64_t v = 0;
+  const auto [end, ec] = std::from_chars(s.data(), s.data() + s.size(), v);
+  if (ec != std::errc() || end != s.data() + s.size() || s.empty()) return std::nullopt;
+  return v;
+}
+
+std::optional<double> parse_double(const std::string& s) {
+  double v = 0;
+  const auto [end, ec] = std::from_chars(s.data(), s.data() + s.size(), v);
+  if (ec != std::errc() || end != s.data() + s.size() || s.empty()) return std::nullopt;
+  return v;
+}
+
+// Which field holds what; -1: absent.
+struct Columns {
+  int query = 0, match = 1, score = 2, ms = -1;
+  int needed() const { return std::max({query, match, score, ms}) + 1; }
+};
+
+int find_column(const std::vector<std::string>& header, std::initializer_list<const char*> names) {
+  for (const char* name : names) {
+    const auto it = std::find(header.begin(), header.end(), name);
+    if (it != header.end()) return static_cast<int>(it - header.begin());
+  }
+  return -1;
+}
+
+// Columns named by a header line; lsgd run's header is recognised by candidate_frame.
+Columns columns_from_header(std::vector<std::string> header) {
+  for (auto& h : header) h = lower(h);
+  Columns c;
+  if (find_column(header, {"candidate_frame"}) >= 0) {
+    c.query = find_column(header, {"frame"});
+    c.match = find_column(header, {"candidate_frame"});
+    c.score = find_column(header, {"score"});
+    c.ms = find_column(header, {"ms"});
+  } else {
+    const int q = find_column(header, {"query", "frame"});
+    const int m = find_column(header, {"match"});
+    const int s = find_column(header, {"score"});
+    if (q >= 0) c.query = q;
+    if (m >= 0) c.match = m;
+    if (s >= 0) c.score = s;
+  }
+  return c;
+}
+
+// Reads records one at a time; a quoted field may continue on the next line.
+class RecordReader {
+ public:
+  explicit RecordReader(const std::string& path) : path_(path), in_(path) {
+    if (!in_) throw IoError(concat("cannot read detections file '", path, "'"));
+  }
+  // Next non-blank, non-comment record; false at the end. line() is where it starts.
+  bool next(std::string& record) {
+    std::string text;
+    while (read_line(text)) {
+      start_ = number_;
+      if (text.rfind("\xEF\xBB\xBF", 0) == 0) text.erase(0, 3);  // UTF-8 BOM
+      const std::string t = trim(text);
+      if (t.empty() || t[0] == '#') continue;
+      record = text;
+      while (std::count(record.begin(), record.end(), '"') % 2 != 0) {
+        std::string more;
+        if (!read_line(more)) {
+          throw FormatError(concat(path_, ":", start_, ": a quoted field is never closed"));
+        }
+        record += '\n' + more;
+      }
+      return true;
+    }
+    if (in_.bad()) throw IoError(concat("error while reading '", path_, "'"));
+    return false;
+  }
+  std::int64_t line() const { return start_; }
+
+ private:
+  bool read_line(std::string& text) {
+    if (!std::getline(in_, text)) return false;
+    ++number_;
+    return true;
+  }
+  std::string path_;
+  std::ifstream in_;
+  std::int64_t number_ = 0;
+  std::int64_t start_ = 0;
+};
+
+struct Row {
+  std::int64_t line = 0;
+  std::int64_t query = 0;
+  std::int64_t match = -1;
+  double score = 0;
+  double ms = 0;
+};
+
+Row parse_row(const std::vector<std::string>& f, const Columns& c, const std::string& where) {
+  if (static_cast<int>(f.size()) < c.needed()) {
+    throw FormatError(concat(where, ": expected at least ", c.needed(),
+                             " fields (query, match, score), got ", f.size()));
+  }
+  Row row;
+  const auto query = parse_int(f[static_cast<std::size_t>(c.query)]);
+  if (!query || *query < 0) {
+    throw FormatError(concat(where, ": query '", f[static_cast<std::size_t>(c.query)],
+                             "' is not a frame id (an integer >= 0)"));
+  }
+  const auto match = parse_int(f[static_cast<std::size_t>(c.match)]);
+  if (!match || *match < -1) {
+    throw FormatError(concat(where, ": match '", f[static_cast<std::size_t>(c.match)],
+                             "' is not a frame id or -1 (no loop)"));
+  }
+  row.query = *query;
+  row.match = *match;
+  const std::string& score = f[static_cast<std::size_t>(c.score)];
+  if (row.match >= 0) {
+    const auto s = parse_double(score);
+    if (!s || !std::isfinite(*s)) {
+      throw FormatError(concat(where, ": score '", score, "' is not a finite number"));
+    }
+    row.score = *s;
+  }
+  if (c.ms >= 0) {
+    const auto ms = parse_double(f[static_cast<std::size_t>(c.ms)]);
+    if (!ms || !std::isfinite(*ms) || *ms < 0) {
+      throw FormatError(concat(where, ": ms '", f[static_cast<std::size_t>(c.ms)],
+                               "' is not a time in milliseconds"));
+    }
+    row.ms = *ms;
+  }
+  return row;
+}
+
+}  // namespace
+
+std::vector<FrameRecord> read_detections(const std::string& path, std::int64_t frames) {
+  if (frames < -1) internal::throw_invalid("read_detections: frames = ", frames, " must be >= -1");
+  RecordReader reader(path);
+  Columns columns;
+  std::vector<Row> rows;
+  std::string record;
+  for (bool first = true; reader.next(record); first = false) {
+    const std::vector<std::string> fields = split_fields(record);
+    if (first && !parse_int(fields.front())) {  // a header: the first field is no frame id
+      columns = columns_from_header(fields);
+      if (columns.query < 0 || columns.match < 0 || columns.score < 0) {
+        throw FormatError(concat(path, ":", reader.line(),
+                                 ": lsgd run header without frame, candidate_frame or score"));
+      }
+      continue;
+    }
+    Row row = parse_row(fields, columns, concat(path, ":", reader.line()));
+    row.line = reader.line();
+    rows.push_back(row);
+  }
+  if (rows.empty()) throw FormatError(concat("detections file '", path, "' has no row"));
+  if (frames < 0) {
+    frames = 0;
+    for (const Row& r : rows) frames = std::max(frames, r.query + 1);
+  }
+  std::vector<FrameRecord> records(static_cast<std::size_t>(frames));
+  std::vector<std::int64_t> line_of(static_cast<std::size_t>(frames), 0);
+  for (std::int64_t i = 0; i < frames; ++i) records[static_cast<std::size_t>(i)].frame = i;
+  for (const Row& r : rows) {
+    const std::string where = concat(path, ":", r.line);
+    if (r.query >= frames) {
+      throw FormatError(concat(where, ": query ", r.query, " is outside the ", frames,
+                               " frames (does the file belong to this sequence and subsampling?)"));
+    }
+    if (r.match >= frames) {
+      throw FormatError(concat(where, ": match ", r.match, " is outside the ", frames, " frames"));
+    }
+    std::int64_t& seen = line_of[static_cast<std::size_t>(r.query)];
+    if (seen != 0) {
+      throw FormatError(concat(where, ": query ", r.query, " already has a row on line ", seen,
+                               " (one reported loop per query)"));
+    }
+    seen = r.line;
+    FrameRecord& out = records[static_cast<std::size_t>(r.query)];
+    out.timings.total_ms = r.ms;
+    if (r.match >= 0) {
+      out.reported = Candidate{r.match, r.score};
+      out.candidates = {out.reported};
+    }
+  }
+  return records;
+}
+
+}  // namespace lsgd::eval

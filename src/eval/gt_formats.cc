@@ -1,0 +1,822 @@
+#include "lsgd/eval/gt_formats.h"
+
+#include <matio.h>
+#include <zlib.h>
+
+#include <algorithm>
+#include <array>
+#include <cctype>
+#include <charconv>
+#include <cmath>
+#include <cstring>
+#include <fstream>
+#include <memory>
+#include <mutex>
+#include <unordered_map>
+#include <utility>
+
+#include "internal/check.h"
+#include "lsgd/error.h"
+
+namespace lsgd::eval {
+
+using internal::concat;
+
+namespace {
+
+// ---- text helpers ---------------------------------------------------------
+
+constexpr std::array<std::pair<GtFormat, const char*>, 5> kFormatNames = {{
+    {GtFormat::kAuto, "auto"},
+    {GtFormat::kPairs, "pairs"},
+    {GtFormat::kMat, "mat"},
+    {GtFormat::kKittiPoses, "kitti-poses"},
+    {GtFormat::kLoopinf, "loopinf"},
+}};
+
+std::ifstream open_text(const std::string& path, const char* what) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw IoError(concat("cannot open ", what, " '", path, "'"));
+  return in;
+}
+
+bool is_space(char c) { return c == ' ' || c == '\t' || c == '\r' || c == '\f' || c == '\v'; }
+
+// Whitespace-separated fields of a line; empty for blank and '#' comment lines.
+std::vector<std::string> fields_of(const std::string& line) {
+  std::vector<std::string> fields;
+  std::size_t i = 0;
+  while (true) {
+    while (i < line.size() && is_space(line[i])) ++i;
+    if (i == line.size() || (fields.empty() && line[i] == '#')) break;
+    std::size_t end = i;
+    while (end < line.size() && !is_space(line[end])) ++end;
+    fields.push_back(line.substr(i, end - i));
+    i = end;
+  }
+  return fields;
+}
+
+bool parse_int(const std::string& text, long long& value) {
+  const char* begin = text.data() + (text.size() > 1 && text[0] == '+' ? 1 : 0);
+  const char* end = text.data() + text.size();
+  const auto [ptr, ec] = std::from_chars(begin, end, value);
+  return ec == std::errc() && ptr == end;
+}
+
+bool parse_double(const std::string& text, double& value) {
+  const char* begin = text.data() + (text.size() > 1 && text[0] == '+' ? 1 : 0);
+  const char* end = text.data() + text.size();
+  const auto [ptr, ec] = std::from_chars(begin, end, value);
+  return ec == std::errc() && ptr == end;
+}
+
+// ---- detection --------------------------------------------------------------
+
+bool has_mat_extension(const std::string& path) {
+  if (path.size() < 4) return false;
+  std::string ext = path.substr(path.size() - 4);
+  std::transform(ext.begin(), ext.end(), ext.begin(),
+                 [](unsigned char c) { return std::tolower(c); });
+  return ext == ".mat";
+}
+
+// What the text lines of a file look like, gathered in one pass.
+struct TextShape {
+  std::int64_t lines = 0;       // data lines
+  std::size_t columns = 0;      // fields per data line (all equal, else an error)
+  bool integers = true;         // every field an integer
+  bool minus_one = false;       // some second field is -1
+  bool other_negative = false;  // some other negative value
+  bool consecutive = true;      // data line k starts with k
+  bool tabs = true;             // every data line contains a tab
+};
+
+TextShape text_shape(std::istream& in, const std::string& path) {
+  TextShape shape;
+  std::string line;
+  for (std::int64_t number = 1; std::getline(in, line); ++number) {
+    const auto fields = fields_of(line);
+    if (fields.empty()) continue;
+    if (shape.lines == 0) shape.columns = fields.size();
+    if (fields.size() != shape.columns) {
+      throw FormatError(concat("cannot tell the ground-truth format of '", path, "': line ", number,
+                               " has ", fields.size(), " fields, the first data line ",
+                               shape.columns, "; pass the format explicitly"));
+    }
+    for (std::size_t f = 0; f < fields.size(); ++f) {
+      long long iv = 0;
+      double dv = 0;
+      if (parse_int(fields[f], iv)) {
+        if (f == 0 && iv != shape.lines) shape.consecutive = false;
+        if (iv == -1 && f == 1) {
+          shape.minus_one = true;
+        } else if (iv < 0) {
+          shape.other_negative = true;
+        }
+      } else if (parse_double(fields[f], dv)) {
+        shape.integers = false;
+      } else {
+        throw FormatError(concat("cannot tell the ground-truth format of '", path, "': line ",
+                                 number, ": '", fields[f], "' is not a number"));
+      }
+    }
+    shape.tabs = shape.tabs && line.find('\t') != std::string::npos;
+    ++shape.lines;
+  }
+  return shape;
+}
+
+// ---- pairs with the frame count taken from the file ------------------------
+
+GroundTruth read_pairs_counted(const std::string& path, std::int64_t frames) {
+  if (frames >= 0) return read_pairs(path, frames);
+  std::ifstream in = open_text(path, "ground-truth file");
+  long long max_id = -1;
+  std::string line;
+  while (std::getline(in, line)) {
+    const auto fields = fields_of(line);
+    long long a = 0, b = 0;
+    if (fields.size() == 2 && parse_int(fields[0], a) && parse_int(fields[1], b)) {
+      max_id = std::max({max_id, a, b});
+    }
+  }
+  if (max_id >= 1'000'000'000) {
+    throw FormatError(concat(path, ": frame id ", max_id, " is implausibly large (limit 1e9)"));
+  }
+  // Malformed lines are left to read_pairs, which names them.
+  return read_pairs(path, max_id + 1);
+}
+
+// ---- MAT files (matio) ------------------------------------------------------
+
+// matio reports problems through a log callback (by default printed to
+// stderr). We install one that keeps the last error of this thread instead, so
+// a failed read becomes a FormatError quoting it; warnings are dropped.
+thread_local std::string matio_last_message;
+
+void matio_log(int level, char* message) {
+  if (level & (MATIO_LOG_LEVEL_ERROR | MATIO_LOG_LEVEL_CRITICAL)) {
+    matio_last_message = message ? message : "";
+  }
+}
+
+std::string matio_detail() {
+  return matio_last_message.empty() ? "" : concat(" (matio: ", matio_last_message, ")");
+}
+
+// ---- MAT container checks and the streaming fast path ------------------------
+//
+// Layouts from the MAT-file format reference (MathWorks, "MAT-File Format",
+// 2019). v5: a 128-byte header, then top-level elements, each an 8-byte tag
+// (uint32 type, uint32 byte count) and its bytes (padded to 8 unless
+// compressed). A miCOMPRESSED element is a zlib stream holding one miMATRIX
+// element: array flags (class in the low byte), dimensions, name, real part.
+// A sub-element whose first word has nonzero upper 16 bits is "small": type
+// in the low 16 bits, byte count in the high 16, data in the next 4 bytes.
+// v4: per variable a 20-byte header (MOPT type, rows, cols, imagf, name
+// length), the name and rows x cols values (twice when complex).
+
+constexpr std::uint32_t kMiMatrix = 14, kMiCompressed = 15;
+
+std::uint32_t u32(const unsigned char* p, bool swap) {
+  std::uint32_t v;
+  std::memcpy(&v, p, 4);
+  return swap ? __builtin_bswap32(v) : v;
+}
+
+struct V5Element {
+  std::uint64_t offset;  // of the tag
+  std::uint32_t type, bytes;
+};
+
+struct Container {
+  bool swapped = false;             // v5 written with the other byte order
+  std::vector<V5Element> elements;  // v5 top-level elements
+};
+
+// matio trusts the byte counts in a file: a truncated file reads as zeros
+// (fewer loops) without an error. So every top-level element must fit first.
+Container check_container(const std::string& path, mat_ft version) {
+  std::ifstream in(path, std::ios::binary | std::ios::ate);
+  const auto size = static_cast<std::uint64_t>(in.tellg());
+  const auto truncated = [&](std::uint64_t at, std::uint64_t need) {
+    return FormatError(concat("'", path, "' is truncated or corrupt: the element at byte ", at,
+                              " needs ", need, " bytes, the file has ", size - at));
+  };
+  const auto read_at = [&](std::uint64_t at, unsigned char* out, std::size_t n) {
+    in.seekg(static_cast<std::streamoff>(at));
+    in.read(reinterpret_cast<char*>(out), static_cast<std::streamsize>(n));
+    if (!in) throw IoError(concat("error while reading '", path, "'"));
+  };
+  Container c;
+  unsigned char b[20];
+  if (version == MAT_FT_MAT5) {
+    if (size < 128) throw truncated(0, 128);
+    read_at(126, b, 2);
+    c.swapped = b[0] == 'M' && b[1] == 'I';
+    for (std::uint64_t pos = 128; pos < size;) {
+      if (size - pos < 8) throw truncated(pos, 8);
+      read_at(pos, b, 8);
+      const V5Element e{pos, u32(b, c.swapped), u32(b + 4, c.swapped)};
+      if (e.bytes > size - pos - 8) throw truncated(pos, std::uint64_t{e.bytes} + 8);
+      c.elements.push_back(e);
+      pos += 8 + std::uint64_t{e.bytes};
+      if (e.type != kMiCompressed) pos = std::min(size, (pos + 7) / 8 * 8);
+    }
+  } else if (version == MAT_FT_MAT4) {
+    for (std::uint64_t pos = 0; pos < size;) {
+      if (size - pos < 20) throw truncated(pos, 20);
+      read_at(pos, b, 20);
+      const bool swap = u32(b, false) > 9999;  // MOPT with M = 1: big-endian
+      const std::uint64_t type = u32(b, swap), rows = u32(b + 4, swap), cols = u32(b + 8, swap);
+      const std::uint64_t parts = u32(b + 12, swap) ? 2 : 1, name = u32(b + 16, swap);
+      static constexpr std::uint64_t kElem[] = {8, 4, 4, 2, 2, 1};
+      const std::uint64_t p = (type / 10) % 10;
+      if (p > 5 || rows * cols > (std::uint64_t{1} << 50)) {
+        throw FormatError(concat("'", path, "': corrupt MAT v4 header at byte ", pos));
+      }
+      const std::uint64_t need = 20 + name + rows * cols * kElem[p] * parts;
+      if (need > size - pos) throw truncated(pos, need);
+      pos += need;
+    }
+  }
+  return c;
+}
+
+// Pulls exact byte counts out of one zlib stream held in memory.
+class Inflater {
+ public:
+  Inflater(const std::string& path, std::string compressed)
+      : path_(path), input_(std::move(compressed)) {
+    z_.next_in = reinterpret_cast<Bytef*>(input_.data());
+    z_.avail_in = static_cast<uInt>(input_.size());
+    if (inflateInit(&z_) != Z_OK) throw FormatError(concat("zlib cannot start on '", path, "'"));
+  }
+  ~Inflater() { inflateEnd(&z_); }
+  Inflater(const Inflater&) = delete;
+  Inflater& operator=(const Inflater&) = delete;
+
+  // Fills out[0, n) or throws FormatError (corrupt or truncated stream).
+  void read(void* out, std::size_t n) {
+    z_.next_out = static_cast<Bytef*>(out);
+    z_.avail_out = static_cast<uInt>(n);
+    while (z_.avail_out > 0) {
+      const int rc = inflate(&z_, Z_NO_FLUSH);
+      if (rc == Z_OK) continue;
+      if (rc == Z_STREAM_END && z_.avail_out == 0) break;
+      const bool early = rc == Z_STREAM_END || (rc == Z_BUF_ERROR && z_.avail_in == 0);
+      throw FormatError(concat("'", path_, "' is corrupt: compressed data ",
+                               early ? "ends early" : "does not inflate", " (zlib ", rc,
+                               z_.msg ? concat(": ", z_.msg) : "", ")"));
+    }
+  }
+  // Reads one sub-element tag: {type, byte count, inline data, 1 if small}.
+  std::array<std::uint32_t, 4> tag() {
+    std::uint32_t w[2];
+    read(w, 8);
+    if (w[0] >> 16) return {w[0] & 0xFFFF, w[0] >> 16, w[1], 1};
+    return {w[0], w[1], 0, 0};
+  }
+  void skip(std::size_t n) {
+    char buffer[256];
+    for (; n > 0; n -= std::min(n, sizeof buffer)) read(buffer, std::min(n, sizeof buffer));
+  }
+
+ private:
+  std::string path_;
+  std::string input_;
+  z_stream z_{};
+};
+
+// Calls f(T{}) with the C++ type of a MAT numeric data type; false for others.
+template <typename F>
+bool with_value_type(std::uint32_t type, F&& f) {
+  switch (type) {
+    case MAT_T_DOUBLE:
+      f(double{});
+      return true;
+    case MAT_T_SINGLE:
+      f(float{});
+      return true;
+    case MAT_T_INT8:
+      f(std::int8_t{});
+      return true;
+    case MAT_T_UINT8:
+      f(std::uint8_t{});
+      return true;
+    case MAT_T_INT16:
+      f(std::int16_t{});
+      return true;
+    case MAT_T_UINT16:
+      f(std::uint16_t{});
+      return true;
+    case MAT_T_INT32:
+      f(std::int32_t{});
+      return true;
+    case MAT_T_UINT32:
+      f(std::uint32_t{});
+      return true;
+    case MAT_T_INT64:
+      f(std::int64_t{});
+      return true;
+    case MAT_T_UINT64:
+      f(std::uint64_t{});
+      return true;
+    default:
+      return false;
+  }
+}
+
+// True when GT(r, c) = v is a loop; a NaN entry is a FormatError.
+template <typename T>
+bool is_loop_value(T v, std::size_t r, std::size_t c, const std::string& path) {
+  if constexpr (std::is_floating_point_v<T>) {
+    if (std::isnan(v)) {
+      throw FormatError(concat("'", path, "': entry (", r + 1, ", ", c + 1, ") is NaN"));
+    }
+  }
+  return v != T(0);
+}
+
+// Adds the loop GT(k % n, k / n) for each nonzero values[i], k = k0 + i
+// (MATLAB stores column-major). Published matrices are >99.9% zeros, so
+// 1-byte types (uint8, logical) skip zeros eight at a time.
+template <typename T>
+void add_nonzero(const T* values, std::size_t count, std::size_t k0, std::size_t n, GroundTruth& gt,
+                 const std::string& path) {
+  for (std::size_t i = 0; i < count; ++i) {
+    if constexpr (sizeof(T) == 1) {
+      std::uint64_t word = 1;
+      if (i + 8 <= count) std::memcpy(&word, values + i, 8);
+      if (word == 0) {
+        i += 7;
+        continue;
+      }
+    }
+    const std::size_t k = k0 + i;
+    if (is_loop_value(values[i], k % n, k / n, path)) {
+      gt.add(static_cast<std::int64_t>(k % n), static_cast<std::int64_t>(k / n));
+    }
+  }
+}
+
+// Scans the n x n values of type T that follow in the stream, 1M at a time.
+template <typename T>
+void scan_stream(Inflater& z, std::size_t n, GroundTruth& gt, const std::string& path) {
+  constexpr std::size_t kChunk = std::size_t{1} << 20;
+  std::vector<T> buffer(kChunk);
+  for (std::size_t k0 = 0; k0 < n * n; k0 += kChunk) {
+    const std::size_t m = std::min(kChunk, n * n - k0);
+    z.read(buffer.data(), m * sizeof(T));
+    add_nonzero(buffer.data(), m, k0, n, gt, path);
+  }
+}
+
+// The common case of published ground truth, a compressed dense real matrix
+// in a native-endian v5 file, read without holding the N x N matrix: matio
+// holds it all (693 MB for Bicocca's 26335^2 uint8) and inflates ~3x slower.
+// Returns false, leaving it to matio, for any other layout.
+bool stream_v5(const std::string& path, const Container& c, const std::string& name, std::size_t n,
+               GroundTruth& gt) {
+  if (c.swapped) return false;
+  for (const V5Element& e : c.elements) {
+    if (e.type != kMiCompressed) continue;
+    std::string bytes(e.bytes, '\0');
+    std::ifstream in(path, std::ios::binary);
+    in.seekg(static_cast<std::streamoff>(e.offset + 8));
+    in.read(bytes.data(), static_cast<std::streamsize>(bytes.size()));
+    if (!in) throw IoError(concat("error while reading '", path, "'"));
+    Inflater z(path, std::move(bytes));
+    if (z.tag()[0] != kMiMatrix) continue;
+    const auto flags = z.tag();
+    std::uint32_t array_flags[2];
+    z.read(array_flags, 8);
+    const auto dims = z.tag();
+    if (flags[1] != 8 || dims[1] != 8) continue;  // not 2-D
+    std::uint32_t d[2];
+    z.read(d, 8);
+    const auto name_tag = z.tag();
+    std::string var;
+    if (name_tag[3]) {  // small element: the name is inline
+      var.assign(reinterpret_cast<const char*>(&name_tag[2]), name_tag[1]);
+    } else {
+      var.resize(name_tag[1]);
+      z.read(var.data(), var.size());
+      z.skip((8 - var.size() % 8) % 8);
+    }
+    if (var != name) continue;
+    const std::uint32_t cls = array_flags[0] & 0xFF;
+    if (d[0] != n || d[1] != n || (array_flags[0] & 0x800) || cls < MAT_C_DOUBLE ||
+        cls > MAT_C_UINT64) {
+      return false;
+    }
+    const auto real = z.tag();
+    const std::size_t size = Mat_SizeOf(static_cast<matio_types>(real[0]));
+    if (real[3] || size == 0 || std::uint64_t{real[1]} != std::uint64_t{n} * n * size) {
+      return false;  // small (inline) or inconsistent: matio decides
+    }
+    return with_value_type(real[0], [&](auto t) { scan_stream<decltype(t)>(z, n, gt, path); });
+  }
+  return false;
+}
+
+struct MatCloser {
+  void operator()(mat_t* mat) const { Mat_Close(mat); }
+};
+struct VarFreer {
+  void operator()(matvar_t* var) const { Mat_VarFree(var); }
+};
+using MatFile = std::unique_ptr<mat_t, MatCloser>;
+using MatVar = std::unique_ptr<matvar_t, VarFreer>;
+
+bool is_matrix_class(matio_classes c) {
+  return c == MAT_C_SPARSE || (c >= MAT_C_DOUBLE && c <= MAT_C_UINT64);
+}
+
+bool is_square_matrix(const matvar_t& v) {
+  return v.rank == 2 && v.dims && v.dims[0] == v.dims[1] && is_matrix_class(v.class_type) &&
+         !v.isComplex;
+}
+
+std::string describe(const matvar_t& v) {
+  std::string dims;
+  for (int i = 0; i < v.rank && v.dims; ++i) dims += (i ? "x" : "") + std::to_string(v.dims[i]);
+  return concat(v.name ? v.name : "?", " ", dims, " class ", static_cast<int>(v.class_type),
+                v.isLogical ? " logical" : "", v.isComplex ? " complex" : "");
+}
+
+bool looks_like_gt_name(const char* name) {
+  std::string lower = name ? name : "";
+  std::transform(lower.begin(), lower.end(), lower.begin(),
+                 [](unsigned char c) { return std::tolower(c); });
+  return lower.find("gt") != std::string::npos || lower.find("truth") != std::string::npos;
+}
+
+// The name of the variable read_mat() reads (see the header for the rule).
+std::string choose_variable(mat_t* mat, const std::string& path) {
+  std::string first, named, seen;
+  int count = 0;
+  while (MatVar info{Mat_VarReadNextInfo(mat)}) {
+    ++count;
+    seen += (seen.empty() ? "" : ", ") + describe(*info);
+    if (!is_square_matrix(*info) || !info->name) continue;
+    if (first.empty()) first = info->name;
+    if (named.empty() && looks_like_gt_name(info->name)) named = info->name;
+  }
+  if (count == 0) {
+    throw FormatError(concat("'", path, "' holds no readable MAT variable (truncated or corrupt?)",
+                             matio_detail()));
+  }
+  if (first.empty()) {
+    throw FormatError(concat("'", path, "' has no square 2-D real numeric, logical or sparse ",
+                             "matrix (variables: ", seen, ")"));
+  }
+  return named.empty() ? first : named;
+}
+
+// Sparse (compressed column): rows ir[jc[c] .. jc[c+1]) of column c, with
+// values (absent for an all-true logical matrix written without data).
+template <typename T>
+void add_sparse(const matvar_t& v, std::size_t n, GroundTruth& gt, const std::string& path) {
+  const auto* s = static_cast<const mat_sparse_t*>(v.data);
+  const auto corrupt = [&](const char* why) {
+    return FormatError(concat("'", path, "': sparse matrix '", v.name, "' is corrupt: ", why));
+  };
+  if (!s || !s->jc || s->njc != n + 1) throw corrupt("column index has the wrong length");
+  const T* values = static_cast<const T*>(s->data);
+  for (std::size_t c = 0; c < n; ++c) {
+    const std::size_t begin = s->jc[c], end = s->jc[c + 1];
+    if (begin > end || end > s->nir || (end > 0 && !s->ir)) throw corrupt("bad column pointers");
+    for (std::size_t k = begin; k < end; ++k) {
+      const std::size_t r = s->ir[k];
+      if (r >= n) throw corrupt("row index out of range");
+      if (values && k < s->ndata && !is_loop_value(values[k], r, c, path)) continue;
+      gt.add(static_cast<std::int64_t>(r), static_cast<std::int64_t>(c));
+    }
+  }
+}
+
+void add_matrix(const matvar_t& v, std::size_t n, GroundTruth& gt, const std::string& path) {
+  const bool sparse = v.class_type == MAT_C_SPARSE;
+  if (!sparse && (!v.data || v.nbytes < n * n * Mat_SizeOf(v.data_type))) {
+    throw FormatError(concat("'", path, "': variable '", v.name, "' holds fewer values than its ",
+                             n, "x", n, " size (truncated?)", matio_detail()));
+  }
+  const bool known = with_value_type(v.data_type, [&](auto t) {
+    using T = decltype(t);
+    if (sparse) return add_sparse<T>(v, n, gt, path);
+    add_nonzero(static_cast<const T*>(v.data), n * n, 0, n, gt, path);
+  });
+  if (!known) {
+    throw FormatError(concat("'", path, "': variable '", v.name, "' has unsupported data type ",
+                             static_cast<int>(v.data_type)));
+  }
+}
+
+// ---- poses grid -------------------------------------------------------------
+
+struct Cell {
+  std::int64_t x, y, z;
+  bool operator==(const Cell& o) const { return x == o.x && y == o.y && z == o.z; }
+};
+struct CellHash {
+  std::size_t operator()(const Cell& c) const {
+    std::uint64_t h = static_cast<std::uint64_t>(c.x) * 0x9E3779B97F4A7C15ull;
+    h ^= static_cast<std::uint64_t>(c.y) * 0xC2B2AE3D27D4EB4Full + (h << 6) + (h >> 2);
+    h ^= static_cast<std::uint64_t>(c.z) * 0x165667B19E3779F9ull + (h << 6) + (h >> 2);
+    return static_cast<std::size_t>(h);
+  }
+};
+
+}  // namespace
+
+// ---- names and options ------------------------------------------------------
+
+GtFormat parse_gt_format(const std::string& name) {
+  for (const auto& [format, text] : kFormatNames) {
+    if (name == text) return format;
+  }
+  internal::throw_invalid("ground-truth format '", name,
+                          "' is unknown: expected auto, pairs, mat, kitti-poses or loopinf");
+}
+
+std::string to_string(GtFormat format) {
+  for (const auto& [f, text] : kFormatNames) {
+    if (f == format) return text;
+  }
+  return "unknown";
+}
+
+void GtOptions::check() const {
+  internal::check_range<std::int64_t>("ground truth frames", frames, -1, 1'000'000'000);
+  internal::check_range_open_low("ground truth poses_distance", poses_distance, 0.0, 1e6, "metres");
+  internal::check_range<std::int64_t>("ground truth poses_min_gap", poses_min_gap, 0, 1'000'000'000,
+                                      "frames");
+  if (static_cast<int>(format) < 0 || static_cast<int>(format) > 4) {
+    internal::throw_invalid("ground truth format = ", static_cast<int>(format), " is invalid");
+  }
+}
+
+// ---- detection and dispatch ---------------------------------------------------
+
+GtFormat detect_gt_format(const std::string& path) {
+  std::ifstream in = open_text(path, "ground-truth file");
+  std::string head(128, '\0');
+  in.read(head.data(), static_cast<std::streamsize>(head.size()));
+  head.resize(static_cast<std::size_t>(in.gcount()));
+  if (head.rfind("MATLAB", 0) == 0 && head.find("MAT-file") < 116) return GtFormat::kMat;
+  if (head.find('\0') != std::string::npos) {
+    if (has_mat_extension(path)) return GtFormat::kMat;  // MAT v4: no text header
+    throw FormatError(concat("cannot tell the ground-truth format of '", path,
+                             "': a binary file without a MAT-file header"));
+  }
+  in.clear();
+  in.seekg(0);
+  const TextShape shape = text_shape(in, path);
+  if (shape.lines == 0) {
+    throw FormatError(concat("cannot tell the ground-truth format of '", path,
+                             "': no data lines (empty or only comments)"));
+  }
+  if (shape.columns == 12 || shape.columns == 13) return GtFormat::kKittiPoses;
+  if (shape.columns == 2 && shape.integers) {
+    if (shape.consecutive && !shape.other_negative && (shape.minus_one || shape.tabs)) {
+      return GtFormat::kLoopinf;
+    }
+    if (!shape.minus_one && !shape.other_negative) return GtFormat::kPairs;
+  }
+  throw FormatError(concat("cannot tell the ground-truth format of '", path, "': ", shape.columns,
+                           shape.integers ? " integer" : " numeric",
+                           " fields per line fit neither pairs ('q m'), loopinf ('k<TAB>j' on line "
+                           "k) nor KITTI poses (12 or 13 numbers)"));
+}
+
+GroundTruth load_groundtruth(const std::string& path, const GtOptions& options) {
+  options.check();
+  const GtFormat format =
+      options.format == GtFormat::kAuto ? detect_gt_format(path) : options.format;
+  switch (format) {
+    case GtFormat::kPairs:
+      return read_pairs_counted(path, options.frames);
+    case GtFormat::kMat:
+      return read_mat(path, options.frames, options.mat_variable);
+    case GtFormat::kLoopinf:
+      return read_loopinf(path, options.frames);
+    case GtFormat::kKittiPoses: {
+      const auto poses = read_kitti_poses(path);
+      const auto n = static_cast<std::int64_t>(poses.size());
+      if (options.frames >= 0 && n != options.frames) {
+        throw FormatError(concat("'", path, "' has ", n, " poses but the sequence has ",
+                                 options.frames, " frames"));
+      }
+      return groundtruth_from_poses(poses, options.poses_distance, options.poses_min_gap);
+    }
+    case GtFormat::kAuto:
+      break;
+  }
+  throw FormatError(concat("cannot read '", path, "': no format"));
+}
+
+// ---- readers --------------------------------------------------------------------
+
+GroundTruth read_mat(const std::string& path, std::int64_t frames, const std::string& variable) {
+  static std::once_flag log_once;
+  std::call_once(log_once, [] { Mat_LogInitFunc("lsgd", matio_log); });
+  if (!std::ifstream(path)) throw IoError(concat("cannot open MAT file '", path, "'"));
+  matio_last_message.clear();
+  MatFile mat{Mat_Open(path.c_str(), MAT_ACC_RDONLY)};
+  if (!mat) {
+    throw FormatError(concat("'", path, "' is not a readable MAT file", matio_detail()));
+  }
+  const mat_ft version = Mat_GetVersion(mat.get());
+  const Container container = check_container(path, version);
+  std::string name = variable;
+  if (name.empty()) {
+    name = choose_variable(mat.get(), path);
+  } else {
+    MatVar info{Mat_VarReadInfo(mat.get(), name.c_str())};
+    if (!info) throw FormatError(concat("'", path, "' has no variable '", name, "'"));
+    if (!is_square_matrix(*info)) {
+      throw FormatError(concat("'", path, "': variable ", describe(*info),
+                               " is not a square 2-D real numeric, logical or sparse matrix"));
+    }
+  }
+  MatVar info{Mat_VarReadInfo(mat.get(), name.c_str())};
+  if (!info) {
+    throw FormatError(
+        concat("cannot read variable '", name, "' from '", path, "'", matio_detail()));
+  }
+  const std::size_t n = info->dims[0];
+  if (frames >= 0 && n != static_cast<std::size_t>(frames)) {
+    throw FormatError(concat("'", path, "': matrix '", name, "' is ", n, "x", n,
+                             " but the sequence has ", frames, " frames"));
+  }
+  if (n > 1'000'000) {
+    throw FormatError(
+        concat("'", path, "': matrix '", name, "' is ", n, "x", n, ": more than 1e6 frames"));
+  }
+  GroundTruth gt(static_cast<std::int64_t>(n));
+  if (version == MAT_FT_MAT5 && info->class_type != MAT_C_SPARSE &&
+      stream_v5(path, container, name, n, gt)) {
+    return gt;
+  }
+  if (info->class_type != MAT_C_SPARSE &&
+      static_cast<double>(n) * n * Mat_SizeOfClass(info->class_type) > 16e9) {
+    throw FormatError(concat("'", path, "': matrix '", name, "' is ", n, "x", n,
+                             ": too large to read densely (limit 16 GB)"));
+  }
+  matio_last_message.clear();
+  MatVar var{Mat_VarRead(mat.get(), name.c_str())};
+  if (!var || !matio_last_message.empty()) {
+    throw FormatError(concat("cannot read variable '", name, "' from '", path,
+                             "' (truncated or corrupt?)", matio_detail()));
+  }
+  add_matrix(*var, n, gt, path);
+  return gt;
+}
+
+std::vector<Pose> read_kitti_poses(const std::string& path) {
+  std::ifstream in = open_text(path, "poses file");
+  std::vector<Pose> poses;
+  std::size_t columns = 0;
+  std::string line;
+  for (std::int64_t number = 1; std::getline(in, line); ++number) {
+    const auto fields = fields_of(line);
+    if (fields.empty()) continue;
+    if (columns == 0) columns = fields.size();
+    if ((fields.size() != 12 && fields.size() != 13) || fields.size() != columns) {
+      throw FormatError(concat(path, ":", number, ": expected ",
+                               columns == fields.size() ? "12 or 13" : std::to_string(columns),
+                               " numbers (a 3x4 pose, optionally after a timestamp), got ",
+                               fields.size()));
+    }
+    std::array<double, 13> v{};
+    for (std::size_t f = 0; f < fields.size(); ++f) {
+      if (!parse_double(fields[f], v[f]) || !std::isfinite(v[f])) {
+        throw FormatError(concat(path, ":", number, ": field ", f + 1, " '", fields[f],
+                                 "' is not a finite number"));
+      }
+    }
+    const std::size_t t = columns - 12;  // skip the timestamp
+    poses.push_back({v[t + 3], v[t + 7], v[t + 11]});
+  }
+  if (in.bad()) throw IoError(concat("error while reading '", path, "'"));
+  if (poses.empty()) throw FormatError(concat("'", path, "' holds no poses"));
+  return poses;
+}
+
+GroundTruth groundtruth_from_poses(const std::vector<Pose>& poses, double distance,
+                                   std::int64_t min_gap) {
+  internal::check_range_open_low("poses distance", distance, 0.0, 1e6, "metres");
+  internal::check_range<std::int64_t>("poses min_gap", min_gap, 0, 1'000'000'000, "frames");
+  const auto n = static_cast<std::int64_t>(poses.size());
+  GroundTruth gt(n);
+  const auto cell_of = [distance](const Pose& p) {
+    const auto index = [distance](double v) {
+      const double c = std::floor(v / distance);
+      if (!(std::abs(c) < 1e15)) {
+        internal::throw_invalid("camera centre coordinate ", v, " is not finite or too large");
+      }
+      return static_cast<std::int64_t>(c);
+    };
+    return Cell{index(p.x), index(p.y), index(p.z)};
+  };
+  // Cells of side `distance`: a pair closer than that lies in adjacent cells.
+  std::unordered_map<Cell, std::vector<std::int64_t>, CellHash> grid;
+  const double d2 = distance * distance;
+  for (std::int64_t i = 0; i < n; ++i) {
+    const Pose& p = poses[static_cast<std::size_t>(i)];
+    const Cell c = cell_of(p);
+    for (std::int64_t dx = -1; dx <= 1; ++dx) {
+      for (std::int64_t dy = -1; dy <= 1; ++dy) {
+        for (std::int64_t dz = -1; dz <= 1; ++dz) {
+          const auto it = grid.find({c.x + dx, c.y + dy, c.z + dz});
+          if (it == grid.end()) continue;
+          for (std::int64_t j : it->second) {  // ascending, all < i
+            if (i - j <= min_gap) break;
+            const Pose& o = poses[static_cast<std::size_t>(j)];
+            const double ex = p.x - o.x, ey = p.y - o.y, ez = p.z - o.z;
+            if (ex * ex + ey * ey + ez * ez < d2) gt.add(i, j);
+          }
+        }
+      }
+    }
+    grid[c].push_back(i);
+  }
+  return gt;
+}
+
+GroundTruth read_loopinf(const std::string& path, std::int64_t frames) {
+  std::ifstream in = open_text(path, "loopinf file");
+  std::vector<std::pair<long long, std::int64_t>> loops;  // (loop frame, line number) per frame
+  std::string line;
+  for (std::int64_t number = 1; std::getline(in, line); ++number) {
+    const auto fields = fields_of(line);
+    if (fields.empty()) continue;
+    long long k = 0, j = 0;
+    if (fields.size() != 2 || !parse_int(fields[0], k) || !parse_int(fields[1], j)) {
+      throw FormatError(
+          concat(path, ":", number, ": expected 'frame<TAB>loop_frame', got '", line, "'"));
+    }
+    if (k != static_cast<long long>(loops.size())) {
+      throw FormatError(concat(path, ":", number, ": expected frame ", loops.size(), ", got ", k,
+                               " (loopinf has one line per frame, in order)"));
+    }
+    if (j < -1) throw FormatError(concat(path, ":", number, ": loop frame ", j, " is negative"));
+    loops.emplace_back(j, number);
+  }
+  if (in.bad()) throw IoError(concat("error while reading '", path, "'"));
+  const auto lines = static_cast<std::int64_t>(loops.size());
+  if (frames >= 0 && lines != frames) {
+    throw FormatError(
+        concat("'", path, "' has ", lines, " frames (lines) but the sequence has ", frames));
+  }
+  GroundTruth gt(lines);
+  for (std::int64_t k = 0; k < lines; ++k) {
+    const auto [j, number] = loops[static_cast<std::size_t>(k)];
+    if (j == -1) continue;
+    if (j >= lines) {
+      throw FormatError(concat(path, ":", number, ": loop frame ", j, " of frame ", k,
+                               " is outside the ", lines, " frames"));
+    }
+    gt.add(k, j);
+  }
+  return gt;
+}
+
+// ---- statistics ---------------------------------------------------------------------
+
+GtStats gt_stats(const GroundTruth& gt, std::int64_t min_gap) {
+  internal::check_range<std::int64_t>("min_gap", min_gap, 0, 1'000'000'000, "frames");
+  GtStats s;
+  s.frames = gt.frames();
+  s.pairs = gt.pairs();
+  s.min_gap = min_gap;
+  std::vector<std::int64_t> gaps;
+  gaps.reserve(static_cast<std::size_t>(gt.pairs()));
+  std::vector<bool> in_loop(static_cast<std::size_t>(gt.frames()), false);
+  for (std::int64_t q = 0; q < gt.frames(); ++q) {
+    const auto& matches = gt.matches(q);
+    if (matches.empty()) continue;
+    ++s.positives;
+    if (gt.has_loop(q, min_gap)) ++s.window_positives;
+    in_loop[static_cast<std::size_t>(q)] = true;
+    for (std::int64_t m : matches) {
+      in_loop[static_cast<std::size_t>(m)] = true;
+      gaps.push_back(q - m);
+      if (q - m > min_gap) ++s.window_pairs;
+    }
+  }
+  s.frames_in_loops = std::count(in_loop.begin(), in_loop.end(), true);
+  if (!gaps.empty()) {
+    std::sort(gaps.begin(), gaps.end());
+    const std::size_t h = gaps.size() / 2;
+    s.gap_min = gaps.front();
+    s.gap_max = gaps.back();
+    s.gap_median = gaps.size() % 2 ? static_cast<double>(gaps[h])
+                                   : 0.5 * static_cast<double>(gaps[h - 1] + gaps[h]);
+  }
+  return s;
+}
+
+}  // namespace lsgd::eval

@@ -1,0 +1,312 @@
+#include "lsgd/eval/sweep.h"
+
+#include <algorithm>
+#include <charconv>
+#include <cstdlib>
+#include <filesystem>
+#include <string>
+#include <vector>
+
+#include "internal/check.h"
+#include "lsgd/error.h"
+#include "lsgd/io/config.h"
+
+namespace lsgd::eval {
+namespace {
+
+using internal::concat;
+using internal::throw_invalid;
+
+constexpr std::size_t kMaxAxisValues = 10'000;
+constexpr std::size_t kMaxPoints = 1'000'000;
+constexpr int kMaxDecimals = 9;
+
+std::string trim(const std::string& text) {
+  const auto first = text.find_first_not_of(" \t");
+  if (first == std::string::npos) return {};
+  return text.substr(first, text.find_last_not_of(" \t") - first + 1);
+}
+
+std::vector<std::string> split(const std::string& text, char separator) {
+  std::vector<std::string> parts;
+  std::size_t start = 0;
+  for (std::size_t pos; (pos = text.find(separator, start)) != std::string::npos; start = pos + 1) {
+    parts.push_back(text.substr(start, pos - start));
+  }
+  parts.push_back(text.substr(start));
+  return parts;
+}
+
+bool is_word_char(char c) {
+  return (c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z') || (c >= '0' && c <= '9') || c == '_';
+}
+
+// A value written into YAML as a plain scalar: only characters that cannot
+// change the document's structure.
+void check_scalar(const std::string& value, const std::string& context) {
+  if (value.empty()) throw_invalid(context, ": empty value");
+  for (char c : value) {
+    if (!is_word_char(c) && c != '.' && c != '+' && c != '-' && c != ',') {
+      throw_invalid(context, ": value '", value, "' holds '", std::string(1, c),
+                    "' (allowed: letters, digits and . _ + - ,)");
+    }
+  }
+}
+
+void check_key(const std::string& key, const std::string& context) {
+  for (const std::string& part : split(key, '.')) {
+    bool ok = !part.empty();
+    for (char c : part) ok = ok && is_word_char(c);
+    if (!ok) throw_invalid(context, ": '", key, "' is not a dotted option name like search.mode");
+  }
+}
+
+// Parses [+-]digits[.digits] (either digit run may be empty, not both) into
+// its digits without the point ("-1.25" -> "-125") and its number of decimals.
+bool parse_decimal(const std::string& text, std::string& digits, int& out_decimals) {
+  std::size_t i = 0;
+  const bool negative = !text.empty() && text[0] == '-';
+  if (!text.empty() && (text[0] == '-' || text[0] == '+')) i = 1;
+  digits.clear();
+  int decimals = -1;
+  for (; i < text.size(); ++i) {
+    if (text[i] == '.' && decimals < 0) {
+      decimals = 0;
+    } else if (text[i] >= '0' && text[i] <= '9') {
+      digits += text[i];
+      if (decimals >= 0) ++decimals;
+    } else {
+      return false;
+    }
+  }
+  out_decimals = decimals < 0 ? 0 : decimals;
+  if (digits.empty() || out_decimals > kMaxDecimals) return false;
+  if (negative) digits.insert(0, "-");
+  return true;
+}
+
+// Scales the digit string of a number with `decimals` decimals to `target` decimals.
+bool rescale(const std::string& digits, int decimals, int target, std::int64_t& out) {
+  const std::string text = digits + std::string(static_cast<std::size_t>(target - decimals), '0');
+  const auto [end, ec] = std::from_chars(text.data(), text.data() + text.size(), out);
+  constexpr std::int64_t kLimit = 1'000'000'000'000'000'000;  // 1e18: no overflow in b - a
+  return ec == std::errc() && end == text.data() + text.size() && out < kLimit && out > -kLimit;
+}
+
+std::string format_decimal(std::int64_t scaled, int decimals) {
+  const std::string sign = scaled < 0 ? "-" : "";
+  std::string digits = std::to_string(scaled < 0 ? -scaled : scaled);
+  if (decimals == 0) return sign + digits;
+  if (digits.size() <= static_cast<std::size_t>(decimals)) {
+    digits.insert(0, static_cast<std::size_t>(decimals) + 1 - digits.size(), '0');
+  }
+  digits.insert(digits.size() - static_cast<std::size_t>(decimals), ".");
+  return sign + digits;
+}
+
+// Expands "a:b:step" exactly, in integer multiples of the finest decimal.
+void expand_range(const std::string& item, const std::string& context,
+                  std::vector<std::string>& values) {
+  const std::vector<std::string> parts = split(item, ':');
+  if (parts.size() != 3) throw_invalid(context, ": range '", item, "' must be a:b:step");
+  std::string digits[3];
+  int places[3] = {0, 0, 0};
+  int decimals = 0;
+  for (int k = 0; k < 3; ++k) {
+    if (!parse_decimal(trim(parts[k]), digits[k], places[k])) {
+      throw_invalid(context, ": range '", item, "': '", trim(parts[k]),
+                    "' is not a decimal number with at most ", kMaxDecimals, " decimals");
+    }
+    decimals = std::max(decimals, places[k]);
+  }
+  std::int64_t a = 0, b = 0, step = 0;
+  if (!rescale(digits[0], places[0], decimals, a) || !rescale(digits[1], places[1], decimals, b) ||
+      !rescale(digits[2], places[2], decimals, step)) {
+    throw_invalid(context, ": range '", item, "' has a number too large");
+  }
+  if (step == 0) throw_invalid(context, ": range '", item, "' has a zero step");
+  if ((b - a) != 0 && ((b - a) > 0) != (step > 0)) {
+    throw_invalid(context, ": range '", item, "' is empty: the step goes away from the end");
+  }
+  const std::int64_t count = (b - a) / step + 1;
+  if (count > static_cast<std::int64_t>(kMaxAxisValues)) {
+    throw_invalid(context, ": range '", item, "' has ", count, " values (at most ", kMaxAxisValues,
+                  ")");
+  }
+  for (std::int64_t i = 0; i < count; ++i) values.push_back(format_decimal(a + i * step, decimals));
+}
+
+// One section or value of the YAML written by sweep_yaml.
+struct YamlNode {
+  std::string name;
+  std::string value;  // leaf value; empty for a section
+  std::vector<YamlNode> children;
+};
+
+void insert(YamlNode& root, const std::string& key, const std::string& value) {
+  YamlNode* node = &root;
+  const std::vector<std::string> parts = split(key, '.');
+  for (std::size_t i = 0; i < parts.size(); ++i) {
+    YamlNode* child = nullptr;
+    for (YamlNode& c : node->children) {
+      if (c.name == parts[i]) child = &c;
+    }
+    const bool last = i + 1 == parts.size();
+    if (child != nullptr && (last || !child->value.empty())) {
+      throw_invalid("sweep: key '", key, "' conflicts with another key of the same sweep");
+    }
+    if (child == nullptr) {
+      node->children.push_back({parts[i], last ? value : std::string(), {}});
+      child = &node->children.back();
+    }
+    node = child;
+  }
+}
+
+void write(const YamlNode& node, int depth, std::string& out) {
+  for (const YamlNode& c : node.children) {
+    out += std::string(static_cast<std::size_t>(2 * depth), ' ') + c.name + ":";
+    if (c.children.empty()) {
+      out += " " + c.value + "\n";
+    } else {
+      out += "\n";
+      write(c, depth + 1, out);
+    }
+  }
+}
+
+// parse_config with any lsgd error turned into InvalidArgument (a bad sweep is a bad argument).
+DetectorOptions parse_as_argument(const std::string& yaml, const std::string& source,
+                                  const DetectorOptions& base) {
+  try {
+    return io::parse_config(yaml, source, base);
+  } catch (const Error& e) {
+    // Line numbers would point into the generated YAML, not into anything the user wrote.
+    std::string message = e.what();
+    const std::size_t at = message.rfind(" (line ");
+    if (at != std::string::npos && message.back() == ')') message.erase(at);
+    throw InvalidArgument(message);
+  }
+}
+
+}  // namespace
+
+SweepAxis parse_sweep_axis(const std::string& spec) {
+  const std::string context = concat("sweep '", spec, "'");
+  const std::size_t eq = spec.find('=');
+  if (eq == std::string::npos) throw_invalid(context, ": expected KEY=VALUES");
+  SweepAxis axis;
+  axis.spec = spec;
+  axis.key = trim(spec.substr(0, eq));
+  check_key(axis.key, context);
+  const std::string list = spec.substr(eq + 1);
+  const char separator = list.find(';') != std::string::npos ? ';' : ',';
+  for (const std::string& raw : split(list, separator)) {
+    const std::string item = trim(raw);
+    if (item.find(':') != std::string::npos) {
+      expand_range(item, context, axis.values);
+    } else {
+      check_scalar(item, context);
+      axis.values.push_back(item);
+    }
+    if (axis.values.size() > kMaxAxisValues) {
+      throw_invalid(context, ": more than ", kMaxAxisValues, " values");
+    }
+  }
+  return axis;
+}
+
+std::string sweep_yaml(const std::vector<std::string>& keys,
+                       const std::vector<std::string>& values) {
+  if (keys.size() != values.size()) {
+    throw_invalid("sweep_yaml: ", keys.size(), " keys but ", values.size(), " values");
+  }
+  YamlNode root;
+  for (std::size_t i = 0; i < keys.size(); ++i) {
+    const std::string context = concat("sweep key '", keys[i], "'");
+    check_key(keys[i], context);
+    check_scalar(values[i], context);
+    insert(root, keys[i], values[i]);
+  }
+  std::string out;
+  write(root, 0, out);
+  return out;
+}
+
+std::vector<SweepPoint> expand_sweep(const std::vector<SweepAxis>& axes,
+                                     const DetectorOptions& base) {
+  std::vector<std::string> keys;
+  std::size_t total = 1;
+  for (const SweepAxis& axis : axes) {
+    for (std::size_t k = 0; k < keys.size(); ++k) {
+      if (keys[k] == axis.key) {
+        throw_invalid("sweep '", axis.spec, "': key '", axis.key, "' is already swept by '",
+                      axes[k].spec, "'");
+      }
+    }
+    if (axis.values.empty()) throw_invalid("sweep '", axis.spec, "': no values");
+    for (const std::string& value : axis.values) {
+      parse_as_argument(sweep_yaml({axis.key}, {value}),
+                        concat("sweep '", axis.spec, "' (value ", value, ")"), base);
+    }
+    keys.push_back(axis.key);
+    total *= axis.values.size();
+    if (total > kMaxPoints) throw_invalid("sweep: more than ", kMaxPoints, " configurations");
+  }
+  std::vector<SweepPoint> points;
+  points.reserve(total);
+  std::vector<std::size_t> index(axes.size(), 0);
+  for (std::size_t p = 0; p < total; ++p) {
+    SweepPoint point;
+    std::string label;
+    for (std::size_t k = 0; k < axes.size(); ++k) {
+      point.values.push_back(axes[k].values[index[k]]);
+      label += concat(k ? ", " : "", keys[k], "=", point.values.back());
+    }
+    point.options =
+        parse_as_argument(sweep_yaml(keys, point.values), concat("sweep point ", label), base);
+    points.push_back(std::move(point));
+    for (std::size_t k = axes.size(); k-- > 0;) {  // odometer: the last axis turns fastest
+      if (++index[k] < axes[k].values.size()) break;
+      index[k] = 0;
+    }
+  }
+  return points;
+}
+
+SweepDataset parse_dataset_spec(const std::string& spec) {
+  const std::string context = concat("dataset '", spec, "'");
+  const std::size_t eq = spec.find('=');
+  if (eq == std::string::npos) {
+    throw_invalid(context, ": expected NAME=SEQUENCE,GT,MIN_GAP or NAME=DIR,MIN_GAP");
+  }
+  SweepDataset d;
+  d.name = spec.substr(0, eq);
+  bool name_ok = !d.name.empty();
+  for (char c : d.name) name_ok = name_ok && (is_word_char(c) || c == '.' || c == '-');
+  if (!name_ok) throw_invalid(context, ": name '", d.name, "' must be letters, digits, . _ -");
+  const std::vector<std::string> parts = split(spec.substr(eq + 1), ',');
+  if (parts.size() != 2 && parts.size() != 3) {
+    throw_invalid(context, ": expected NAME=SEQUENCE,GT,MIN_GAP or NAME=DIR,MIN_GAP (",
+                  parts.size(), " comma-separated parts after '=')");
+  }
+  for (const std::string& part : parts) {
+    if (part.empty()) throw_invalid(context, ": empty part");
+  }
+  const std::string& gap = parts.back();
+  const auto [end, ec] = std::from_chars(gap.data(), gap.data() + gap.size(), d.min_gap);
+  if (ec != std::errc() || end != gap.data() + gap.size() || d.min_gap < 0) {
+    throw_invalid(context, ": MIN_GAP '", gap, "' must be an integer >= 0 (frames)");
+  }
+  if (parts.size() == 2) {
+    const std::filesystem::path dir(parts[0]);
+    d.sequence = (dir / "sequence.txt").string();
+    d.ground_truth = (dir / "groundtruth.txt").string();
+  } else {
+    d.sequence = parts[0];
+    d.ground_truth = parts[1];
+  }
+  return d;
+}
+
+}  // namespace lsgd::eval

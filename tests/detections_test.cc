@@ -1,0 +1,143 @@
+// Tests of reading another system's detections (eval/detections.h) and
+// scoring them with the strict protocol, metrics computed by hand.
+#include "lsgd/eval/detections.h"
+
+#include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <filesystem>
+#include <fstream>
+#include <string>
+#include <vector>
+
+#include "lsgd/error.h"
+#include "test_util.h"
+
+namespace lsgd::eval {
+namespace {
+
+namespace fs = std::filesystem;
+
+class DetectionsTest : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
+    dir_ = fs::path(LSGD_TEST_TMP) /
+           (std::string("detections_") + info->name() + "_" + std::to_string(::getpid()));
+    fs::remove_all(dir_);
+    fs::create_directories(dir_);
+  }
+  void TearDown() override { fs::remove_all(dir_); }
+  std::string write(const std::string& name, const std::string& content) const {
+    const fs::path p = dir_ / name;
+    std::ofstream(p, std::ios::binary) << content;
+    return p.string();
+  }
+  // Expects FormatError whose message has file:line and `part`.
+  void expect_line_error(const std::string& content, int line, const std::string& part) {
+    const std::string path = write("bad.csv", content);
+    const std::string message = test::message_of<FormatError>([&] { read_detections(path, 10); });
+    EXPECT_NE(message.find(path + ":" + std::to_string(line) + ":"), std::string::npos) << message;
+    EXPECT_NE(message.find(part), std::string::npos) << message;
+  }
+  fs::path dir_;
+};
+
+TEST_F(DetectionsTest, ReadsQueryMatchScoreWithoutHeader) {
+  const std::string path =
+      write("d.csv", "# from another system\n5,0,0.9\n6,-1,\n\n7,2,0.85,extra\n");
+  const auto records = read_detections(path, 8);
+  ASSERT_EQ(records.size(), 8u);
+  for (std::int64_t i = 0; i < 8; ++i) EXPECT_EQ(records[static_cast<std::size_t>(i)].frame, i);
+  EXPECT_EQ(records[5].reported.frame, 0);
+  EXPECT_DOUBLE_EQ(records[5].reported.score, 0.9);
+  ASSERT_EQ(records[5].candidates.size(), 1u);
+  EXPECT_EQ(records[6].reported.frame, -1);  // match -1: no loop
+  EXPECT_TRUE(records[6].candidates.empty());
+  EXPECT_EQ(records[7].reported.frame, 2);
+  EXPECT_EQ(records[0].reported.frame, -1);  // no row: no loop
+}
+
+TEST_F(DetectionsTest, HeaderNamesColumnsInAnyOrder) {
+  const std::string path = write("d.csv", "score,match,query\n0.5,1,4\n");
+  const auto records = read_detections(path);
+  ASSERT_EQ(records.size(), 5u);  // frames -1: largest query + 1
+  EXPECT_EQ(records[4].reported.frame, 1);
+  EXPECT_DOUBLE_EQ(records[4].reported.score, 0.5);
+}
+
+TEST_F(DetectionsTest, WhiteSpaceSeparatedRowsAreAccepted) {
+  const std::string path = write("d.txt", "3 0 0.25\r\n4\t-1\t0\n");
+  const auto records = read_detections(path, 5);
+  EXPECT_EQ(records[3].reported.frame, 0);
+  EXPECT_DOUBLE_EQ(records[3].reported.score, 0.25);
+  EXPECT_EQ(records[4].reported.frame, -1);
+}
+
+TEST_F(DetectionsTest, ReadsLsgdRunCsvUsingTheCandidateFrame) {
+  const std::string path =
+      write("run.csv",
+            "frame,image,loop_frame,candidate_frame,score,ms\n"
+            "0,a.png,-1,-1,0,1.5\n"
+            "1,\"b,\"\"quoted\"\"\nname.png\",-1,0,0.4,2.5\n"  // a quoted field over two lines
+            "2,c.png,0,0,0.95,3\n");
+  const auto records = read_detections(path, 3);
+  EXPECT_EQ(records[0].reported.frame, -1);
+  EXPECT_DOUBLE_EQ(records[0].timings.total_ms, 1.5);
+  EXPECT_EQ(records[1].reported.frame, 0);  // below the decision threshold, still reported
+  EXPECT_DOUBLE_EQ(records[1].reported.score, 0.4);
+  EXPECT_DOUBLE_EQ(records[1].timings.total_ms, 2.5);
+  EXPECT_EQ(records[2].reported.frame, 0);
+  EXPECT_DOUBLE_EQ(records[2].reported.score, 0.95);
+}
+
+TEST_F(DetectionsTest, ScoresLikeHandComputation) {
+  // 10 frames, window 2: loops 5~0, 6~1, 7~2 (three positives).
+  GroundTruth gt(10);
+  gt.add(5, 0);
+  gt.add(6, 1);
+  gt.add(7, 2);
+  const std::string path = write("d.csv",
+                                 "query,match,score\n"
+                                 "5,0,0.9\n"  // true
+                                 "6,3,0.8\n"  // false
+                                 "7,2,0.7\n"  // true
+                                 "9,4,0.6\n"  // false, on a loop-free query
+                                 "8,-1,0\n");
+  const Metrics m = evaluate(read_detections(path, gt.frames()), gt, 2);
+  EXPECT_EQ(m.frames, 10);
+  EXPECT_EQ(m.positives, 3);
+  // Sweep: 0.9 (1/1, 1/3), 0.8 (1/2, 1/3), 0.7 (2/3, 2/3), 0.6 (2/4, 2/3).
+  EXPECT_DOUBLE_EQ(m.recall_at_100_precision, 1.0 / 3.0);
+  EXPECT_DOUBLE_EQ(m.average_precision, (1.0 / 3.0) * 1.0 + (1.0 / 3.0) * (2.0 / 3.0));
+  EXPECT_DOUBLE_EQ(m.recall_at_1, 2.0 / 3.0);
+  EXPECT_DOUBLE_EQ(m.recall_at_10, 2.0 / 3.0);  // one candidate per query from a file
+}
+
+TEST_F(DetectionsTest, MalformedRowsNameFileAndLine) {
+  expect_line_error("1,0,0.5\n2,x,0.5\n", 2, "match 'x'");
+  expect_line_error("# c\n\n1,0\n", 3, "at least 3 fields");
+  expect_line_error("query,match,score\n1,0,abc\n", 2, "score 'abc'");
+  expect_line_error("1,0,nan\n", 1, "score 'nan'");
+  expect_line_error("-2,0,0.5\n", 1, "query '-2'");
+  expect_line_error("1,-5,0.5\n", 1, "match '-5'");
+  expect_line_error("1,0,0.5\n12,0,0.5\n", 2, "query 12 is outside the 10 frames");
+  expect_line_error("1,10,0.5\n", 1, "match 10 is outside");
+  expect_line_error("1,0,0.5\n3,0,0.5\n1,2,0.4\n", 3, "already has a row on line 1");
+  expect_line_error("1,\"0,0.5\n", 1, "never closed");
+  expect_line_error("frame,image,loop_frame,candidate_frame,ms\n", 1, "score");
+}
+
+TEST_F(DetectionsTest, EmptyOrMissingFilesAreErrors) {
+  const std::string empty = write("empty.csv", "# nothing\n\n");
+  EXPECT_NE(test::message_of<FormatError>([&] { read_detections(empty, 5); }).find("no row"),
+            std::string::npos);
+  const std::string header_only = write("header.csv", "query,match,score\n");
+  EXPECT_THROW(read_detections(header_only, 5), FormatError);
+  const std::string missing = (dir_ / "missing.csv").string();
+  EXPECT_NE(test::message_of<IoError>([&] { read_detections(missing, 5); }).find(missing),
+            std::string::npos);
+}
+
+}  // namespace
+}  // namespace lsgd::eval

@@ -1,0 +1,305 @@
+// End-to-end tests of `lsgd eval` beyond the strict run: scoring detections
+// files, the lenient reference protocol, subsampling and dataset layouts.
+// They run the real binary on a short synthetic street and tiny layouts.
+#include <gtest/gtest.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <cstdio>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <iomanip>
+#include <nlohmann/json.hpp>
+#include <opencv2/core.hpp>
+#include <opencv2/imgcodecs.hpp>
+#include <sstream>
+#include <string>
+
+#include "lsgd/eval/groundtruth.h"
+#include "lsgd/eval/gt_remap.h"
+#include "lsgd/eval/synthetic.h"
+
+namespace fs = std::filesystem;
+
+namespace {
+
+const fs::path kTmp = fs::path(LSGD_TEST_TMP) / ("eval-cli-" + std::to_string(getpid()));
+
+struct CmdResult {
+  int code = -1;
+  std::string out;
+  std::string err;
+};
+
+std::string slurp(const fs::path& path) {
+  std::ifstream in(path);
+  std::stringstream s;
+  s << in.rdbuf();
+  return s.str();
+}
+
+std::string q(const fs::path& p) { return "'" + p.string() + "'"; }
+
+// Runs `lsgd ARGS`, capturing stdout and stderr.
+CmdResult lsgd(const std::string& args) {
+  fs::create_directories(kTmp);
+  const fs::path out = kTmp / "stdout.txt", err = kTmp / "stderr.txt";
+  const std::string cmd =
+      std::string("'") + LSGD_CLI + "' " + args + " >" + q(out) + " 2>" + q(err) + " </dev/null";
+  const int status = std::system(cmd.c_str());
+  return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, slurp(out), slurp(err)};
+}
+
+nlohmann::json read_json(const fs::path& path) { return nlohmann::json::parse(slurp(path)); }
+
+int lines_of(const std::string& text) {
+  int n = 0;
+  for (char c : text) n += c == '\n';
+  return n;
+}
+
+void write_text(const fs::path& path, const std::string& text) {
+  fs::create_directories(path.parent_path());
+  std::ofstream(path) << text;
+}
+
+void write_image(const fs::path& path, int seed) {
+  fs::create_directories(path.parent_path());
+  cv::Mat m(48, 64, CV_8UC1);
+  cv::randu(m, 0, 255);
+  m.at<unsigned char>(0, 0) = static_cast<unsigned char>(seed);
+  ASSERT_TRUE(cv::imwrite(path.string(), m));
+}
+
+// A short synthetic street (about 330 frames, 160x120) and the CSV `lsgd run` wrote for it.
+class ShortStreet : public ::testing::Test {
+ protected:
+  static void SetUpTestSuite() {
+    dir_ = kTmp / "street";
+    fs::remove_all(dir_);
+    fs::create_directories(dir_ / "images");
+    lsgd::eval::SyntheticOptions options;
+    options.width = 160;
+    options.height = 120;
+    options.route_scale = 0.3;
+    const lsgd::eval::SyntheticWorld world(options);
+    frames_ = world.frames();
+    gt_ = world.ground_truth();
+    std::ofstream list(dir_ / "sequence.txt");
+    for (std::int64_t i = 0; i < frames_; ++i) {
+      std::ostringstream name;
+      name << "images/" << std::setw(5) << std::setfill('0') << i << ".png";
+      ASSERT_TRUE(cv::imwrite((dir_ / name.str()).string(), world.render(i)));
+      list << name.str() << "\n";
+    }
+    list.close();
+    lsgd::eval::write_pairs(gt_, (dir_ / "gt.txt").string());
+    const CmdResult r =
+        lsgd("run --sequence " + q(dir_ / "sequence.txt") + " --output " + q(dir_ / "run.csv"));
+    ASSERT_EQ(r.code, 0) << r.err;
+  }
+  static void TearDownTestSuite() { fs::remove_all(dir_); }
+
+  static std::string common(const fs::path& json) {
+    return " --gt " + q(dir_ / "gt.txt") + " --min-gap 50 --json " + q(json);
+  }
+
+  static fs::path dir_;
+  static std::int64_t frames_;
+  static lsgd::eval::GroundTruth gt_;
+};
+fs::path ShortStreet::dir_;
+std::int64_t ShortStreet::frames_ = 0;
+lsgd::eval::GroundTruth ShortStreet::gt_;
+
+TEST_F(ShortStreet, RunCsvScoredAsDetectionsMatchesEval) {
+  const fs::path online = kTmp / "online.json", offline = kTmp / "offline.json";
+  const CmdResult a = lsgd("eval --sequence " + q(dir_ / "sequence.txt") + common(online));
+  ASSERT_EQ(a.code, 0) << a.err;
+  const CmdResult b = lsgd("eval --detections " + q(dir_ / "run.csv") + common(offline));
+  ASSERT_EQ(b.code, 0) << b.err;
+  const auto x = read_json(online), y = read_json(offline);
+  EXPECT_EQ(y["frames"], frames_);  // the CSV's frames extend the pairs file's ids
+  EXPECT_EQ(x["frames"], y["frames"]);
+  EXPECT_EQ(x["positives"], y["positives"]);
+  EXPECT_GT(x["positives"].get<int>(), 20);
+  EXPECT_GT(x["average_precision"].get<double>(), 0.1);  // not a trivially equal zero
+  EXPECT_DOUBLE_EQ(x["recall_at_100_precision"].get<double>(),
+                   y["recall_at_100_precision"].get<double>());
+  EXPECT_DOUBLE_EQ(x["average_precision"].get<double>(), y["average_precision"].get<double>());
+  EXPECT_EQ(y["detections"], (dir_ / "run.csv").string());
+  EXPECT_NE(b.out.find("no detector run"), std::string::npos) << b.out;
+}
+
+TEST_F(ShortStreet, LenientProtocolSaysSoAndIsNeverStricter) {
+  const fs::path strict = kTmp / "strict.json", lenient = kTmp / "lenient.json";
+  ASSERT_EQ(lsgd("eval --detections " + q(dir_ / "run.csv") + common(strict)).code, 0);
+  const CmdResult r = lsgd("eval --detections " + q(dir_ / "run.csv") + common(lenient) +
+                           " --protocol lsgddn-reference");
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_NE(r.out.find("protocol: lsgddn-reference (lenient"), std::string::npos) << r.out;
+  const auto s = read_json(strict), l = read_json(lenient);
+  EXPECT_EQ(s["protocol"], "strict");
+  EXPECT_EQ(l["protocol"], "lsgddn-reference");
+  EXPECT_EQ(l["tolerance"], 50);
+  EXPECT_NE(l["protocol_note"].get<std::string>().find("lenient"), std::string::npos);
+  // Same positives; every strict hit is a lenient hit and lenient hides false positives.
+  EXPECT_EQ(s["positives"], l["positives"]);
+  EXPECT_GE(l["recall_at_100_precision"].get<double>(), s["recall_at_100_precision"].get<double>());
+}
+
+TEST_F(ShortStreet, EveryKeepsEveryKthFrameAndRemapsTheGroundTruth) {
+  const fs::path json = kTmp / "every.json", csv = kTmp / "every.csv";
+  const CmdResult r =
+      lsgd("eval --sequence " + q(dir_ / "sequence.txt") + " --gt " + q(dir_ / "gt.txt") +
+           " --min-gap 16 --every 3 --json " + q(json) + " --output " + q(csv));
+  ASSERT_EQ(r.code, 0) << r.err;
+  const lsgd::eval::GroundTruth sub = lsgd::eval::subsample(gt_, 3);
+  std::int64_t positives = 0;
+  for (std::int64_t i = 0; i < sub.frames(); ++i) positives += sub.has_loop(i, 16) ? 1 : 0;
+  const auto j = read_json(json);
+  EXPECT_EQ(j["frames"], (frames_ + 2) / 3);
+  EXPECT_EQ(j["every"], 3);
+  EXPECT_EQ(j["ground_truth_pairs"], sub.pairs());
+  EXPECT_EQ(j["positives"], positives);
+  EXPECT_GT(positives, 10);
+  const std::string rows = slurp(csv);
+  // Frame 1 is image 3, frame 2 image 6.
+  EXPECT_NE(rows.find("\n1," + (dir_ / "images/00003.png").string() + ","), std::string::npos);
+  EXPECT_NE(rows.find("\n2," + (dir_ / "images/00006.png").string() + ","), std::string::npos);
+}
+
+TEST_F(ShortStreet, ReportWithPosesAndLoopinfGroundTruth) {
+  // The LSGDDN authors' loopinf format (one GT index per frame, -1 for none),
+  // written from the street's ground truth and read back by format detection.
+  std::ostringstream loopinf;
+  for (std::int64_t i = 0; i < frames_; ++i) {
+    const auto& m = gt_.matches(i);
+    loopinf << i << "\t" << (m.empty() ? -1 : m.front()) << "\n";
+  }
+  write_text(kTmp / "loopinf.txt", loopinf.str());
+  std::ostringstream poses;  // 12-column KITTI poses: frame i at x = i, z = i % 40
+  for (std::int64_t i = 0; i < frames_; ++i) {
+    poses << "1 0 0 " << i << " 0 1 0 0 0 0 1 " << i % 40 << "\n";
+  }
+  write_text(kTmp / "poses.txt", poses.str());
+  const fs::path json = kTmp / "report.json", html = kTmp / "report.html";
+  const CmdResult r = lsgd("eval --sequence " + q(dir_ / "sequence.txt") + " --gt " +
+                           q(kTmp / "loopinf.txt") + " --min-gap 50 --json " + q(json) +
+                           " --report " + q(html) + " --poses " + q(kTmp / "poses.txt"));
+  ASSERT_EQ(r.code, 0) << r.err;
+  const std::string text = slurp(html);
+  EXPECT_NE(text.find("<svg"), std::string::npos);
+  EXPECT_NE(text.find("data:image/png;base64,"), std::string::npos);  // the similarity matrix
+  EXPECT_NE(text.find("Trajectory"), std::string::npos);
+  EXPECT_EQ(text.find("http://"), std::string::npos);
+  std::int64_t positives = 0;  // one GT index per frame: the first match only
+  for (std::int64_t i = 0; i < frames_; ++i) {
+    const auto& m = gt_.matches(i);
+    positives += !m.empty() && m.front() < i - 50 ? 1 : 0;
+  }
+  EXPECT_EQ(read_json(json)["positives"], positives);
+  // --poses needs --report; poses of another length are an error naming the file.
+  const CmdResult lone = lsgd("eval --sequence " + q(dir_ / "sequence.txt") + common(json) +
+                              " --poses " + q(kTmp / "poses.txt"));
+  EXPECT_NE(lone.code, 0);
+  EXPECT_NE(lone.err.find("--report"), std::string::npos) << lone.err;
+  write_text(kTmp / "short-poses.txt", "1 0 0 0 0 1 0 0 0 0 1 0\n");
+  const CmdResult shorter = lsgd("eval --detections " + q(dir_ / "run.csv") + common(json) +
+                                 " --report " + q(html) + " --poses " + q(kTmp / "short-poses.txt"));
+  EXPECT_NE(shorter.code, 0);
+  EXPECT_NE(shorter.err.find("short-poses.txt"), std::string::npos) << shorter.err;
+}
+
+// ---------------------------------------------------------------- detections files, layouts
+
+TEST(EvalCli, DetectionsErrorNamesFileAndLine) {
+  const fs::path dir = kTmp / "badcsv";
+  write_text(dir / "gt.txt", "8 0\n");
+  write_text(dir / "d.csv", "query,match,score\n8,0,0.9\n9,zero,0.5\n");
+  const CmdResult r = lsgd("eval --detections " + q(dir / "d.csv") + " --gt " + q(dir / "gt.txt") +
+                           " --min-gap 2 --json " + q(dir / "out.json"));
+  EXPECT_EQ(r.code, 1);
+  EXPECT_NE(r.err.find((dir / "d.csv").string() + ":3:"), std::string::npos) << r.err;
+  EXPECT_EQ(lines_of(r.err), 1) << r.err;
+}
+
+TEST(EvalCli, FabmapBothSidesRemapsAPerPairGroundTruth) {
+  // 60 pairs, 120 images; pair 50 revisits pair 0 and pair 51 revisits pair 1.
+  const fs::path dir = kTmp / "fabmap-eval";
+  write_text(dir / "gt.txt", "50 0\n51 1\n");
+  write_text(dir / "d.csv",
+             "100,0,0.9\n"    // pair 50 left -> pair 0 left: true
+             "103,2,0.8\n"    // pair 51 right -> pair 1 left: true (the same place)
+             "101,4,0.7\n");  // pair 50 right -> pair 2: false
+  const fs::path json = dir / "out.json";
+  const CmdResult r =
+      lsgd("eval --detections " + q(dir / "d.csv") + " --gt " + q(dir / "gt.txt") +
+           " --min-gap 10 --layout fabmap --side both --frames 60 --json " + q(json));
+  ASSERT_EQ(r.code, 0) << r.err;
+  const auto j = read_json(json);
+  EXPECT_EQ(j["frames"], 120);
+  EXPECT_EQ(j["positives"], 4);  // frames 100, 101, 102, 103
+  EXPECT_EQ(j["side"], "both");
+  EXPECT_DOUBLE_EQ(j["recall_at_100_precision"].get<double>(), 0.5);
+  EXPECT_DOUBLE_EQ(j["average_precision"].get<double>(), 0.5);
+}
+
+TEST(EvalCli, FlagsThatWouldBeIgnoredAreErrors) {
+  const fs::path dir = kTmp / "flags";
+  write_text(dir / "gt.txt", "8 0\n");
+  write_text(dir / "d.csv", "8,0,0.9\n");
+  write_image(dir / "images" / "0.png", 0);
+  const std::string base =
+      " --gt " + q(dir / "gt.txt") + " --min-gap 2 --json " + q(dir / "o.json");
+  const std::string det = "eval --detections " + q(dir / "d.csv") + base;
+  const std::string seq = "eval --sequence " + q(dir / "images") + base;
+  for (const auto& [args, expected] : std::vector<std::pair<std::string, std::string>>{
+           {det + " --side left", "--side"},
+           {det + " --tolerance 10", "--tolerance"},
+           {det + " --mode nodes", "--mode"},
+           {det + " --gt-rows image", "--gt-rows"},
+           {seq + " --frames 10", "--frames"},
+           {seq + " --detections " + q(dir / "d.csv"), "exactly one"},
+           {"eval" + base, "exactly one"}}) {
+    const CmdResult r = lsgd(args);
+    EXPECT_EQ(r.code, 1) << args;
+    EXPECT_NE(r.err.find(expected), std::string::npos) << args << "\n" << r.err;
+  }
+}
+
+TEST(EvalCli, RunReadsKittiAndFabmapLayouts) {
+  const fs::path root = kTmp / "kitti";
+  const fs::path seq = root / "sequences" / "03";
+  std::string times;
+  for (int i = 0; i < 4; ++i) {
+    char name[16];
+    std::snprintf(name, sizeof(name), "%06d.png", i);
+    write_image(seq / "image_1" / name, i);
+    times += std::to_string(i) + ".0\n";
+  }
+  write_text(seq / "times.txt", times);
+  CmdResult r = lsgd("run --sequence " + q(root) + " --kitti-sequence 3 --camera 1");
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_EQ(lines_of(r.out), 5);
+  EXPECT_NE(r.out.find("\n3," + (seq / "image_1" / "000003.png").string()), std::string::npos)
+      << r.out;
+  r = lsgd("run --sequence " + q(seq));  // auto: KITTI, but no image_0
+  EXPECT_EQ(r.code, 1);
+  EXPECT_NE(r.err.find("no image_0"), std::string::npos) << r.err;
+
+  const fs::path images = kTmp / "cc" / "Images";
+  for (int i = 1; i <= 6; ++i) {
+    char name[16];
+    std::snprintf(name, sizeof(name), "%04d.jpg", i);
+    write_image(images / name, i);
+  }
+  r = lsgd("run --sequence " + q(images) + " --layout fabmap --side right --every 2");
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_EQ(lines_of(r.out), 3);  // header + 0002.jpg, 0006.jpg
+  EXPECT_NE(r.out.find("\n0," + (images / "0002.jpg").string()), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("\n1," + (images / "0006.jpg").string()), std::string::npos) << r.out;
+}
+
+}  // namespace

@@ -1,0 +1,180 @@
+// End-to-end tests of `lsgd gt convert` and `lsgd gt stats`: they run the real binary.
+#include <gtest/gtest.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <sstream>
+#include <string>
+
+#include "lsgd/eval/groundtruth.h"
+#include "lsgd/eval/gt_formats.h"
+
+namespace fs = std::filesystem;
+
+namespace {
+
+const fs::path kTmp = fs::path(LSGD_TEST_TMP) / ("gtcli-" + std::to_string(getpid()));
+const fs::path kGt = fs::path(LSGD_SHARED_DIR) / "groundtruth";
+
+struct CmdResult {
+  int code = -1;
+  std::string out;
+  std::string err;
+};
+
+std::string slurp(const fs::path& path) {
+  std::ifstream in(path);
+  std::stringstream s;
+  s << in.rdbuf();
+  return s.str();
+}
+
+fs::path write_file(const std::string& name, const std::string& text) {
+  fs::create_directories(kTmp);
+  const fs::path path = kTmp / name;
+  std::ofstream(path, std::ios::binary) << text;
+  return path;
+}
+
+CmdResult lsgd(const std::string& args) {
+  fs::create_directories(kTmp);
+  const fs::path out = kTmp / "stdout.txt", err = kTmp / "stderr.txt";
+  const std::string cmd = std::string("'") + LSGD_CLI + "' " + args + " >'" + out.string() +
+                          "' 2>'" + err.string() + "' </dev/null";
+  const int status = std::system(cmd.c_str());
+  return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, slurp(out), slurp(err)};
+}
+
+bool contains(const std::string& text, const std::string& part) {
+  return text.find(part) != std::string::npos;
+}
+
+bool same(const lsgd::eval::GroundTruth& a, const lsgd::eval::GroundTruth& b) {
+  if (a.frames() != b.frames() || a.pairs() != b.pairs()) return false;
+  for (std::int64_t q = 0; q < a.frames(); ++q) {
+    if (a.matches(q) != b.matches(q)) return false;
+  }
+  return true;
+}
+
+// A loopinf file: frames 30..39 revisit 0..9, frame 45 revisits 5, -1 elsewhere.
+fs::path write_loopinf() {
+  std::string text;
+  for (int k = 0; k < 50; ++k) {
+    const int j = (k >= 30 && k < 40) ? k - 30 : (k == 45 ? 5 : -1);
+    text += std::to_string(k) + "\t" + std::to_string(j) + "\n";
+  }
+  return write_file("seq.loopinf", text);
+}
+
+TEST(GtCli, ConvertWritesPairsThatReadBackTheSame) {
+  const fs::path src = write_loopinf(), out = kTmp / "converted.txt";
+  const CmdResult r = lsgd("gt convert '" + src.string() + "' --output '" + out.string() + "'");
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_TRUE(contains(r.out, "11 pairs over 50 frames")) << r.out;
+  EXPECT_TRUE(contains(r.out, "loopinf")) << r.out;
+  const auto back = lsgd::eval::read_pairs(out.string(), 50);
+  EXPECT_TRUE(same(back, lsgd::eval::read_loopinf(src.string())));
+  EXPECT_TRUE(back.is_loop(45, 5));
+  EXPECT_TRUE(back.is_loop(39, 9));
+
+  // Forcing another format or count is honoured (and fails here).
+  EXPECT_EQ(lsgd("gt convert '" + src.string() + "' --output x --frames 49").code, 1);
+  EXPECT_EQ(lsgd("gt convert '" + src.string() + "' --output x --format mat").code, 1);
+}
+
+TEST(GtCli, ConvertDerivesLoopsFromPoses) {
+  // Out and back along a line, 1 m per frame, with a timestamp column.
+  std::string text;
+  for (int i = 0; i < 40; ++i) {
+    const double x = i < 20 ? i : 39 - i;
+    text += std::to_string(0.1 * i) + " 1 0 0 " + std::to_string(x) + " 0 1 0 0 0 0 1 0\n";
+  }
+  const fs::path src = write_file("poses.txt", text), out = kTmp / "poses-pairs.txt";
+  const CmdResult r = lsgd("gt convert '" + src.string() + "' --output '" + out.string() +
+                           "' --distance 0.5 --min-gap 3");
+  ASSERT_EQ(r.code, 0) << r.err;
+  lsgd::eval::GtOptions o;
+  o.poses_distance = 0.5;
+  o.poses_min_gap = 3;
+  const auto expected = lsgd::eval::load_groundtruth(src.string(), o);
+  EXPECT_EQ(expected.pairs(), 18);  // (39 - i, i) for i = 0..17; 18 and 21 are 3 apart
+  EXPECT_TRUE(same(lsgd::eval::read_pairs(out.string(), 40), expected));
+}
+
+TEST(GtCli, StatsPrintsAndWritesJson) {
+  const fs::path src = write_loopinf(), json = kTmp / "stats.json";
+  CmdResult r = lsgd("gt stats '" + src.string() + "' --json '" + json.string() + "'");
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_TRUE(contains(r.out, "frames: 50")) << r.out;
+  EXPECT_TRUE(contains(r.out, "pairs: 11")) << r.out;
+  EXPECT_TRUE(contains(r.out, "positive queries: 11")) << r.out;
+  EXPECT_TRUE(contains(r.out, "gap (frames): min 30, median 30, max 40")) << r.out;
+  EXPECT_FALSE(contains(r.out, "with min gap")) << r.out;
+  auto j = nlohmann::json::parse(slurp(json));
+  EXPECT_EQ(j["format"], "loopinf");
+  EXPECT_EQ(j["frames"], 50);
+  EXPECT_EQ(j["pairs"], 11);
+  EXPECT_EQ(j["positives"], 11);
+  EXPECT_EQ(j["frames_in_loops"], 21);
+  EXPECT_EQ(j["gap_max"], 40);
+
+  r = lsgd("gt stats '" + src.string() + "' --min-gap 35 --json '" + json.string() + "'");
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_TRUE(contains(r.out, "with min gap 35: positive queries 1, pairs 1")) << r.out;
+  j = nlohmann::json::parse(slurp(json));
+  EXPECT_EQ(j["min_gap"], 35);
+  EXPECT_EQ(j["window_positives"], 1);
+}
+
+TEST(GtCli, BadInputExitsNonZeroNamingTheFile) {
+  const fs::path corrupt =
+      write_file("corrupt.mat", std::string("MATLAB 5.0 MAT-file") + std::string(200, '\x07'));
+  const fs::path odd = write_file("odd.txt", "1 2 3\n");
+  const fs::path absent = kTmp / "absent.txt";
+  for (const fs::path& p : {corrupt, odd, absent}) {
+    for (const std::string& cmd :
+         {"gt stats '" + p.string() + "'",
+          "gt convert '" + p.string() + "' --output '" + (kTmp / "never.txt").string() + "'"}) {
+      const CmdResult r = lsgd(cmd);
+      EXPECT_EQ(r.code, 1) << cmd;
+      EXPECT_TRUE(contains(r.err, p.string())) << cmd << ": " << r.err;
+    }
+  }
+  EXPECT_FALSE(fs::exists(kTmp / "never.txt"));
+  // Flags that do not apply to the format are errors, not ignored.
+  const fs::path pairs = write_file("p.txt", "5 1\n");
+  CmdResult r = lsgd("gt stats '" + pairs.string() + "' --distance 5");
+  EXPECT_EQ(r.code, 1);
+  EXPECT_TRUE(contains(r.err, "--distance")) << r.err;
+  r = lsgd("gt convert '" + pairs.string() + "' --output x --min-gap 5");
+  EXPECT_EQ(r.code, 1);
+  EXPECT_TRUE(contains(r.err, "--min-gap")) << r.err;
+  r = lsgd("gt stats '" + pairs.string() + "' --format xml");
+  EXPECT_EQ(r.code, 1);
+  EXPECT_TRUE(contains(r.err, "'xml'")) << r.err;
+  EXPECT_NE(lsgd("gt").code, 0);  // a subcommand is required
+}
+
+TEST(GtCli, Kitti00PosesGiveTheDocumentedCount) {
+  const fs::path poses = kGt / "kitti-poses" / "00.txt";
+  if (!fs::exists(poses)) GTEST_SKIP() << poses << " not found (../shared is absent)";
+  const fs::path json = kTmp / "k00.json";
+  const CmdResult r =
+      lsgd("gt stats '" + poses.string() + "' --min-gap 100 --json '" + json.string() + "'");
+  ASSERT_EQ(r.code, 0) << r.err;
+  const auto j = nlohmann::json::parse(slurp(json));
+  EXPECT_EQ(j["format"], "kitti-poses");
+  EXPECT_EQ(j["frames"], 4541);
+  EXPECT_EQ(j["pairs"], 29698);
+  EXPECT_EQ(j["poses_distance"], 10.0);
+  EXPECT_EQ(j["poses_min_gap"], 100);
+  EXPECT_EQ(j["window_pairs"], 29698);
+  std::cout << r.out;
+}
+
+}  // namespace

@@ -1,0 +1,753 @@
+// Tests of the ground-truth readers, format detection, KITTI poses -> loops and
+// statistics (eval/gt_formats.h): generated files of every format (MAT files
+// written here with matio), broken files, and the real files of
+// ../shared/groundtruth when present (skipped with a message otherwise).
+#include "lsgd/eval/gt_formats.h"
+
+#include <gtest/gtest.h>
+#include <matio.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <cctype>
+#include <chrono>
+#include <cmath>
+#include <cstdint>
+#include <filesystem>
+#include <fstream>
+#include <set>
+#include <sstream>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "lsgd/error.h"
+#include "test_util.h"
+
+namespace fs = std::filesystem;
+using lsgd::eval::GroundTruth;
+using lsgd::eval::GtFormat;
+using lsgd::eval::Pose;
+using lsgd::test::message_of;
+
+namespace {
+
+const fs::path kTmp = fs::path(LSGD_TEST_TMP) / ("gtf-" + std::to_string(getpid()));
+const fs::path kGt = fs::path(LSGD_SHARED_DIR) / "groundtruth";
+
+using Pairs = std::set<std::pair<std::int64_t, std::int64_t>>;  // (q, m), q > m
+
+fs::path write_file(const std::string& name, const std::string& text) {
+  fs::create_directories(kTmp);
+  const fs::path path = kTmp / name;
+  std::ofstream(path, std::ios::binary) << text;
+  return path;
+}
+
+Pairs pairs_of(const GroundTruth& gt) {
+  Pairs out;
+  for (std::int64_t q = 0; q < gt.frames(); ++q) {
+    for (std::int64_t m : gt.matches(q)) out.emplace(q, m);
+  }
+  return out;
+}
+
+bool contains(const std::string& text, const std::string& part) {
+  return text.find(part) != std::string::npos;
+}
+
+// ---- MAT files written with matio ---------------------------------------------
+
+enum class Layout { kLower, kUpper, kFull };
+
+// Column-major n x n matrix with `one` at each pair, placed per layout.
+template <typename T>
+std::vector<T> dense(std::size_t n, const Pairs& pairs, Layout layout, T one = T(1)) {
+  std::vector<T> m(n * n, T(0));
+  for (const auto& [q, mm] : pairs) {
+    const auto r = static_cast<std::size_t>(q), c = static_cast<std::size_t>(mm);
+    if (layout != Layout::kUpper) m[c * n + r] = one;  // GT(q, m), below the diagonal
+    if (layout != Layout::kLower) m[r * n + c] = one;  // GT(m, q), above
+  }
+  return m;
+}
+
+struct MatVarSpec {
+  std::string name;
+  matio_classes cls;
+  matio_types type;
+  std::size_t rows, cols;
+  void* data;
+  int flags = 0;
+};
+
+// Writes the variables; false when this matio cannot create the version.
+bool write_mat(const fs::path& path, const std::vector<MatVarSpec>& vars,
+               mat_ft version = MAT_FT_MAT5, matio_compression z = MAT_COMPRESSION_ZLIB) {
+  fs::create_directories(path.parent_path());
+  fs::remove(path);
+  mat_t* mat = Mat_CreateVer(path.c_str(), nullptr, version);
+  if (!mat) return false;
+  bool ok = true;
+  for (const auto& v : vars) {
+    std::size_t dims[2] = {v.rows, v.cols};
+    matvar_t* var = Mat_VarCreate(v.name.c_str(), v.cls, v.type, 2, dims, v.data,
+                                  v.flags | MAT_F_DONT_COPY_DATA);
+    ok = ok && var && Mat_VarWrite(mat, var, z) == 0;
+    Mat_VarFree(var);
+  }
+  Mat_Close(mat);
+  return ok;
+}
+
+// A 40-frame ground truth with loops at several gaps, including (39, 0).
+const std::size_t kN = 40;
+const Pairs kPairs = {{12, 2}, {13, 3}, {30, 10}, {31, 10}, {39, 0}, {25, 24}};
+
+fs::path write_dense_u8(const std::string& name, Layout layout, bool logical,
+                        matio_compression z = MAT_COMPRESSION_ZLIB) {
+  auto m = dense<std::uint8_t>(kN, kPairs, layout);
+  const fs::path p = kTmp / name;
+  EXPECT_TRUE(write_mat(
+      p, {{"GT", MAT_C_UINT8, MAT_T_UINT8, kN, kN, m.data(), logical ? MAT_F_LOGICAL : 0}},
+      MAT_FT_MAT5, z));
+  return p;
+}
+
+TEST(ReadMat, LowerUpperAndFullLogicalGiveTheSamePairs) {
+  for (Layout layout : {Layout::kLower, Layout::kUpper, Layout::kFull}) {
+    const fs::path p = write_dense_u8("logical.mat", layout, true);
+    const GroundTruth gt = lsgd::eval::read_mat(p.string());
+    EXPECT_EQ(gt.frames(), static_cast<std::int64_t>(kN));
+    EXPECT_EQ(pairs_of(gt), kPairs) << "layout " << static_cast<int>(layout);
+  }
+}
+
+TEST(ReadMat, EveryNumericClassCompressedOrNot) {
+  auto d = dense<double>(kN, kPairs, Layout::kLower, 1.0);
+  auto f = dense<float>(kN, kPairs, Layout::kUpper, 0.5f);
+  auto i8 = dense<std::int8_t>(kN, kPairs, Layout::kLower, -1);
+  auto u16 = dense<std::uint16_t>(kN, kPairs, Layout::kFull, 7);
+  auto i32 = dense<std::int32_t>(kN, kPairs, Layout::kLower, 3);
+  auto u64 = dense<std::uint64_t>(kN, kPairs, Layout::kUpper, 1);
+  const std::vector<MatVarSpec> specs = {
+      {"d", MAT_C_DOUBLE, MAT_T_DOUBLE, kN, kN, d.data()},
+      {"f", MAT_C_SINGLE, MAT_T_SINGLE, kN, kN, f.data()},
+      {"i8", MAT_C_INT8, MAT_T_INT8, kN, kN, i8.data()},
+      {"u16", MAT_C_UINT16, MAT_T_UINT16, kN, kN, u16.data()},
+      {"i32", MAT_C_INT32, MAT_T_INT32, kN, kN, i32.data()},
+      {"u64", MAT_C_UINT64, MAT_T_UINT64, kN, kN, u64.data()},
+  };
+  for (auto z : {MAT_COMPRESSION_NONE, MAT_COMPRESSION_ZLIB}) {
+    for (const auto& spec : specs) {
+      const fs::path p = kTmp / ("class-" + spec.name + ".mat");
+      ASSERT_TRUE(write_mat(p, {spec}, MAT_FT_MAT5, z)) << spec.name;
+      EXPECT_EQ(pairs_of(lsgd::eval::read_mat(p.string())), kPairs) << spec.name << " z=" << z;
+    }
+  }
+  const fs::path u8 = write_dense_u8("uint8.mat", Layout::kLower, false, MAT_COMPRESSION_NONE);
+  EXPECT_EQ(pairs_of(lsgd::eval::read_mat(u8.string())), kPairs);
+}
+
+TEST(ReadMat, SparseDoubleAndLogical) {
+  // Lower-triangular sparse: column c holds rows q of pairs (q, c), ascending.
+  std::vector<mat_uint32_t> ir, jc(kN + 1, 0);
+  for (std::size_t c = 0; c < kN; ++c) {
+    for (const auto& [q, m] : kPairs) {
+      if (static_cast<std::size_t>(m) == c) ir.push_back(static_cast<mat_uint32_t>(q));
+    }
+    jc[c + 1] = static_cast<mat_uint32_t>(ir.size());
+  }
+  std::vector<double> values(ir.size(), 1.0);
+  values[0] = 0.0;  // an explicit zero is no loop
+  std::vector<std::uint8_t> flags(ir.size(), 1);
+  mat_sparse_t sd{};
+  sd.nzmax = sd.nir = sd.ndata = static_cast<mat_uint32_t>(ir.size());
+  sd.ir = ir.data();
+  sd.jc = jc.data();
+  sd.njc = static_cast<mat_uint32_t>(jc.size());
+  sd.data = values.data();
+  mat_sparse_t sl = sd;
+  sl.data = flags.data();
+  const fs::path p = kTmp / "sparse.mat";
+  ASSERT_TRUE(write_mat(p, {{"sd", MAT_C_SPARSE, MAT_T_DOUBLE, kN, kN, &sd}}));
+  Pairs expected = kPairs;
+  expected.erase({39, 0});  // stored first (column 0) with the explicit zero
+  EXPECT_EQ(pairs_of(lsgd::eval::read_mat(p.string())), expected);
+  ASSERT_TRUE(write_mat(p, {{"sl", MAT_C_SPARSE, MAT_T_UINT8, kN, kN, &sl, MAT_F_LOGICAL}}));
+  EXPECT_EQ(pairs_of(lsgd::eval::read_mat(p.string())), kPairs);
+}
+
+TEST(ReadMat, Version73AndVersion4) {
+  auto d = dense<double>(kN, kPairs, Layout::kLower);
+  const fs::path v73 = kTmp / "v73.mat";
+  if (write_mat(v73, {{"gt", MAT_C_DOUBLE, MAT_T_DOUBLE, kN, kN, d.data()}}, MAT_FT_MAT73)) {
+    EXPECT_EQ(lsgd::eval::detect_gt_format(v73.string()), GtFormat::kMat);
+    EXPECT_EQ(pairs_of(lsgd::eval::read_mat(v73.string())), kPairs);
+  } else {
+    std::cout << "this matio cannot write MAT v7.3 (no HDF5): v7.3 not tested\n";
+  }
+  const fs::path v4 = kTmp / "v4.mat";
+  ASSERT_TRUE(write_mat(v4, {{"gt", MAT_C_DOUBLE, MAT_T_DOUBLE, kN, kN, d.data()}}, MAT_FT_MAT4,
+                        MAT_COMPRESSION_NONE));
+  EXPECT_EQ(lsgd::eval::detect_gt_format(v4.string()), GtFormat::kMat);  // by its extension
+  EXPECT_EQ(pairs_of(lsgd::eval::read_mat(v4.string())), kPairs);
+}
+
+TEST(ReadMat, ChoosesTheVariableByNameThenOrder) {
+  auto other = dense<double>(kN, {{5, 1}}, Layout::kLower);
+  auto gt = dense<double>(kN, kPairs, Layout::kLower);
+  std::vector<double> row(kN, 1.0);
+  const fs::path p = kTmp / "vars.mat";
+  ASSERT_TRUE(write_mat(p, {{"row", MAT_C_DOUBLE, MAT_T_DOUBLE, 1, kN, row.data()},
+                            {"scores", MAT_C_DOUBLE, MAT_T_DOUBLE, kN, kN, other.data()},
+                            {"myGroundTruth", MAT_C_DOUBLE, MAT_T_DOUBLE, kN, kN, gt.data()}}));
+  EXPECT_EQ(pairs_of(lsgd::eval::read_mat(p.string())), kPairs);  // "truth" in the name wins
+  EXPECT_EQ(pairs_of(lsgd::eval::read_mat(p.string(), -1, "scores")), (Pairs{{5, 1}}));
+  const std::string missing =
+      message_of<lsgd::FormatError>([&] { lsgd::eval::read_mat(p.string(), -1, "nothere"); });
+  EXPECT_TRUE(contains(missing, "nothere") && contains(missing, p.string())) << missing;
+  EXPECT_THROW(lsgd::eval::read_mat(p.string(), -1, "row"), lsgd::FormatError);  // 1 x N
+
+  ASSERT_TRUE(write_mat(p, {{"row", MAT_C_DOUBLE, MAT_T_DOUBLE, 1, kN, row.data()},
+                            {"a", MAT_C_DOUBLE, MAT_T_DOUBLE, kN, kN, other.data()},
+                            {"b", MAT_C_DOUBLE, MAT_T_DOUBLE, kN, kN, gt.data()}}));
+  EXPECT_EQ(pairs_of(lsgd::eval::read_mat(p.string())), (Pairs{{5, 1}}));  // first square one
+  ASSERT_TRUE(write_mat(p, {{"row", MAT_C_DOUBLE, MAT_T_DOUBLE, 1, kN, row.data()}}));
+  const std::string none = message_of<lsgd::FormatError>([&] { lsgd::eval::read_mat(p.string()); });
+  EXPECT_TRUE(contains(none, p.string()) && contains(none, "row 1x40")) << none;
+}
+
+TEST(ReadMat, FrameCountMismatchNamesBoth) {
+  const fs::path p = write_dense_u8("count.mat", Layout::kLower, true);
+  EXPECT_EQ(lsgd::eval::read_mat(p.string(), 40).frames(), 40);
+  const std::string e =
+      message_of<lsgd::FormatError>([&] { lsgd::eval::read_mat(p.string(), 41); });
+  EXPECT_TRUE(contains(e, p.string()) && contains(e, "40x40") && contains(e, "41")) << e;
+}
+
+TEST(ReadMat, RejectsNonSquareComplexAndNaN) {
+  std::vector<double> rect(kN * (kN + 1), 0.0);
+  const fs::path p = kTmp / "bad.mat";
+  ASSERT_TRUE(write_mat(p, {{"GT", MAT_C_DOUBLE, MAT_T_DOUBLE, kN, kN + 1, rect.data()}}));
+  EXPECT_THROW(lsgd::eval::read_mat(p.string()), lsgd::FormatError);
+
+  std::vector<double> re(kN * kN, 0.0), im(kN * kN, 0.0);
+  mat_complex_split_t split{re.data(), im.data()};
+  ASSERT_TRUE(write_mat(p, {{"GT", MAT_C_DOUBLE, MAT_T_DOUBLE, kN, kN, &split, MAT_F_COMPLEX}}));
+  EXPECT_THROW(lsgd::eval::read_mat(p.string()), lsgd::FormatError);
+
+  auto d = dense<double>(kN, kPairs, Layout::kLower);
+  d[3 * kN + 20] = std::nan("");
+  ASSERT_TRUE(write_mat(p, {{"GT", MAT_C_DOUBLE, MAT_T_DOUBLE, kN, kN, d.data()}}));
+  const std::string e = message_of<lsgd::FormatError>([&] { lsgd::eval::read_mat(p.string()); });
+  EXPECT_TRUE(contains(e, "NaN") && contains(e, "(21, 4)")) << e;
+}
+
+TEST(ReadMat, DiagonalIsIgnored) {
+  auto d = dense<double>(kN, kPairs, Layout::kLower);
+  for (std::size_t i = 0; i < kN; ++i) d[i * kN + i] = 1.0;
+  const fs::path p = kTmp / "diag.mat";
+  ASSERT_TRUE(write_mat(p, {{"GT", MAT_C_DOUBLE, MAT_T_DOUBLE, kN, kN, d.data()}}));
+  EXPECT_EQ(pairs_of(lsgd::eval::read_mat(p.string())), kPairs);
+}
+
+std::string slurp(const fs::path& path) {
+  std::ifstream in(path, std::ios::binary);
+  std::stringstream s;
+  s << in.rdbuf();
+  return s.str();
+}
+
+// Truncated files are FormatErrors naming the file; byte flips and garbage
+// must throw an lsgd::Error or read, never crash.
+TEST(ReadMat, TruncatedAndCorruptFiles) {
+  for (auto z : {MAT_COMPRESSION_ZLIB, MAT_COMPRESSION_NONE}) {
+    const std::string bytes = slurp(write_dense_u8("whole.mat", Layout::kLower, true, z));
+    ASSERT_GT(bytes.size(), 200u);
+    for (std::size_t keep :
+         {std::size_t{0}, std::size_t{10}, std::size_t{127}, std::size_t{128}, std::size_t{140},
+          std::size_t{200}, bytes.size() / 2, bytes.size() - 1}) {
+      const fs::path p = write_file("cut.mat", bytes.substr(0, keep));
+      const std::string e =
+          message_of<lsgd::FormatError>([&] { lsgd::eval::read_mat(p.string()); });
+      EXPECT_TRUE(contains(e, p.string())) << "z=" << z << " keep " << keep << ": " << e;
+    }
+    std::uint64_t seed = 7;
+    for (int trial = 0; trial < 60; ++trial) {
+      std::string flipped = bytes;
+      const std::size_t at = 116 + lsgd::test::splitmix64(seed) % (flipped.size() - 116);
+      flipped[at] = static_cast<char>(flipped[at] ^ (1 + lsgd::test::splitmix64(seed) % 255));
+      const fs::path p = write_file("flip.mat", flipped);
+      const std::string e = message_of<lsgd::Error>([&] { lsgd::eval::read_mat(p.string()); });
+      EXPECT_TRUE(e == "<no exception>" || contains(e, p.string()))
+          << "flip at " << at << ": " << e;
+    }
+  }
+  const fs::path text = write_file("text.mat", "1 2\n3 4\n");
+  EXPECT_TRUE(contains(message_of<lsgd::FormatError>([&] { lsgd::eval::read_mat(text.string()); }),
+                       text.string()));
+  EXPECT_THROW(lsgd::eval::read_mat((kTmp / "absent.mat").string()), lsgd::IoError);
+}
+
+// ---- KITTI poses ------------------------------------------------------------------
+
+std::string pose_line(double x, double y, double z, bool timestamp, double t = 0) {
+  std::ostringstream s;
+  s.precision(17);
+  if (timestamp) s << t << ' ';
+  s << "1 0 0 " << x << " 0 1 0 " << y << " 0 0 1 " << z << '\n';
+  return s.str();
+}
+
+TEST(ReadKittiPoses, TwelveAndThirteenColumns) {
+  std::string twelve, thirteen;
+  for (int i = 0; i < 5; ++i) {
+    twelve += pose_line(i, -0.5 * i, 2.0 * i, false);
+    thirteen += pose_line(i, -0.5 * i, 2.0 * i, true, 0.1 * i);
+  }
+  const auto a = lsgd::eval::read_kitti_poses(write_file("p12.txt", twelve).string());
+  const auto b =
+      lsgd::eval::read_kitti_poses(write_file("p13.txt", "# c\n" + thirteen + "\n").string());
+  ASSERT_EQ(a.size(), 5u);
+  ASSERT_EQ(b.size(), 5u);
+  for (int i = 0; i < 5; ++i) {
+    EXPECT_DOUBLE_EQ(a[i].x, i);
+    EXPECT_DOUBLE_EQ(a[i].y, -0.5 * i);
+    EXPECT_DOUBLE_EQ(a[i].z, 2.0 * i);
+    EXPECT_DOUBLE_EQ(b[i].x, a[i].x);
+    EXPECT_DOUBLE_EQ(b[i].y, a[i].y);
+    EXPECT_DOUBLE_EQ(b[i].z, a[i].z);
+  }
+}
+
+TEST(ReadKittiPoses, ErrorsNameFileAndLine) {
+  const auto expect_line = [](const std::string& name, const std::string& text, int line) {
+    const fs::path p = write_file(name, text);
+    const std::string e =
+        message_of<lsgd::FormatError>([&] { lsgd::eval::read_kitti_poses(p.string()); });
+    EXPECT_TRUE(contains(e, p.string() + ":" + std::to_string(line))) << e;
+  };
+  const std::string ok = pose_line(1, 2, 3, false);
+  expect_line("p11.txt", ok + "1 2 3 4 5 6 7 8 9 10 11\n", 2);
+  expect_line("pmix.txt", ok + ok + pose_line(1, 2, 3, true), 3);
+  expect_line("pword.txt", "\n" + ok + "1 0 0 x 0 1 0 2 0 0 1 3\n", 3);
+  expect_line("pinf.txt", "1 0 0 inf 0 1 0 2 0 0 1 3\n", 1);
+  EXPECT_THROW(lsgd::eval::read_kitti_poses(write_file("pnone.txt", "# nothing\n").string()),
+               lsgd::FormatError);
+  EXPECT_THROW(lsgd::eval::read_kitti_poses((kTmp / "absent.txt").string()), lsgd::IoError);
+}
+
+// Brute force, the definition: i - j > gap and |c_i - c_j| < d.
+Pairs brute_force(const std::vector<Pose>& poses, double d, std::int64_t gap) {
+  Pairs out;
+  for (std::size_t i = 0; i < poses.size(); ++i) {
+    for (std::size_t j = 0; j < i; ++j) {
+      const double dx = poses[i].x - poses[j].x, dy = poses[i].y - poses[j].y,
+                   dz = poses[i].z - poses[j].z;
+      if (static_cast<std::int64_t>(i - j) > gap && std::sqrt(dx * dx + dy * dy + dz * dz) < d) {
+        out.emplace(static_cast<std::int64_t>(i), static_cast<std::int64_t>(j));
+      }
+    }
+  }
+  return out;
+}
+
+TEST(GroundTruthFromPoses, MatchesBruteForceOnALoopingWalk) {
+  // A walk around a 60 m square, three laps with lateral noise: many revisits.
+  std::vector<Pose> poses;
+  std::uint64_t seed = 3;
+  for (int k = 0; k < 720; ++k) {
+    const double s = std::fmod(k * 1.0, 240.0), side = std::floor(s / 60), t = s - 60 * side;
+    const double noise = (static_cast<double>(lsgd::test::splitmix64(seed) % 1000) / 1000 - 0.5);
+    double x = side == 0 ? t : side == 1 ? 60 : side == 2 ? 60 - t : 0;
+    double z = side == 0 ? 0 : side == 1 ? t : side == 2 ? 60 : 60 - t;
+    poses.push_back(
+        {x + noise, 0.3 * noise - 1000, z - noise});  // far from the origin: negative cells
+  }
+  for (double d : {0.7, 3.0, 10.0, 25.0}) {
+    for (std::int64_t gap : {0, 50, 300}) {
+      const Pairs expected = brute_force(poses, d, gap);
+      EXPECT_EQ(pairs_of(lsgd::eval::groundtruth_from_poses(poses, d, gap)), expected)
+          << "d " << d << " gap " << gap;
+      if (d == 3.0 && gap == 50) {
+        EXPECT_GT(expected.size(), 1000u);
+      }
+    }
+  }
+}
+
+TEST(GroundTruthFromPoses, BoundsAreStrict) {
+  const std::vector<Pose> poses = {{0, 0, 0}, {5, 0, 0}, {0, 0, 2}, {0, 0, 0.5}};
+  const auto gt = lsgd::eval::groundtruth_from_poses(poses, 2.0, 1);
+  EXPECT_EQ(pairs_of(gt), (Pairs{{3, 0}}));  // (2, 0): distance 2 is not < 2; (3, 2): gap 1
+  EXPECT_EQ(lsgd::eval::groundtruth_from_poses({}, 1.0, 0).frames(), 0);
+  EXPECT_THROW(lsgd::eval::groundtruth_from_poses(poses, 0.0, 1), lsgd::InvalidArgument);
+  EXPECT_THROW(lsgd::eval::groundtruth_from_poses(poses, std::nan(""), 1), lsgd::InvalidArgument);
+  EXPECT_THROW(lsgd::eval::groundtruth_from_poses(poses, 1.0, -1), lsgd::InvalidArgument);
+  EXPECT_THROW(lsgd::eval::groundtruth_from_poses({{1e300, 0, 0}}, 1.0, 0), lsgd::InvalidArgument);
+}
+
+// ---- loopinf -------------------------------------------------------------------------
+
+TEST(ReadLoopinf, ReadsLoopsBothWays) {
+  const fs::path p = write_file("li.txt", "0\t5\n1\t-1\n2\t-1\n3\t-1\n4\t-1\n5\t0\n6\t1\n7\t-1");
+  const GroundTruth gt = lsgd::eval::read_loopinf(p.string());
+  EXPECT_EQ(gt.frames(), 8);
+  EXPECT_EQ(pairs_of(gt), (Pairs{{5, 0}, {6, 1}}));
+  EXPECT_EQ(lsgd::eval::read_loopinf(p.string(), 8).pairs(), 2);
+  const std::string e =
+      message_of<lsgd::FormatError>([&] { lsgd::eval::read_loopinf(p.string(), 9); });
+  EXPECT_TRUE(contains(e, p.string()) && contains(e, "8") && contains(e, "9")) << e;
+}
+
+TEST(ReadLoopinf, ErrorsNameFileAndLine) {
+  const auto expect_line = [](const std::string& name, const std::string& text, int line) {
+    const fs::path p = write_file(name, text);
+    const std::string e =
+        message_of<lsgd::FormatError>([&] { lsgd::eval::read_loopinf(p.string()); });
+    EXPECT_TRUE(contains(e, p.string() + ":" + std::to_string(line))) << e;
+  };
+  expect_line("li-order.txt", "0\t-1\n2\t-1\n", 2);
+  expect_line("li-range.txt", "0\t-1\n1\t-1\n2\t3\n", 3);
+  expect_line("li-neg.txt", "0\t-2\n", 1);
+  expect_line("li-word.txt", "0\t-1\n1\tx\n", 2);
+  expect_line("li-three.txt", "0\t-1\t4\n", 1);
+  EXPECT_THROW(lsgd::eval::read_loopinf((kTmp / "absent.txt").string()), lsgd::IoError);
+}
+
+// ---- detection, options, dispatch, statistics ------------------------------------------------
+
+TEST(DetectGtFormat, TellsEachFormatByContent) {
+  using lsgd::eval::detect_gt_format;
+  EXPECT_EQ(detect_gt_format(write_file("d-pairs", "# c\n12 2\n13 3\n\n4 30\n").string()),
+            GtFormat::kPairs);
+  EXPECT_EQ(detect_gt_format(write_file("d-pairs-tab", "5\t1\n9\t2\n").string()), GtFormat::kPairs);
+  EXPECT_EQ(detect_gt_format(write_file("d-li", "0\t-1\n1\t-1\n2\t0\n").string()),
+            GtFormat::kLoopinf);
+  EXPECT_EQ(detect_gt_format(write_file("d-li-space", "0 -1\n1 -1\n").string()),
+            GtFormat::kLoopinf);
+  EXPECT_EQ(detect_gt_format(write_file("d-li-tab", "0\t3\n1\t4\n2\t5\n").string()),
+            GtFormat::kLoopinf);
+  EXPECT_EQ(detect_gt_format(write_file("d-12", pose_line(1, 2, 3, false)).string()),
+            GtFormat::kKittiPoses);
+  EXPECT_EQ(detect_gt_format(write_file("d-13", pose_line(1, 2, 3, true)).string()),
+            GtFormat::kKittiPoses);
+  EXPECT_EQ(detect_gt_format(write_dense_u8("d.dat", Layout::kLower, true).string()),
+            GtFormat::kMat);  // by the header, whatever the name
+  for (const auto& [name, text] : std::vector<std::pair<std::string, std::string>>{
+           {"d-three", "1 2 3\n"},
+           {"d-empty", ""},
+           {"d-comments", "# only\n\n"},
+           {"d-mixed", "1 2\n1 2 3\n"},
+           {"d-words", "a b\n"},
+           {"d-neg", "3 -1\n4 -1\n"},  // -1 but not one line per frame
+           {"d-binary", std::string("\x01\x00\x02\x03", 4)}}) {
+    const fs::path p = write_file(name, text);
+    const std::string e = message_of<lsgd::FormatError>([&] { detect_gt_format(p.string()); });
+    EXPECT_TRUE(contains(e, p.string())) << name << ": " << e;
+  }
+  EXPECT_THROW(detect_gt_format((kTmp / "absent").string()), lsgd::IoError);
+}
+
+TEST(GtFormatNames, RoundTripAndRejectUnknown) {
+  for (GtFormat f : {GtFormat::kAuto, GtFormat::kPairs, GtFormat::kMat, GtFormat::kKittiPoses,
+                     GtFormat::kLoopinf}) {
+    EXPECT_EQ(lsgd::eval::parse_gt_format(lsgd::eval::to_string(f)), f);
+  }
+  const std::string e =
+      message_of<lsgd::InvalidArgument>([] { lsgd::eval::parse_gt_format("matlab"); });
+  EXPECT_TRUE(contains(e, "'matlab'")) << e;
+}
+
+TEST(GtOptions, CheckNamesTheField) {
+  lsgd::eval::GtOptions o;
+  EXPECT_NO_THROW(o.check());
+  o.frames = -2;
+  EXPECT_TRUE(contains(message_of<lsgd::InvalidArgument>([&] { o.check(); }), "frames"));
+  o = {};
+  o.poses_distance = 0;
+  EXPECT_TRUE(contains(message_of<lsgd::InvalidArgument>([&] { o.check(); }), "poses_distance"));
+  o = {};
+  o.poses_min_gap = -1;
+  EXPECT_TRUE(contains(message_of<lsgd::InvalidArgument>([&] { o.check(); }), "poses_min_gap"));
+}
+
+TEST(LoadGroundtruth, DispatchesAndTakesFramesFromTheFile) {
+  lsgd::eval::GtOptions o;
+  const fs::path pairs = write_file("l-pairs.txt", "12 2\n3 13\n");
+  GroundTruth gt = lsgd::eval::load_groundtruth(pairs.string(), o);
+  EXPECT_EQ(gt.frames(), 14);  // max id + 1
+  EXPECT_EQ(pairs_of(gt), (Pairs{{12, 2}, {13, 3}}));
+  o.frames = 20;
+  EXPECT_EQ(lsgd::eval::load_groundtruth(pairs.string(), o).frames(), 20);
+  o.frames = 10;
+  EXPECT_THROW(lsgd::eval::load_groundtruth(pairs.string(), o), lsgd::FormatError);
+
+  std::string walk;
+  for (int i = 0; i < 30; ++i) walk += pose_line(i < 15 ? i : 29 - i, 0, 0, true, i);
+  const fs::path poses = write_file("l-poses.txt", walk);
+  o = {};
+  o.poses_distance = 0.5;
+  o.poses_min_gap = 2;
+  gt = lsgd::eval::load_groundtruth(poses.string(), o);
+  EXPECT_EQ(pairs_of(gt), brute_force(lsgd::eval::read_kitti_poses(poses.string()), 0.5, 2));
+  EXPECT_EQ(gt.pairs(), 14);  // i and 29 - i, i < 14 (14 and 15 are 1 frame apart)
+  o.frames = 31;
+  EXPECT_THROW(lsgd::eval::load_groundtruth(poses.string(), o), lsgd::FormatError);
+
+  o = {};
+  o.format = GtFormat::kLoopinf;  // forced: the detector would say pairs
+  const fs::path li = write_file("l-li.txt", "0\t2\n1\t3\n2\t0\n3\t1\n");
+  EXPECT_EQ(pairs_of(lsgd::eval::load_groundtruth(li.string(), o)), (Pairs{{2, 0}, {3, 1}}));
+  o.format = GtFormat::kMat;
+  EXPECT_THROW(lsgd::eval::load_groundtruth(li.string(), o), lsgd::FormatError);
+  o = {};
+  o.poses_distance = -1;
+  EXPECT_THROW(lsgd::eval::load_groundtruth(li.string(), o), lsgd::InvalidArgument);
+}
+
+TEST(GtStats, CountsPairsPositivesAndGaps) {
+  GroundTruth gt(100);
+  gt.add(60, 5);   // gap 55
+  gt.add(60, 50);  // gap 10
+  gt.add(90, 10);  // gap 80
+  gt.add(91, 89);  // gap 2
+  auto s = lsgd::eval::gt_stats(gt, 50);
+  EXPECT_EQ(s.frames, 100);
+  EXPECT_EQ(s.pairs, 4);
+  EXPECT_EQ(s.positives, 3);
+  EXPECT_EQ(s.frames_in_loops, 7);
+  EXPECT_EQ(s.gap_min, 2);
+  EXPECT_DOUBLE_EQ(s.gap_median, 32.5);
+  EXPECT_EQ(s.gap_max, 80);
+  EXPECT_EQ(s.min_gap, 50);
+  EXPECT_EQ(s.window_pairs, 2);
+  EXPECT_EQ(s.window_positives, 2);
+  gt.add(99, 0);  // gap 99: odd count, median 55
+  EXPECT_DOUBLE_EQ(lsgd::eval::gt_stats(gt).gap_median, 55.0);
+  EXPECT_EQ(lsgd::eval::gt_stats(gt).window_positives, 4);
+  const auto empty = lsgd::eval::gt_stats(GroundTruth(3), 10);
+  EXPECT_EQ(empty.pairs + empty.positives + empty.gap_max + empty.frames_in_loops, 0);
+  EXPECT_THROW(lsgd::eval::gt_stats(gt, -1), lsgd::InvalidArgument);
+}
+
+// ---- the real files of ../shared/groundtruth ---------------------------------------------------
+
+// Reads a "*.pairs.txt" twin: "# source X.mat var=V dims=NxN; ..." then "row col" per nonzero.
+Pairs read_twin(const fs::path& path, std::int64_t& frames) {
+  std::ifstream in(path);
+  std::string line;
+  std::getline(in, line);
+  const auto dims = line.find("dims=");
+  frames = dims == std::string::npos ? -1 : std::stoll(line.substr(dims + 5));
+  Pairs out;
+  std::int64_t r = 0, c = 0;
+  while (in >> r >> c) out.emplace(std::max(r, c), std::min(r, c));
+  return out;
+}
+
+std::vector<std::string> published_mats() {
+  std::vector<std::string> files;
+  const fs::path dir = kGt / "published";
+  if (fs::exists(dir)) {
+    for (const auto& e : fs::recursive_directory_iterator(dir)) {
+      if (e.path().extension() == ".mat") files.push_back(e.path().string());
+    }
+  }
+  std::sort(files.begin(), files.end());
+  if (files.empty()) files.push_back("");  // one test that skips with a message
+  return files;
+}
+
+class PublishedMat : public ::testing::TestWithParam<std::string> {};
+
+// Every published MAT file equals its pairs twin (pairs compared unordered:
+// the twin lists (row, col) as stored, and two kn-zhang files are upper-triangular).
+TEST_P(PublishedMat, EqualsItsPairsTwin) {
+  if (GetParam().empty()) GTEST_SKIP() << "no published ground truth under " << kGt / "published";
+  const fs::path mat = GetParam();
+  fs::path twin = mat;
+  twin.replace_extension(".pairs.txt");
+  ASSERT_TRUE(fs::exists(twin)) << twin;
+  std::int64_t frames = -1;
+  const Pairs expected = read_twin(twin, frames);
+  EXPECT_EQ(lsgd::eval::detect_gt_format(mat.string()), GtFormat::kMat);
+  EXPECT_EQ(lsgd::eval::detect_gt_format(twin.string()), GtFormat::kPairs);
+  const GroundTruth gt = lsgd::eval::read_mat(mat.string());
+  EXPECT_EQ(gt.frames(), frames);
+  EXPECT_EQ(gt.pairs(), static_cast<std::int64_t>(expected.size()));
+  EXPECT_TRUE(pairs_of(gt) == expected) << mat;
+  std::cout << mat.filename().string() << ": " << gt.frames() << " frames, " << gt.pairs()
+            << " pairs\n";
+}
+
+std::string test_name(const ::testing::TestParamInfo<std::string>& info) {
+  std::string name = fs::path(info.param).parent_path().filename().string() + "_" +
+                     fs::path(info.param).stem().string();
+  for (char& c : name) {
+    if (!std::isalnum(static_cast<unsigned char>(c))) c = '_';
+  }
+  return info.param.empty() ? "absent" : name;
+}
+
+INSTANTIATE_TEST_SUITE_P(Shared, PublishedMat, ::testing::ValuesIn(published_mats()), test_name);
+
+// Every loopinf file: detected, and each line's loop present; a loop frame
+// beyond the sequence (loopinf-kitti-09.txt has two) must be named by line.
+TEST(SharedLoopinf, EveryFileReadsOrNamesTheBadLine) {
+  const fs::path dir = kGt / "lsgddn-loopinf";
+  if (!fs::exists(dir)) GTEST_SKIP() << "LSGDDN loopinf files not found at " << dir;
+  int files = 0, rejected = 0;
+  for (const auto& entry : fs::directory_iterator(dir)) {
+    const std::string path = entry.path().string();
+    std::vector<std::int64_t> loop;
+    std::ifstream in(path);
+    std::int64_t k = 0, j = 0;
+    while (in >> k >> j) loop.push_back(j);
+    const auto n = static_cast<std::int64_t>(loop.size());
+    std::int64_t bad_line = 0;
+    for (std::int64_t i = 0; i < n && !bad_line; ++i) bad_line = loop[i] >= n ? i + 1 : 0;
+    EXPECT_EQ(lsgd::eval::detect_gt_format(path), GtFormat::kLoopinf) << path;
+    ++files;
+    if (bad_line) {
+      ++rejected;
+      const std::string e = message_of<lsgd::FormatError>([&] { lsgd::eval::read_loopinf(path); });
+      EXPECT_TRUE(contains(e, path + ":" + std::to_string(bad_line))) << e;
+      std::cout << entry.path().filename().string() << ": rejected: " << e << "\n";
+      continue;
+    }
+    const GroundTruth gt = lsgd::eval::read_loopinf(path);
+    EXPECT_EQ(gt.frames(), n) << path;
+    std::int64_t with_loop = 0;
+    for (std::int64_t i = 0; i < n; ++i) {
+      if (loop[i] < 0 || loop[i] == i) continue;
+      ++with_loop;
+      EXPECT_TRUE(gt.is_loop(i, loop[i])) << path << " frame " << i;
+    }
+    EXPECT_LE(gt.pairs(), with_loop) << path;
+    EXPECT_GT(gt.pairs(), 0) << path;
+  }
+  EXPECT_GE(files, 5);
+  EXPECT_LE(rejected, 1);
+}
+
+TEST(SharedKittiPoses, EveryFileReads) {
+  const fs::path dir = kGt / "kitti-poses";
+  if (!fs::exists(dir)) GTEST_SKIP() << "KITTI poses not found at " << dir;
+  int files = 0;
+  for (const auto& entry : fs::directory_iterator(dir)) {
+    const std::string path = entry.path().string();
+    std::ifstream in(path);
+    const auto lines = std::count(std::istreambuf_iterator<char>(in), {}, '\n');
+    EXPECT_EQ(lsgd::eval::detect_gt_format(path), GtFormat::kKittiPoses) << path;
+    EXPECT_EQ(static_cast<std::int64_t>(lsgd::eval::read_kitti_poses(path).size()), lines) << path;
+    ++files;
+  }
+  EXPECT_EQ(files, 11);
+  const fs::path p00 = dir / "00.txt";
+  if (!fs::exists(p00)) return;
+  // Line 2 of 00.txt: "0.1037359 <r00 r01 r02> -0.04690294 ... -0.02839928 ... 0.8586941".
+  const auto poses = lsgd::eval::read_kitti_poses(p00.string());
+  EXPECT_DOUBLE_EQ(poses[1].x, -0.04690294);
+  EXPECT_DOUBLE_EQ(poses[1].y, -0.02839928);
+  EXPECT_DOUBLE_EQ(poses[1].z, 0.8586941);
+}
+
+// ---- KITTI-00: loops derived from the poses vs the published matrices ------------------------
+
+struct Overlap {
+  double pair_recall = 0;      // published pairs that are derived pairs
+  double pair_precision = 0;   // derived pairs that are published pairs
+  double query_recall = 0;     // published positive queries that are derived positives
+  double query_precision = 0;  // derived positive queries that are published positives
+  double median_distance = 0;  // camera distance of the published pairs, metres
+  double p95_distance = 0, max_distance = 0;
+};
+
+Overlap overlap(const Pairs& published, const Pairs& derived, const std::vector<Pose>& poses) {
+  std::size_t common = 0;
+  std::set<std::int64_t> qp, qd;
+  std::vector<double> dist;
+  for (const auto& [q, m] : published) {
+    common += derived.count({q, m});
+    qp.insert(q);
+    const Pose &a = poses[static_cast<std::size_t>(q)], &b = poses[static_cast<std::size_t>(m)];
+    dist.push_back(std::hypot(a.x - b.x, a.y - b.y, a.z - b.z));
+  }
+  for (const auto& pair : derived) qd.insert(pair.first);
+  std::size_t qcommon = 0;
+  for (std::int64_t q : qp) qcommon += qd.count(q);
+  std::sort(dist.begin(), dist.end());
+  return {static_cast<double>(common) / published.size(),
+          static_cast<double>(common) / derived.size(),
+          static_cast<double>(qcommon) / qp.size(),
+          static_cast<double>(qcommon) / qd.size(),
+          dist[dist.size() / 2],
+          dist[dist.size() * 95 / 100],
+          dist.back()};
+}
+
+TEST(Kitti00, PosesAgreeWithThePublishedMatrices) {
+  const fs::path poses_file = kGt / "kitti-poses" / "00.txt";
+  const std::vector<fs::path> published = {kGt / "published/kn-zhang/groundTruth_KITTI00.mat",
+                                           kGt / "published/tsintotas-botw/groundTruthKITTI00.mat"};
+  for (const auto& p : std::vector<fs::path>{poses_file, published[0], published[1]}) {
+    if (!fs::exists(p)) GTEST_SKIP() << p << " not found (../shared is absent)";
+  }
+  const auto poses = lsgd::eval::read_kitti_poses(poses_file.string());
+  const auto start = std::chrono::steady_clock::now();
+  const GroundTruth derived_gt = lsgd::eval::groundtruth_from_poses(poses, 10.0, 100);
+  const double ms =
+      std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+  std::cout << "KITTI-00 from poses (d = 10 m, gap = 100): " << derived_gt.pairs() << " pairs, "
+            << lsgd::eval::gt_stats(derived_gt).positives << " positive queries, " << ms << " ms\n";
+  EXPECT_EQ(derived_gt.pairs(), 29698);  // the figure of ../shared/docs/evaluation.md
+  EXPECT_LT(ms, 1000.0);
+  const Pairs derived = pairs_of(derived_gt);
+
+  // Controls: poses 5 frames late change the count; 50 frames late must fail
+  // the overlap thresholds below.
+  const auto late_by = [&](std::size_t s) {
+    std::vector<Pose> late(poses.begin() + static_cast<std::ptrdiff_t>(s), poses.end());
+    late.resize(poses.size(), poses.back());
+    return pairs_of(lsgd::eval::groundtruth_from_poses(late, 10.0, 100));
+  };
+  const std::size_t late5 = late_by(5).size();
+  std::cout << "control: poses 5 frames late give " << late5 << " pairs\n";
+  EXPECT_NE(late5, 29698u);
+  const Pairs shifted = late_by(50);
+
+  const double min_pair_recall[] = {0.62, 0.58}, min_query_recall[] = {0.95, 0.90};
+  for (std::size_t k = 0; k < published.size(); ++k) {
+    const GroundTruth pub = lsgd::eval::read_mat(published[k].string(), 4541);
+    const Overlap o = overlap(pairs_of(pub), derived, poses);
+    const Overlap c = overlap(pairs_of(pub), shifted, poses);
+    std::cout << published[k].parent_path().filename().string() << "/"
+              << published[k].filename().string() << ": " << pub.pairs()
+              << " pairs, camera distance of its pairs: median " << o.median_distance << " m, p95 "
+              << o.p95_distance << " m, max " << o.max_distance << " m; pairs: recall "
+              << o.pair_recall << " precision " << o.pair_precision << "; positive queries: recall "
+              << o.query_recall << " precision " << o.query_precision
+              << " | control (poses 50 frames late): pair recall " << c.pair_recall << " precision "
+              << c.pair_precision << "\n";
+    EXPECT_GE(o.pair_recall, min_pair_recall[k]);
+    EXPECT_GE(o.pair_precision, 0.68);
+    EXPECT_GE(o.query_recall, min_query_recall[k]);
+    EXPECT_GE(o.query_precision, 0.82);
+    EXPECT_GT(o.median_distance, 4.0);
+    EXPECT_LT(o.median_distance, 10.0);
+    EXPECT_TRUE(c.pair_recall < min_pair_recall[k] && c.pair_precision < 0.68)
+        << "the control passed: the thresholds cannot catch misaligned poses";
+    // For docs/evaluation.md: how the agreement moves with the distance d.
+    for (double d : {5.0, 7.5, 10.0, 12.5, 15.0, 20.0}) {
+      const Pairs at_d = pairs_of(lsgd::eval::groundtruth_from_poses(poses, d, 100));
+      const Overlap od = overlap(pairs_of(pub), at_d, poses);
+      std::cout << "  d = " << d << " m: " << at_d.size() << " pairs; pair recall "
+                << od.pair_recall << " precision " << od.pair_precision << "; query recall "
+                << od.query_recall << " precision " << od.query_precision << "\n";
+    }
+  }
+}
+
+}  // namespace

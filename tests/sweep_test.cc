@@ -1,0 +1,427 @@
+// Sweep grids (parsing, exact ranges, cross-product order, validation) and
+// `lsgd sweep` end to end on a short synthetic sequence written by the test.
+#include "lsgd/eval/sweep.h"
+
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <iomanip>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+#include <opencv2/core.hpp>
+#include <opencv2/imgcodecs.hpp>
+
+#include "lsgd/error.h"
+#include "lsgd/eval/groundtruth.h"
+#include "lsgd/eval/synthetic.h"
+#include "lsgd/io/config.h"
+#include "test_util.h"
+
+namespace fs = std::filesystem;
+using lsgd::InvalidArgument;
+using lsgd::eval::expand_sweep;
+using lsgd::eval::parse_dataset_spec;
+using lsgd::eval::parse_sweep_axis;
+using lsgd::eval::SweepAxis;
+using lsgd::test::message_of;
+using Strings = std::vector<std::string>;
+
+namespace {
+
+// ---------------------------------------------------------------- axes
+
+TEST(SweepAxis, CommaList) {
+  const SweepAxis a = parse_sweep_axis("search.mode=exhaustive, nodes");
+  EXPECT_EQ(a.key, "search.mode");
+  EXPECT_EQ(a.values, (Strings{"exhaustive", "nodes"}));
+  EXPECT_EQ(a.spec, "search.mode=exhaustive, nodes");
+}
+
+TEST(SweepAxis, IntegerRangeIsInclusive) {
+  EXPECT_EQ(parse_sweep_axis("segmentation.superpixel_size=10:100:10").values,
+            (Strings{"10", "20", "30", "40", "50", "60", "70", "80", "90", "100"}));
+  EXPECT_EQ(parse_sweep_axis("k=10:95:10").values.back(), "90");  // the end is not on the grid
+  EXPECT_EQ(parse_sweep_axis("k=5:5:1").values, (Strings{"5"}));
+  EXPECT_EQ(parse_sweep_axis("k=-1:1:1").values, (Strings{"-1", "0", "1"}));
+}
+
+TEST(SweepAxis, FloatRangeDoesNotDrift) {
+  EXPECT_EQ(parse_sweep_axis("search.nodes.beta=0.9:1.1:0.1").values,
+            (Strings{"0.9", "1.0", "1.1"}));
+  // 3 * 0.1 > 0.3 in binary floating point: a naive loop would drop the end.
+  EXPECT_EQ(parse_sweep_axis("k=0:0.3:0.1").values, (Strings{"0.0", "0.1", "0.2", "0.3"}));
+  const Strings many = parse_sweep_axis("k=0:1:0.01").values;
+  ASSERT_EQ(many.size(), 101u);
+  EXPECT_EQ(many[29], "0.29");
+  EXPECT_EQ(many.back(), "1.00");
+  EXPECT_EQ(parse_sweep_axis("k=1:0:-0.25").values,
+            (Strings{"1.00", "0.75", "0.50", "0.25", "0.00"}));
+  EXPECT_EQ(parse_sweep_axis("k=-0.5:0.5:.5").values, (Strings{"-0.5", "0.0", "0.5"}));
+}
+
+TEST(SweepAxis, ItemsMayMixRangesAndValues) {
+  EXPECT_EQ(parse_sweep_axis("k=10:30:10,100").values, (Strings{"10", "20", "30", "100"}));
+}
+
+TEST(SweepAxis, SemicolonSeparatesItemsHoldingCommas) {
+  EXPECT_EQ(parse_sweep_axis("verification.stages=none;temporal,geometric").values,
+            (Strings{"none", "temporal,geometric"}));
+}
+
+TEST(SweepAxis, BadSpecsNameTheSpec) {
+  for (const char* spec :
+       {"search.mode", "=1", "a..b=1", "a.b c=1", "k=", "k=1,,2", "k=1 2", "k=a:b:c", "k=1:2",
+        "k=1:2:3:4", "k=1:2:0", "k=1:0:1", "k=0:1:-1", "k=0:1e6:1", "k=0:100000:1", "k=x:y",
+        "k={a: 1}", "k=1#2", "k=0.1234567891:1:1"}) {
+    const std::string message = message_of<InvalidArgument>([&] { parse_sweep_axis(spec); });
+    EXPECT_NE(message.find(std::string("'") + spec + "'"), std::string::npos)
+        << spec << " -> " << message;
+  }
+}
+
+// ---------------------------------------------------------------- grids
+
+TEST(SweepGrid, CrossProductInTheOrderGiven) {
+  const auto points = expand_sweep({parse_sweep_axis("segmentation.superpixel_size=30,40"),
+                                    parse_sweep_axis("search.mode=exhaustive,nodes")},
+                                   {});
+  ASSERT_EQ(points.size(), 4u);
+  const Strings expected[] = {
+      {"30", "exhaustive"}, {"30", "nodes"}, {"40", "exhaustive"}, {"40", "nodes"}};
+  for (std::size_t i = 0; i < 4; ++i) {
+    EXPECT_EQ(points[i].values, expected[i]) << i;
+    EXPECT_EQ(points[i].options.segmentation.superpixel_size, i < 2 ? 30 : 40) << i;
+    EXPECT_EQ(points[i].options.search.mode,
+              i % 2 ? lsgd::SearchMode::kDynamicNodes : lsgd::SearchMode::kExhaustive)
+        << i;
+  }
+}
+
+TEST(SweepGrid, ThreeAxesTurnLikeNestedLoops) {
+  const auto points = expand_sweep(
+      {parse_sweep_axis("search.top_n=1,2"), parse_sweep_axis("search.mode=exhaustive,nodes"),
+       parse_sweep_axis("search.nodes.beta=0.9:1.1:0.1")},
+      {});
+  ASSERT_EQ(points.size(), 12u);
+  EXPECT_EQ(points[0].values, (Strings{"1", "exhaustive", "0.9"}));
+  EXPECT_EQ(points[2].values, (Strings{"1", "exhaustive", "1.1"}));
+  EXPECT_EQ(points[3].values, (Strings{"1", "nodes", "0.9"}));
+  EXPECT_EQ(points[11].values, (Strings{"2", "nodes", "1.1"}));
+  EXPECT_EQ(points[11].options.search.nodes.beta, 1.1);  // the double nearest 1.1, exactly
+  EXPECT_EQ(points[4].options.search.nodes.beta, 1.0);
+}
+
+TEST(SweepGrid, ValuesApplyOnTopOfTheBase) {
+  lsgd::DetectorOptions base;
+  base.segmentation.superpixel_size = 25;
+  lsgd::parse_verification_stages("none", base.verification);
+  base.search.nodes.alpha = 0.5;
+  const auto points = expand_sweep({parse_sweep_axis("search.nodes.beta=0.8")}, base);
+  ASSERT_EQ(points.size(), 1u);
+  lsgd::DetectorOptions expected = base;
+  expected.search.nodes.beta = 0.8;
+  EXPECT_EQ(lsgd::io::to_yaml(points[0].options), lsgd::io::to_yaml(expected));
+}
+
+TEST(SweepGrid, NoAxesIsTheBase) {
+  lsgd::DetectorOptions base;
+  base.segmentation.superpixel_size = 17;
+  const auto points = expand_sweep({}, base);
+  ASSERT_EQ(points.size(), 1u);
+  EXPECT_TRUE(points[0].values.empty());
+  EXPECT_EQ(lsgd::io::to_yaml(points[0].options), lsgd::io::to_yaml(base));
+}
+
+TEST(SweepGrid, BadKeysAndValuesNameTheSpec) {
+  struct Case {
+    const char* spec;
+    const char* detail;  // also in the message
+  };
+  for (const Case& c : {Case{"segmentation.superpixel_sze=30,40", "superpixel_sze"},
+                        Case{"segmentation.superpixel_size=1,40", "out of range"},
+                        Case{"segmentation.superpixel_size=3.5", "integer"},
+                        Case{"search.mode=exhaustive,bogus", "bogus"},
+                        Case{"search.nodes=1", "map"}, Case{"nothing.at_all=1", "nothing"},
+                        Case{"verification.stages=none;temporal,bogus", "bogus"}}) {
+    const std::string message = message_of<InvalidArgument>([&] {
+      expand_sweep({parse_sweep_axis("search.top_n=5"), parse_sweep_axis(c.spec)}, {});
+    });
+    EXPECT_NE(message.find(std::string("'") + c.spec + "'"), std::string::npos)
+        << c.spec << " -> " << message;
+    EXPECT_NE(message.find(c.detail), std::string::npos) << c.spec << " -> " << message;
+    EXPECT_EQ(message.find("(line "), std::string::npos) << message;  // no line of hidden YAML
+  }
+}
+
+TEST(SweepGrid, KeySweptTwiceIsAnError) {
+  const std::string message = message_of<InvalidArgument>([] {
+    expand_sweep({parse_sweep_axis("search.top_n=1"), parse_sweep_axis("search.top_n=2")}, {});
+  });
+  EXPECT_NE(message.find("already swept"), std::string::npos) << message;
+}
+
+TEST(SweepGrid, YamlMergesSectionsSharingAPrefix) {
+  EXPECT_EQ(lsgd::eval::sweep_yaml({"search.mode", "segmentation.superpixel_size",
+                                    "search.nodes.beta", "search.nodes.alpha"},
+                                   {"nodes", "30", "0.9", "0.7"}),
+            "search:\n"
+            "  mode: nodes\n"
+            "  nodes:\n"
+            "    beta: 0.9\n"
+            "    alpha: 0.7\n"
+            "segmentation:\n"
+            "  superpixel_size: 30\n");
+  EXPECT_THROW(lsgd::eval::sweep_yaml({"search.nodes", "search.nodes.beta"}, {"1", "2"}),
+               InvalidArgument);
+  EXPECT_THROW(lsgd::eval::sweep_yaml({"search.mode"}, {"a: b"}), InvalidArgument);
+}
+
+// ---------------------------------------------------------------- datasets
+
+TEST(SweepDataset, BothForms) {
+  const auto full = parse_dataset_spec("corridor=/d/seq.txt,/d/gt.txt,50");
+  EXPECT_EQ(full.name, "corridor");
+  EXPECT_EQ(full.sequence, "/d/seq.txt");
+  EXPECT_EQ(full.ground_truth, "/d/gt.txt");
+  EXPECT_EQ(full.min_gap, 50);
+  const auto dir = parse_dataset_spec("nordland-trimmed=/data/nordland,100");
+  EXPECT_EQ(dir.name, "nordland-trimmed");
+  EXPECT_EQ(dir.sequence, "/data/nordland/sequence.txt");
+  EXPECT_EQ(dir.ground_truth, "/data/nordland/groundtruth.txt");
+  EXPECT_EQ(dir.min_gap, 100);
+}
+
+TEST(SweepDataset, BadSpecsNameTheSpec) {
+  for (const char* spec :
+       {"/d/seq.txt,/d/gt.txt,50", "=/d,50", "a b=/d,50", "a|b=/d,50", "x=/d", "x=/d,/g,/h,50",
+        "x=/d,-1", "x=/d,5.5", "x=/d,fifty", "x=,/g,50", "x=/d,"}) {
+    const std::string message = message_of<InvalidArgument>([&] { parse_dataset_spec(spec); });
+    EXPECT_NE(message.find(std::string("'") + spec + "'"), std::string::npos)
+        << spec << " -> " << message;
+  }
+}
+
+// ---------------------------------------------------------------- lsgd sweep, end to end
+
+#ifdef LSGD_CLI
+
+const fs::path kTmp = fs::path(LSGD_TEST_TMP) / ("sweep-" + std::to_string(getpid()));
+
+std::string slurp(const fs::path& path) {
+  std::ifstream in(path);
+  std::stringstream s;
+  s << in.rdbuf();
+  return s.str();
+}
+
+struct CmdResult {
+  int code = -1;
+  std::string out;
+  std::string err;
+};
+
+CmdResult lsgd_cli(const std::string& args) {
+  const fs::path out = kTmp / "stdout.txt", err = kTmp / "stderr.txt";
+  const std::string cmd = std::string("'") + LSGD_CLI + "' " + args + " >'" + out.string() +
+                          "' 2>'" + err.string() + "' </dev/null";
+  const int status = std::system(cmd.c_str());
+  return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, slurp(out), slurp(err)};
+}
+
+std::vector<Strings> read_csv(const fs::path& path) {  // no quoted fields in these tables
+  std::vector<Strings> rows;
+  std::ifstream in(path);
+  for (std::string line; std::getline(in, line);) {
+    Strings fields;
+    std::stringstream s(line);
+    for (std::string f; std::getline(s, f, ',');) fields.push_back(f);
+    rows.push_back(fields);
+  }
+  return rows;
+}
+
+// A short synthetic street (160x120, 218 frames, revisits from frame ~60).
+class SweepCli : public ::testing::Test {
+ protected:
+  static constexpr int kWindow = 20;
+
+  static void SetUpTestSuite() {
+    dir_ = kTmp / "street";
+    fs::remove_all(dir_);
+    fs::create_directories(dir_ / "images");
+    lsgd::eval::SyntheticOptions options;
+    options.width = 160;
+    options.height = 120;
+    options.route_scale = 0.2;
+    const lsgd::eval::SyntheticWorld world(options);
+    std::ofstream list(dir_ / "sequence.txt");
+    for (std::int64_t i = 0; i < world.frames(); ++i) {
+      std::ostringstream name;
+      name << "images/" << std::setw(4) << std::setfill('0') << i << ".png";
+      ASSERT_TRUE(cv::imwrite((dir_ / name.str()).string(), world.render(i)));
+      list << name.str() << "\n";
+    }
+    frames_ = world.frames();
+    lsgd::eval::write_pairs(world.ground_truth(), (dir_ / "groundtruth.txt").string());
+  }
+  static void TearDownTestSuite() { fs::remove_all(kTmp); }
+
+  static std::string dataset(const std::string& name = "street") {
+    return "--dataset " + name + "='" + dir_.string() + "'," + std::to_string(kWindow);
+  }
+
+  static fs::path dir_;
+  static std::int64_t frames_;
+};
+fs::path SweepCli::dir_;
+std::int64_t SweepCli::frames_ = 0;
+
+const Strings kHeader = {"dataset",
+                         "segmentation.superpixel_size",
+                         "search.mode",
+                         "min_gap",
+                         "frames",
+                         "positives",
+                         "recall_at_100_precision",
+                         "threshold_at_100_precision",
+                         "precision_at_100_recall",
+                         "average_precision",
+                         "recall_at_1",
+                         "recall_at_5",
+                         "recall_at_10",
+                         "prt",
+                         "ms_per_frame_median",
+                         "ms_per_frame_p95",
+                         "nodes",
+                         "bytes_per_frame"};
+constexpr std::size_t kFirstTimeColumn = 14;  // ms_per_frame_median, ms_per_frame_p95
+
+TEST_F(SweepCli, FourCellsMatchDirectEvals) {
+  const fs::path csv = kTmp / "grid.csv", md = kTmp / "grid.md", json = kTmp / "grid.json";
+  const CmdResult r =
+      lsgd_cli("sweep " + dataset() +
+               " --set segmentation.superpixel_size=30,40"
+               " --set search.mode=exhaustive,nodes --verify none --csv '" +
+               csv.string() + "' --markdown '" + md.string() + "' --json '" + json.string() + "'");
+  ASSERT_EQ(r.code, 0) << r.err;
+  const auto rows = read_csv(csv);
+  ASSERT_EQ(rows.size(), 5u);
+  EXPECT_EQ(rows[0], kHeader);
+  const Strings order[] = {
+      {"30", "exhaustive"}, {"30", "nodes"}, {"40", "exhaustive"}, {"40", "nodes"}};
+  for (std::size_t i = 1; i < 5; ++i) {
+    ASSERT_EQ(rows[i].size(), kHeader.size()) << i;
+    EXPECT_EQ(rows[i][0], "street");
+    EXPECT_EQ((Strings{rows[i][1], rows[i][2]}), order[i - 1]);
+    EXPECT_EQ(rows[i][3], std::to_string(kWindow));
+    EXPECT_EQ(rows[i][4], std::to_string(frames_));
+    EXPECT_GT(std::stoll(rows[i][5]), 20);                      // positives
+    EXPECT_GT(std::stod(rows[i][14]), 0.0);                     // ms/frame median
+    EXPECT_EQ(rows[i][16] == "0", rows[i][2] == "exhaustive");  // nodes only in nodes mode
+  }
+  // The Markdown: protocol, window, a header and 4 rows, on stdout and in the file.
+  const std::string table = slurp(md);
+  EXPECT_EQ(table, r.out);
+  EXPECT_NE(table.find("strict protocol"), std::string::npos) << table;
+  EXPECT_NE(table.find("window w = " + std::to_string(kWindow)), std::string::npos) << table;
+  EXPECT_NE(table.find("| street | 40 | nodes | " + std::to_string(frames_)), std::string::npos);
+  const auto j = nlohmann::json::parse(slurp(json));
+  ASSERT_EQ(j["rows"].size(), 4u);
+  EXPECT_NE(j["rows"][3]["config_yaml"].get<std::string>().find("superpixel_size: 40"),
+            std::string::npos);
+
+  // Cells (S_p 30, nodes) and (S_p 40, exhaustive) run alone by `lsgd eval` give the same scores.
+  for (const std::size_t row : {2u, 3u}) {
+    const fs::path config = kTmp / "cell.yaml", out = kTmp / "cell.json";
+    std::ofstream(config) << "segmentation: {superpixel_size: " << rows[row][1] << "}\n";
+    const CmdResult e =
+        lsgd_cli("eval --sequence '" + (dir_ / "sequence.txt").string() + "' --gt '" +
+                 (dir_ / "groundtruth.txt").string() + "' --min-gap " + std::to_string(kWindow) +
+                 " --mode " + rows[row][2] + " --verify none --config '" + config.string() +
+                 "' --json '" + out.string() + "'");
+    ASSERT_EQ(e.code, 0) << e.err;
+    const auto cell = nlohmann::json::parse(slurp(out));
+    for (std::size_t c = 5; c < kHeader.size(); ++c) {
+      if (c == kFirstTimeColumn || c == kFirstTimeColumn + 1 || kHeader[c] == "prt") continue;
+      EXPECT_DOUBLE_EQ(std::stod(rows[row][c]), cell[kHeader[c]].get<double>())
+          << kHeader[c] << " row " << row;
+    }
+    EXPECT_EQ(cell["config_yaml"], j["rows"][row - 1]["config_yaml"]);
+  }
+}
+
+TEST_F(SweepCli, ParallelJobsGiveTheSameScores) {
+  const fs::path one = kTmp / "one.csv", two = kTmp / "two.csv";
+  const std::string grid = " --set search.mode=exhaustive,nodes --set search.nodes.beta=0.9,1.1";
+  const CmdResult a = lsgd_cli("sweep " + dataset() + grid + " --csv '" + one.string() + "'");
+  ASSERT_EQ(a.code, 0) << a.err;
+  const CmdResult b =
+      lsgd_cli("sweep " + dataset() + grid + " --jobs 3 --csv '" + two.string() + "'");
+  ASSERT_EQ(b.code, 0) << b.err;
+  EXPECT_NE(b.out.find("NOT comparable"), std::string::npos) << b.out;
+  EXPECT_EQ(a.out.find("NOT comparable"), std::string::npos) << a.out;
+  auto x = read_csv(one), y = read_csv(two);
+  ASSERT_EQ(x.size(), 5u);
+  ASSERT_EQ(y.size(), x.size());
+  for (std::size_t i = 1; i < x.size(); ++i) {  // timing columns aside, byte-identical rows
+    for (auto* row : {&x[i], &y[i]}) {
+      (*row)[kFirstTimeColumn - 1] = "";  // prt: AP / (1 + 10 t), t the mean time
+      (*row)[kFirstTimeColumn] = (*row)[kFirstTimeColumn + 1] = "";
+    }
+    EXPECT_EQ(x[i], y[i]) << i;
+  }
+}
+
+TEST_F(SweepCli, BadSetFailsBeforeAnyRunOrOutput) {
+  const fs::path csv = kTmp / "never.csv";
+  const CmdResult r = lsgd_cli("sweep " + dataset() +
+                               " --set search.mode=exhaustive --set segmentation.superpixel_sze=30"
+                               " --csv '" +
+                               csv.string() + "'");
+  EXPECT_EQ(r.code, 1);
+  EXPECT_NE(r.err.find("superpixel_sze"), std::string::npos) << r.err;
+  EXPECT_FALSE(fs::exists(csv));
+  EXPECT_EQ(r.out, "");
+  const CmdResult gap = lsgd_cli("sweep " + dataset() + " --set search.min_gap=5");
+  EXPECT_EQ(gap.code, 1);
+  EXPECT_NE(gap.err.find("--dataset"), std::string::npos) << gap.err;
+  const CmdResult missing = lsgd_cli("sweep --dataset x='" + (kTmp / "nowhere").string() + "',5");
+  EXPECT_EQ(missing.code, 1);
+  EXPECT_NE(missing.err.find("nowhere"), std::string::npos) << missing.err;
+}
+
+TEST_F(SweepCli, AFailingCellKeepsTheRowsBefore) {
+  // A second dataset whose last image is corrupt: the sweep fails on it, after
+  // the first dataset's rows were written.
+  const fs::path broken = kTmp / "broken";
+  fs::create_directories(broken);
+  std::ofstream(broken / "bad.png") << "not a png";
+  std::ofstream list(broken / "sequence.txt");
+  for (std::int64_t i = 0; i < 30; ++i)
+    list << (dir_ / "images").string() << "/" << std::setw(4) << std::setfill('0') << i << ".png\n";
+  list << "bad.png\n";
+  list.close();
+  std::ofstream(broken / "groundtruth.txt") << "25 1\n";
+  const fs::path csv = kTmp / "partial.csv";
+  const CmdResult r =
+      lsgd_cli("sweep " + dataset() + " --dataset broken='" + broken.string() +
+               "',5 --set search.mode=exhaustive,nodes --csv '" + csv.string() + "'");
+  EXPECT_EQ(r.code, 1);
+  EXPECT_NE(r.err.find("bad.png"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("broken"), std::string::npos) << r.err;
+  const auto rows = read_csv(csv);
+  ASSERT_EQ(rows.size(), 3u);  // header + the two rows of the good dataset
+  EXPECT_EQ(rows[1][0], "street");
+  EXPECT_EQ(rows[2][0], "street");
+}
+
+#endif  // LSGD_CLI
+
+}  // namespace

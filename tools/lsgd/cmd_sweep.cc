@@ -1,0 +1,381 @@
+// lsgd sweep --dataset NAME=SEQUENCE,GT,MIN_GAP ... [--set KEY=VALUES ...] [--config FILE]
+//            [--mode M] [--threshold T] [--verify S] [--csv F] [--markdown F] [--json F] [--jobs N]
+// Runs every configuration of the grid on every dataset and scores it (strict
+// protocol): one table row per (dataset, configuration).
+#include <algorithm>
+#include <atomic>
+#include <charconv>
+#include <exception>
+#include <iomanip>
+#include <iostream>
+#include <memory>
+#include <mutex>
+#include <sstream>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include <CLI/CLI.hpp>
+#include <opencv2/core.hpp>
+
+#include "commands.h"
+#include "common.h"
+#include "lsgd/error.h"
+#include "lsgd/eval/groundtruth.h"
+#include "lsgd/eval/sweep.h"
+#include "lsgd/io/config.h"
+#include "lsgd/io/sequence.h"
+
+namespace lsgd::cli {
+namespace {
+
+struct SweepArgs {
+  std::vector<std::string> datasets;
+  std::vector<std::string> sets;
+  std::string csv;
+  std::string markdown;
+  std::string json;
+  int jobs = 1;
+  DetectorFlags detector;
+};
+
+// The one place ground truth is read (other formats plug in here).
+eval::GroundTruth load_ground_truth(const std::string& path, std::int64_t frames) {
+  return eval::read_pairs(path, frames);
+}
+
+struct Dataset {
+  eval::SweepDataset spec;
+  eval::FrameSource source;
+  eval::GroundTruth gt;
+  std::int64_t positives = 0;
+};
+
+// Opens the sequence, decodes its first image and reads the ground truth, so
+// a wrong path fails before any run.
+Dataset prepare(const eval::SweepDataset& spec) {
+  const io::Sequence sequence = io::open_sequence(spec.sequence);
+  io::read_image(sequence.images.front());
+  Dataset d{spec, eval::sequence_source(sequence),
+            load_ground_truth(spec.ground_truth, static_cast<std::int64_t>(sequence.images.size())),
+            0};
+  for (std::int64_t q = 0; q < d.gt.frames(); ++q) d.positives += d.gt.has_loop(q, spec.min_gap);
+  return d;
+}
+
+// One (dataset, configuration) run.
+struct Cell {
+  const Dataset* dataset = nullptr;
+  const eval::SweepPoint* point = nullptr;
+  DetectorOptions options;  // the point's options with the dataset's window
+  std::string label;        // for progress and error messages
+};
+
+struct Row {
+  eval::Metrics metrics;
+  std::int64_t nodes = 0;
+  std::size_t bytes_per_frame = 0;
+  bool done = false;
+};
+
+// Shortest text that reads back to exactly `value`.
+std::string exact(double value) {
+  char buffer[64];
+  const auto [end, ec] = std::to_chars(buffer, buffer + sizeof(buffer), value);
+  return ec == std::errc() ? std::string(buffer, end) : std::to_string(value);
+}
+
+std::string fixed(double value, int decimals) {
+  std::ostringstream out;
+  out << std::fixed << std::setprecision(decimals) << value;
+  return out.str();
+}
+
+std::string csv_field(const std::string& text) {
+  if (text.find_first_of(",\"\n") == std::string::npos) return text;
+  std::string out = "\"";
+  for (char c : text) out += c == '"' ? std::string("\"\"") : std::string(1, c);
+  return out + "\"";
+}
+
+std::ofstream open_output(const std::string& path) {
+  std::ofstream out(path);
+  if (!out) throw IoError("cannot write output file '" + path + "'");
+  return out;
+}
+
+// The table: Markdown on stdout (and --markdown), CSV (--csv), JSON (--json).
+// Rows are written in grid order as soon as they and every row before them
+// are done, each flushed; rows after a failure are written by finish().
+class SweepOutput {
+ public:
+  SweepOutput(const SweepArgs& args, std::vector<std::string> keys,
+              const std::vector<Dataset>& datasets, const std::vector<Cell>& cells)
+      : args_(args),
+        keys_(std::move(keys)),
+        datasets_(datasets),
+        cells_(cells),
+        rows_(cells.size()) {
+    if (!args.csv.empty()) csv_ = std::make_unique<std::ofstream>(open_output(args.csv));
+    if (!args.markdown.empty()) {
+      markdown_ = std::make_unique<std::ofstream>(open_output(args.markdown));
+    }
+    if (!args.json.empty()) open_output(args.json);  // fail now, not after the runs
+  }
+
+  void write_headers(const DetectorOptions& base) {
+    if (csv_) {
+      *csv_ << "dataset";
+      for (const auto& k : keys_) *csv_ << ',' << csv_field(k);
+      *csv_ << ",min_gap,frames,positives,recall_at_100_precision,threshold_at_100_precision,"
+               "precision_at_100_recall,average_precision,recall_at_1,recall_at_5,recall_at_10,"
+               "prt,ms_per_frame_median,ms_per_frame_p95,nodes,bytes_per_frame\n"
+            << std::flush;
+    }
+    std::ostringstream md;
+    md << "Sweep, strict protocol (docs/evaluation.md): each configuration runs online on each "
+          "dataset; one row per (dataset, configuration).\n\n";
+    for (const Dataset& d : datasets_) {
+      md << "- " << d.spec.name << ": " << d.spec.sequence << ", " << d.source.frames << " frames, "
+         << d.positives << " positives, window w = " << d.spec.min_gap << "\n";
+    }
+    md << "\nBase configuration: " << describe_base(base) << ".\n\n"
+       << (args_.jobs == 1
+               ? "Times: Detector::process() per frame (image decoding excluded), one cell at a "
+                 "time (--jobs 1).\n\n"
+               : "Times: --jobs " + std::to_string(args_.jobs) +
+                     ": cells ran in parallel threads, so ms/frame is NOT comparable between "
+                     "rows or with single-thread runs (use --jobs 1 for timings).\n\n")
+       << "| dataset |";
+    for (const auto& k : keys_) md << ' ' << k << " |";
+    md << " frames | positives | R@100P | P@100R | AP | R@1 | R@5 | R@10 | PRT | ms/frame median |"
+          " ms/frame p95 | nodes | bytes/frame |\n|---|";
+    for (std::size_t i = 0; i < keys_.size(); ++i) md << "---|";
+    md << "---|---|---|---|---|---|---|---|---|---|---|---|---|\n";
+    markdown(md.str());
+  }
+
+  void add(std::size_t index, const Row& row) {
+    std::lock_guard<std::mutex> lock(mutex_);
+    rows_[index] = row;
+    while (next_ < rows_.size() && rows_[next_].done) write_row(next_++);
+  }
+
+  // Writes the rows still held back (after a failure) and the JSON.
+  void finish() {
+    std::lock_guard<std::mutex> lock(mutex_);
+    for (; next_ < rows_.size(); ++next_) {
+      if (rows_[next_].done) write_row(next_);
+    }
+    if (args_.json.empty()) return;
+    nlohmann::json json;
+    json["protocol"] = "strict";
+    json["jobs"] = args_.jobs;
+    json["times_comparable"] = args_.jobs == 1;
+    json["keys"] = keys_;
+    json["datasets"] = nlohmann::json::array();
+    for (const Dataset& d : datasets_) {
+      json["datasets"].push_back({{"name", d.spec.name},
+                                  {"sequence", d.spec.sequence},
+                                  {"ground_truth", d.spec.ground_truth},
+                                  {"min_gap", d.spec.min_gap},
+                                  {"frames", d.source.frames},
+                                  {"positives", d.positives}});
+    }
+    json["rows"] = nlohmann::json::array();
+    for (std::size_t i = 0; i < rows_.size(); ++i) {
+      if (rows_[i].done) json["rows"].push_back(row_json(i));
+    }
+    write_json(json, args_.json);
+  }
+
+ private:
+  std::string describe_base(const DetectorOptions& base) const {
+    const DetectorFlags& f = args_.detector;
+    std::string text = f.config.empty() ? "defaults" : "--config " + f.config;
+    if (!f.mode.empty()) text += ", --mode " + f.mode;
+    if (f.threshold) text += ", --threshold " + exact(*f.threshold);
+    if (!f.verify.empty()) text += ", --verify " + f.verify;
+    const std::pair<std::string, std::string> shown[] = {
+        {"segmentation.superpixel_size", std::to_string(base.segmentation.superpixel_size)},
+        {"segmentation.intensity_scale", exact(base.segmentation.intensity_scale)},
+        {"similarity.metric", to_string(base.similarity.metric)},
+        {"search.mode", to_string(base.search.mode)},
+        {"verification.stages", verification_stages(base.verification)}};
+    std::string fixed_keys;
+    for (const auto& [key, value] : shown) {
+      if (std::find(keys_.begin(), keys_.end(), key) != keys_.end()) continue;
+      fixed_keys += (fixed_keys.empty() ? "" : ", ") + key + " " + value;
+    }
+    if (!fixed_keys.empty()) text += " (" + fixed_keys + ")";
+    return text + "; the window comes from each dataset; --json holds every row's full config";
+  }
+
+  void markdown(const std::string& text) {
+    std::cout << text << std::flush;
+    if (markdown_) *markdown_ << text << std::flush;
+  }
+
+  void write_row(std::size_t i) {
+    const Cell& cell = cells_[i];
+    const eval::Metrics& m = rows_[i].metrics;
+    std::ostringstream md;
+    md << "| " << cell.dataset->spec.name << " |";
+    for (const auto& v : cell.point->values) md << ' ' << v << " |";
+    md << ' ' << m.frames << " | " << m.positives << " | " << fixed(m.recall_at_100_precision, 3)
+       << " | " << fixed(m.precision_at_100_recall, 3) << " | " << fixed(m.average_precision, 3)
+       << " | " << fixed(m.recall_at_1, 3) << " | " << fixed(m.recall_at_5, 3) << " | "
+       << fixed(m.recall_at_10, 3) << " | " << fixed(m.prt, 3) << " | "
+       << fixed(m.ms_per_frame_median, 2) << " | " << fixed(m.ms_per_frame_p95, 2) << " | "
+       << rows_[i].nodes << " | " << rows_[i].bytes_per_frame << " |\n";
+    markdown(md.str());
+    if (!csv_) return;
+    *csv_ << csv_field(cell.dataset->spec.name);
+    for (const auto& v : cell.point->values) *csv_ << ',' << csv_field(v);
+    *csv_ << ',' << m.min_gap << ',' << m.frames << ',' << m.positives << ','
+          << exact(m.recall_at_100_precision) << ',' << exact(m.threshold_at_100_precision) << ','
+          << exact(m.precision_at_100_recall) << ',' << exact(m.average_precision) << ','
+          << exact(m.recall_at_1) << ',' << exact(m.recall_at_5) << ',' << exact(m.recall_at_10)
+          << ',' << exact(m.prt) << ',' << exact(m.ms_per_frame_median) << ','
+          << exact(m.ms_per_frame_p95) << ',' << rows_[i].nodes << ',' << rows_[i].bytes_per_frame
+          << '\n'
+          << std::flush;
+    if (!*csv_) throw IoError("error while writing CSV file '" + args_.csv + "'");
+  }
+
+  nlohmann::json row_json(std::size_t i) const {
+    const Cell& cell = cells_[i];
+    nlohmann::json values = nlohmann::json::object();
+    for (std::size_t k = 0; k < keys_.size(); ++k) values[keys_[k]] = cell.point->values[k];
+    nlohmann::json row = metrics_json(rows_[i].metrics);
+    row["dataset"] = cell.dataset->spec.name;
+    row["values"] = values;
+    row["mode"] = to_string(cell.options.search.mode);
+    row["verification"] = verification_stages(cell.options.verification);
+    row["nodes"] = rows_[i].nodes;
+    row["bytes_per_frame"] = rows_[i].bytes_per_frame;
+    row["config_yaml"] = io::to_yaml(cell.options);
+    return row;
+  }
+
+  const SweepArgs& args_;
+  std::vector<std::string> keys_;
+  const std::vector<Dataset>& datasets_;
+  const std::vector<Cell>& cells_;
+  std::vector<Row> rows_;
+  std::size_t next_ = 0;  // first row not yet written
+  std::mutex mutex_;
+  std::unique_ptr<std::ofstream> csv_;
+  std::unique_ptr<std::ofstream> markdown_;
+};
+
+Row run_cell(const Cell& cell, bool progress) {
+  Detector detector(cell.options);
+  const std::vector<eval::FrameRecord> records =
+      progress ? run_with_progress(detector, cell.dataset->source, cell.label, nullptr)
+               : eval::run_detector(detector, cell.dataset->source);
+  return {eval::evaluate(records, cell.dataset->gt, cell.options.search.min_gap), detector.nodes(),
+          detector.bytes_per_frame(), true};
+}
+
+// Runs the cells on `jobs` threads (1: this thread, with a progress bar).
+// After a failure no new cell starts; running ones finish and are kept. The
+// first failure is rethrown, naming its cell.
+void run_cells(const std::vector<Cell>& cells, int jobs, SweepOutput& output) {
+  std::atomic<std::size_t> next{0};
+  std::atomic<bool> failed{false};
+  std::exception_ptr error;
+  std::mutex error_mutex;
+  auto worker = [&] {
+    for (std::size_t i; !failed && (i = next++) < cells.size();) {
+      try {
+        output.add(i, run_cell(cells[i], jobs == 1));
+      } catch (const std::exception& e) {
+        std::lock_guard<std::mutex> lock(error_mutex);
+        if (!failed.exchange(true)) {
+          error = std::make_exception_ptr(Error(cells[i].label + ": " + e.what()));
+        }
+      }
+    }
+  };
+  if (jobs == 1) {
+    worker();
+  } else {
+    std::vector<std::thread> threads;
+    const auto n = std::min<std::size_t>(static_cast<std::size_t>(jobs), cells.size());
+    for (std::size_t t = 0; t < n; ++t) threads.emplace_back(worker);
+    for (auto& t : threads) t.join();
+  }
+  output.finish();
+  if (error) std::rethrow_exception(error);
+}
+
+void sweep(const SweepArgs& args) {
+  // Everything is validated before the first run: grid, configs, datasets, outputs.
+  const DetectorOptions base = args.detector.resolve();
+  std::vector<eval::SweepAxis> axes;
+  std::vector<std::string> keys;
+  for (const std::string& spec : args.sets) {
+    axes.push_back(eval::parse_sweep_axis(spec));
+    keys.push_back(axes.back().key);
+    if (keys.back() == "search.min_gap") {
+      throw InvalidArgument("--set " + spec +
+                            ": the window is set per dataset: --dataset NAME=...,MIN_GAP");
+    }
+  }
+  const std::vector<eval::SweepPoint> points = eval::expand_sweep(axes, base);
+  std::vector<Dataset> datasets;
+  for (const std::string& spec : args.datasets) {
+    datasets.push_back(prepare(eval::parse_dataset_spec(spec)));
+    for (std::size_t i = 0; i + 1 < datasets.size(); ++i) {
+      if (datasets[i].spec.name == datasets.back().spec.name) {
+        throw InvalidArgument("--dataset " + spec + ": the name '" + datasets[i].spec.name +
+                              "' is used twice");
+      }
+    }
+  }
+  std::vector<Cell> cells;
+  for (const Dataset& d : datasets) {
+    for (const eval::SweepPoint& p : points) {
+      Cell cell{&d, &p, p.options, d.spec.name};
+      for (std::size_t k = 0; k < keys.size(); ++k) cell.label += " " + keys[k] + "=" + p.values[k];
+      cell.label = "[" + std::to_string(cells.size() + 1) + "/" +
+                   std::to_string(datasets.size() * points.size()) + "] " + cell.label;
+      cell.options.search.min_gap = d.spec.min_gap;
+      cell.options.check();
+      cells.push_back(std::move(cell));
+    }
+  }
+  SweepOutput output(args, keys, datasets, cells);
+  output.write_headers(base);
+  run_cells(cells, args.jobs, output);
+}
+
+}  // namespace
+
+void register_sweep(CLI::App& app) {
+  auto args = std::make_shared<SweepArgs>();
+  CLI::App* cmd = app.add_subcommand(
+      "sweep", "run a grid of detector configurations on datasets and tabulate the scores");
+  cmd->add_option("--dataset", args->datasets,
+                  "NAME=SEQUENCE,GT,MIN_GAP or NAME=DIR,MIN_GAP (DIR holds sequence.txt and "
+                  "groundtruth.txt); repeat for several datasets")
+      ->required()
+      ->take_all();
+  cmd->add_option("--set", args->sets,
+                  "KEY=VALUES: a config key (e.g. search.nodes.beta) and a comma list or an "
+                  "inclusive range a:b:step; repeat for a cross product, first --set slowest")
+      ->take_all();
+  cmd->add_option("--csv", args->csv, "write the table as CSV here (rows flushed as they finish)");
+  cmd->add_option("--markdown", args->markdown, "also write the Markdown table here");
+  cmd->add_option("--json", args->json, "write every row's metrics, PR curve and config here");
+  cmd->add_option("--jobs", args->jobs,
+                  "cells run in parallel threads (default 1; times only comparable with 1)")
+      ->check(CLI::Range(1, 256));
+  args->detector.add_to(*cmd);
+  // The window is a property of each dataset here (--dataset ...,MIN_GAP).
+  if (CLI::Option* gap = cmd->get_option_no_throw("--min-gap")) cmd->remove_option(gap);
+  cmd->callback([args] { sweep(*args); });
+}
+
+}  // namespace lsgd::cli

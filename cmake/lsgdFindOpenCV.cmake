@@ -30,3 +30,38 @@ if(NOT TARGET lsgd_opencv)
       INTERFACE_INCLUDE_DIRECTORIES "${LSGD_OPENCV_INCLUDE_DIR}")
   endif()
 endif()
+
+# Optional: OpenCV's contrib module ximgproc (Debian: libopencv-contrib-dev),
+# used only by the command-line tool, whose `lsgd bench` times OpenCV's own
+# SLIC next to ours. When found, the INTERFACE target lsgd_opencv_ximgproc
+# links it and defines LSGD_HAVE_XIMGPROC; never linked into the libraries.
+if(LSGD_BUILD_TOOLS)
+  option(LSGD_WITH_XIMGPROC "lsgd bench: also time OpenCV's SLIC (opencv_ximgproc) when found" ON)
+endif()
+if(LSGD_BUILD_TOOLS AND LSGD_WITH_XIMGPROC AND NOT TARGET lsgd_opencv_ximgproc)
+  if(OpenCV_FOUND AND TARGET opencv_ximgproc)
+    add_library(lsgd_opencv_ximgproc INTERFACE IMPORTED)
+    set_target_properties(lsgd_opencv_ximgproc PROPERTIES
+      INTERFACE_LINK_LIBRARIES opencv_ximgproc
+      INTERFACE_COMPILE_DEFINITIONS LSGD_HAVE_XIMGPROC)
+  else()
+    find_path(LSGD_OPENCV_XIMGPROC_INCLUDE_DIR opencv2/ximgproc.hpp
+      HINTS ${OpenCV_INCLUDE_DIRS} ${LSGD_OPENCV_INCLUDE_DIR} PATH_SUFFIXES opencv4)
+    find_library(LSGD_OPENCV_ximgproc_LIBRARY opencv_ximgproc)
+    if(LSGD_OPENCV_XIMGPROC_INCLUDE_DIR AND LSGD_OPENCV_ximgproc_LIBRARY)
+      add_library(lsgd_opencv_ximgproc INTERFACE IMPORTED)
+      set_target_properties(lsgd_opencv_ximgproc PROPERTIES
+        INTERFACE_LINK_LIBRARIES "${LSGD_OPENCV_ximgproc_LIBRARY}"
+        INTERFACE_INCLUDE_DIRECTORIES "${LSGD_OPENCV_XIMGPROC_INCLUDE_DIR}"
+        INTERFACE_COMPILE_DEFINITIONS LSGD_HAVE_XIMGPROC)
+    endif()
+  endif()
+  if(TARGET lsgd_opencv_ximgproc)
+    message(STATUS "lsgd: opencv_ximgproc found: lsgd bench times OpenCV's SLIC")
+  else()
+    message(STATUS "lsgd: opencv_ximgproc not found: lsgd bench runs without OpenCV's SLIC "
+                   "(install libopencv-contrib-dev)")
+  endif()
+elseif(LSGD_BUILD_TOOLS AND NOT LSGD_WITH_XIMGPROC)
+  message(STATUS "lsgd: LSGD_WITH_XIMGPROC=OFF: lsgd bench runs without OpenCV's SLIC")
+endif()

@@ -7,6 +7,7 @@ packages=(
   cmake g++ make pkgconf
   libopencv-core-dev libopencv-imgproc-dev libopencv-imgcodecs-dev
   libopencv-features2d-dev libopencv-calib3d-dev
+  libopencv-contrib-dev  # opencv_ximgproc: `lsgd bench` times OpenCV's SLIC (optional)
   libcli11-dev libyaml-cpp-dev nlohmann-json3-dev
   libgtest-dev libgmock-dev
   libbenchmark-dev

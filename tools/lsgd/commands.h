@@ -11,6 +11,7 @@ void register_run(CLI::App& app);   // lsgd run: detect loops in a sequence, CSV
 void register_eval(CLI::App& app);  // lsgd eval: detect and score against ground truth
 void register_demo(CLI::App& app);  // lsgd demo: the built-in synthetic world
 void register_sweep(CLI::App& app);  // lsgd sweep: a grid of configurations on datasets, one table
+void register_bench(CLI::App& app);  // lsgd bench: per-stage timing on a generated sequence
 void register_gt(CLI::App& app);     // lsgd gt: convert ground-truth formats, print statistics
 
 }  // namespace lsgd::cli

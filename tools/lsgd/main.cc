@@ -14,6 +14,7 @@ int main(int argc, char** argv) {
   lsgd::cli::register_eval(app);
   lsgd::cli::register_demo(app);
   lsgd::cli::register_sweep(app);
+  lsgd::cli::register_bench(app);
   lsgd::cli::register_gt(app);
   try {
     app.parse(argc, argv);

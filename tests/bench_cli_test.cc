@@ -1,0 +1,217 @@
+// `lsgd bench` end to end (the real binary on tiny runs), and its helpers
+// (tools/lsgd/bench_support.cc): the region size that matches OpenCV's SLIC
+// to our grid and the query-growth table.
+#include <gtest/gtest.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <cmath>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <opencv2/core.hpp>
+#include <sstream>
+#include <string>
+#include <tuple>
+#include <utility>
+#include <vector>
+
+#include "bench_support.h"
+#include "lsgd/error.h"
+#include "lsgd/segmentation.h"
+
+namespace fs = std::filesystem;
+
+namespace {
+
+const fs::path kTmp = fs::path(LSGD_TEST_TMP) / ("bench-cli-" + std::to_string(getpid()));
+
+struct CmdResult {
+  int code = -1;
+  std::string out;
+  std::string err;
+};
+
+std::string slurp(const fs::path& path) {
+  std::ifstream in(path);
+  std::stringstream s;
+  s << in.rdbuf();
+  return s.str();
+}
+
+CmdResult lsgd(const std::string& args) {
+  fs::create_directories(kTmp);
+  const fs::path out = kTmp / "stdout.txt", err = kTmp / "stderr.txt";
+  const std::string cmd = std::string("'") + LSGD_CLI + "' " + args + " >'" + out.string() +
+                          "' 2>'" + err.string() + "' </dev/null";
+  const int status = std::system(cmd.c_str());
+  return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, slurp(out), slurp(err)};
+}
+
+constexpr const char* kTiny = "bench --frames 60 --width 320 --height 240 --warmup 5 --block 20 ";
+
+void expect_positive(const nlohmann::json& j, const char* key) {
+  ASSERT_TRUE(j.contains(key)) << key;
+  ASSERT_TRUE(j[key].is_number()) << key << " = " << j[key].dump();
+  const double v = j[key].get<double>();
+  EXPECT_TRUE(std::isfinite(v)) << key;
+  EXPECT_GT(v, 0.0) << key;
+}
+
+// Keys every run writes, whatever the mode and whether OpenCV's SLIC ran.
+void expect_common(const nlohmann::json& j) {
+  EXPECT_EQ(j["frames"].get<std::int64_t>(), 60);
+  EXPECT_EQ(j["measured_frames"].get<std::int64_t>(), 55);
+  EXPECT_EQ(j["width"].get<int>(), 320);
+  EXPECT_EQ(j["grid"]["cells"].get<int>(), lsgd::grid_size(320, 240, 40).cells());
+  for (const char* stage : {"convert", "segment", "describe", "query", "verify", "frame",
+                            "frame_cpu", "segment_describe", "render", "cvtcolor"}) {
+    const std::string median = std::string(stage) + "_ms_median",
+                      p95 = std::string(stage) + "_ms_p95";
+    expect_positive(j, median.c_str());
+    expect_positive(j, p95.c_str());
+    EXPECT_GE(j[p95].get<double>(), j[median].get<double>()) << stage;
+  }
+  // The stages are parts of the frame, so their medians cannot exceed its p95.
+  EXPECT_LE(j["segment_ms_median"].get<double>(), j["frame_ms_p95"].get<double>());
+  for (const char* key : {"bytes_per_frame", "store_bytes", "peak_rss_bytes"}) {
+    expect_positive(j, key);
+  }
+  EXPECT_DOUBLE_EQ(j["store_bytes"].get<double>(), 60.0 * j["bytes_per_frame"].get<double>());
+  EXPECT_GE(j["peak_rss_bytes"].get<double>(), j["store_bytes"].get<double>());
+  EXPECT_NE(j["config_yaml"].get<std::string>().find("superpixel_size: 40"), std::string::npos);
+  EXPECT_FALSE(j["machine"]["cpu_model"].get<std::string>().empty());
+  EXPECT_GT(j["machine"]["logical_cores"].get<int>(), 0);
+  EXPECT_FALSE(j["machine"]["compiler"].get<std::string>().empty());
+  // Blocks of 20 over the measured frames 5..59: 5-24, 25-44, 45-59.
+  const auto& rows = j["query_growth"]["rows"];
+  ASSERT_EQ(rows.size(), 3u);
+  EXPECT_EQ(rows[0]["first_frame"].get<int>(), 5);
+  EXPECT_EQ(rows[2]["last_frame"].get<int>(), 59);
+  for (const auto& row : rows) EXPECT_GT(row["query_ms_median"].get<double>(), 0.0);
+}
+
+TEST(BenchCli, TinyExhaustiveRunWritesEveryKey) {
+  const fs::path json = kTmp / "exhaustive.json";
+  const auto r = lsgd(std::string(kTiny) + "--opencv-frames 5 --json '" + json.string() + "'");
+  ASSERT_EQ(r.code, 0) << r.err;
+  const auto j = nlohmann::json::parse(slurp(json));
+  expect_common(j);
+  EXPECT_EQ(j["mode"], "exhaustive");
+  EXPECT_EQ(j["nodes"].get<int>(), 0);
+  // min_gap 50: only the last block's queries scan anything.
+  const auto& rows = j["query_growth"]["rows"];
+  EXPECT_EQ(rows[0]["gb_per_s"].get<double>(), 0.0);
+  EXPECT_GT(rows[2]["gb_per_s"].get<double>(), 0.0);
+  EXPECT_NE(r.out.find("query time vs stored frames N"), std::string::npos) << r.out;
+#ifdef LSGD_HAVE_XIMGPROC
+  for (const char* key :
+       {"opencv_slic_ms_median", "opencv_slic_ms_p95", "opencv_slic_cpu_ms_median",
+        "speedup_vs_opencv_slic", "speedup_vs_opencv_slic_incl_describe",
+        "speedup_vs_opencv_slic_same_frames", "speedup_vs_opencv_slic_cpu",
+        "speedup_vs_opencv_slic_cpu_incl_describe"}) {
+    expect_positive(j, key);
+  }
+  for (const char* key : {"segment_ms_median", "segment_describe_ms_median",
+                          "segment_cpu_ms_median", "segment_describe_cpu_ms_median"}) {
+    expect_positive(j["opencv_slic"]["ours_same_frames"], key);
+  }
+  EXPECT_EQ(j["opencv_slic"]["frames"].get<int>(), 5);
+  EXPECT_EQ(j["opencv_slic"]["superpixels"].get<int>(), j["grid"]["cells"].get<int>());
+  EXPECT_NEAR(j["speedup_vs_opencv_slic"].get<double>(),
+              j["opencv_slic_ms_median"].get<double>() / j["segment_ms_median"].get<double>(),
+              1e-9);
+  EXPECT_LT(j["speedup_vs_opencv_slic_incl_describe"].get<double>(),
+            j["speedup_vs_opencv_slic"].get<double>());
+  EXPECT_NE(r.out.find("speedup = OpenCV SLIC median / ours"), std::string::npos) << r.out;
+#else
+  EXPECT_TRUE(j["opencv_slic_ms_median"].is_null());
+  EXPECT_TRUE(j["speedup_vs_opencv_slic"].is_null());
+  EXPECT_NE(r.out.find("built without opencv_ximgproc (install libopencv-contrib-dev)"),
+            std::string::npos)
+      << r.out;
+#endif
+}
+
+TEST(BenchCli, NodesModeWithoutOpenCvWritesNull) {
+  const fs::path json = kTmp / "nodes.json";
+  const auto r = lsgd(std::string(kTiny) + "--mode nodes --verify none --opencv-frames 0 --json '" +
+                      json.string() + "'");
+  ASSERT_EQ(r.code, 0) << r.err;
+  const auto j = nlohmann::json::parse(slurp(json));
+  expect_common(j);
+  EXPECT_EQ(j["mode"], "nodes");
+  EXPECT_EQ(j["verify"], "none");
+  EXPECT_GT(j["nodes"].get<int>(), 0);
+  for (const char* key :
+       {"opencv_slic_ms_median", "opencv_slic_ms_p95", "opencv_slic_cpu_ms_median",
+        "speedup_vs_opencv_slic", "speedup_vs_opencv_slic_incl_describe",
+        "speedup_vs_opencv_slic_same_frames", "speedup_vs_opencv_slic_cpu"}) {
+    EXPECT_TRUE(j[key].is_null()) << key;
+  }
+  EXPECT_EQ(j["opencv_slic"]["reason"], "--opencv-frames 0");
+  for (const auto& row : j["query_growth"]["rows"]) EXPECT_EQ(row["gb_per_s"].get<double>(), 0.0);
+}
+
+TEST(BenchCli, BadArgumentsFailNamingTheFlag) {
+  const std::pair<const char*, const char*> cases[] = {
+      {"bench --frames 0", "--frames"},           {"bench --width 10", "--width"},
+      {"bench --height 5000", "--height"},        {"bench --frames 10 --warmup 10", "--warmup"},
+      {"bench --frames 10 --block 0", "--block"}, {"bench --frames 10 --mode fast", "--mode"}};
+  for (const auto& [args, flag] : cases) {
+    const auto r = lsgd(args);
+    EXPECT_NE(r.code, 0) << args;
+    EXPECT_NE(r.err.find(flag), std::string::npos) << args << ": " << r.err;
+  }
+}
+
+TEST(BenchSupport, SlicRegionSizeMatchesOurGrid) {
+  using lsgd::cli::bench::slic_region_size;
+  using lsgd::cli::bench::slic_seed_count;
+  // KITTI at S_p 40: 5 x 16 = 80 cells; r = 76 seeds round(1241/76) x round(376/76) = 16 x 5.
+  EXPECT_EQ(slic_region_size(1241, 376, 80), 76);
+  EXPECT_EQ(slic_seed_count(1241, 376, 76), 80);
+  EXPECT_EQ(slic_region_size(320, 240, 20), 62);
+  EXPECT_EQ(slic_seed_count(320, 240, 62), 20);
+  // Never larger than the shorter side (OpenCV would drop seeds off the image).
+  EXPECT_EQ(slic_region_size(32, 32, 1), 32);
+  EXPECT_EQ(slic_seed_count(32, 32, 32), 1);
+  EXPECT_THROW(slic_region_size(320, 240, 0), lsgd::InvalidArgument);
+}
+
+#ifdef LSGD_HAVE_XIMGPROC
+// slic_seed_count must predict the count OpenCV actually makes.
+TEST(BenchSupport, SlicSeedCountIsWhatOpenCvMakes) {
+  for (const auto& [w, h, sp] : {std::tuple{320, 240, 40}, {200, 120, 10}, {97, 61, 7}}) {
+    const int cells = lsgd::grid_size(w, h, sp).cells();
+    lsgd::cli::bench::OpenCvSlic slic(w, h, cells, 2);
+    cv::Mat gray(h, w, CV_8UC1);
+    cv::randu(gray, 0, 256);
+    EXPECT_GT(slic.time(gray).wall_ms, 0.0);
+    EXPECT_EQ(slic.superpixels(), lsgd::cli::bench::slic_seed_count(w, h, slic.region_size()))
+        << w << "x" << h;
+  }
+}
+#endif
+
+TEST(BenchSupport, QueryGrowthCutsBlocksAndCountsScannedBytes) {
+  // Frames 10..16 queried in 2 ms each; min_gap 2, 100 bytes per frame.
+  const std::vector<double> ms(7, 2.0);
+  const auto rows = lsgd::cli::bench::query_growth(ms, 10, 3, true, 2, 100);
+  ASSERT_EQ(rows.size(), 3u);
+  EXPECT_EQ(rows[0].first_frame, 10);
+  EXPECT_EQ(rows[0].last_frame, 12);
+  EXPECT_EQ(rows[0].stored_frames, 11);
+  EXPECT_DOUBLE_EQ(rows[0].scanned_bytes, 900.0);  // frame 11 scans frames 0..8
+  // Block 0 scans (8 + 9 + 10) * 100 bytes in 6 ms.
+  EXPECT_DOUBLE_EQ(rows[0].gb_per_s, 2700.0 / 6e-3 * 1e-9);
+  EXPECT_EQ(rows[2].first_frame, 16);
+  EXPECT_EQ(rows[2].last_frame, 16);
+  EXPECT_DOUBLE_EQ(rows[2].query_ms_median, 2.0);
+  const auto nodes = lsgd::cli::bench::query_growth(ms, 10, 3, false, 2, 100);
+  EXPECT_EQ(nodes[0].gb_per_s, 0.0);
+  EXPECT_EQ(nodes[0].scanned_bytes, 0.0);
+}
+
+}  // namespace

@@ -1,0 +1,197 @@
+// lsgd bench: whole-pipeline timing on a generated sequence of any length and
+// size. Frame i shows frame i % 1090 of the synthetic street's route
+// (eval/synthetic.h), rendered on the fly and converted to gray with
+// cv::cvtColor outside the timed part; Detector::process gets the gray frame,
+// so its stages (Result::timings) are what is reported, after the warm-up
+// frames. OpenCV runs sequentially (cv::setNumThreads(0)) for the whole bench.
+// Every k-th measured frame is also segmented by OpenCV's own SLIC
+// (cv::ximgproc, when built with it) and by a standalone lsgd::Segmenter, in
+// alternating order, so machine noise hits both alike.
+#include <CLI/CLI.hpp>
+#include <algorithm>
+#include <iostream>
+#include <memory>
+#include <opencv2/core.hpp>
+#include <opencv2/imgproc.hpp>
+
+#include "bench_report.h"
+#include "bench_support.h"
+#include "commands.h"
+#include "common.h"
+#include "lsgd/descriptor.h"
+#include "lsgd/error.h"
+#include "lsgd/eval/synthetic.h"
+#include "lsgd/segmentation.h"
+
+namespace lsgd::cli {
+namespace {
+
+using bench::Elapsed;
+using bench::Stopwatch;
+
+struct BenchArgs {
+  bench::Setup setup;
+  std::string json;
+  DetectorFlags detector;
+};
+
+void record(const Result& r, double cpu_ms, double render_ms, double cvt_ms, bench::Samples& s) {
+  const Timings& t = r.timings;
+  s.convert.push_back(t.convert_ms);
+  s.segment.push_back(t.segment_ms);
+  s.describe.push_back(t.describe_ms);
+  s.query.push_back(t.search_ms);
+  s.verify.push_back(t.verify_ms);
+  s.total.push_back(t.total_ms);
+  s.segment_describe.push_back(t.segment_ms + t.describe_ms);
+  s.total_cpu.push_back(cpu_ms);
+  s.render.push_back(render_ms);
+  s.cvtcolor.push_back(cvt_ms);
+}
+
+// Our segmentation and descriptor called the way OpenCvSlic calls SLIC: one
+// frame at a time, timed with the same clocks.
+class StandaloneLsgd {
+ public:
+  explicit StandaloneLsgd(const SegmentationOptions& options) : segmenter_(options) {}
+
+  void time(const cv::Mat& gray, bench::SlicSamples& s) {
+    to_gray(gray, gray_);
+    const Stopwatch watch;
+    segmenter_.segment(gray_, segmentation_);
+    const Elapsed segment = watch.elapsed();
+    describe(gray_, segmentation_, descriptor_);
+    const Elapsed both = watch.elapsed();
+    s.segment.push_back(segment.wall_ms);
+    s.segment_cpu.push_back(segment.cpu_ms);
+    s.segment_describe.push_back(both.wall_ms);
+    s.segment_describe_cpu.push_back(both.cpu_ms);
+  }
+
+ private:
+  Segmenter segmenter_;
+  GrayImage gray_;
+  Segmentation segmentation_;
+  Descriptor descriptor_;
+};
+
+void plan_slic(const bench::Setup& a, const DetectorOptions& options, bench::RunData& d) {
+  bench::SlicSamples& s = d.slic;
+  if (a.opencv_frames == 0) {
+    s.reason = "--opencv-frames 0";
+  } else if (!bench::OpenCvSlic::available()) {
+    s.reason = bench::OpenCvSlic::unavailable_reason();
+  } else {
+    s.slic = std::make_unique<bench::OpenCvSlic>(a.width, a.height, d.grid.cells(),
+                                                 options.segmentation.iterations);
+    s.every = std::max<std::int64_t>(1, (a.frames - a.warmup) / a.opencv_frames);
+  }
+}
+
+// Frame i is a SLIC frame when it is the m-th measured frame with m % every == 0, m / every < N.
+bool slic_frame(const bench::Setup& a, const bench::SlicSamples& s, std::int64_t i) {
+  if (!s.slic || i < a.warmup) return false;
+  const std::int64_t m = i - a.warmup;
+  return m % s.every == 0 && m / s.every < a.opencv_frames;
+}
+
+void run(const bench::Setup& a, const DetectorOptions& options, bench::RunData& d) {
+  eval::SyntheticOptions world_options;
+  world_options.width = a.width;
+  world_options.height = a.height;
+  world_options.seed = a.seed;
+  const eval::SyntheticWorld world(world_options);
+  Detector detector(options);
+  StandaloneLsgd ours(options.segmentation);
+  d.grid = grid_size(a.width, a.height, options.segmentation.superpixel_size);
+  plan_slic(a, options, d);
+  d.peak_rss_before_bytes = bench::peak_rss_bytes();
+
+  Progress progress(a.frames, std::string("bench ") + to_string(options.search.mode));
+  cv::Mat gray;
+  double total_ms = 0;
+  for (std::int64_t i = 0; i < a.frames; ++i) {
+    const Stopwatch render;
+    const cv::Mat bgr = world.render(i % world.frames());
+    const double render_ms = render.elapsed().wall_ms;
+    const Stopwatch cvt;
+    cv::cvtColor(bgr, gray, cv::COLOR_BGR2GRAY);
+    const double cvt_ms = cvt.elapsed().wall_ms;
+
+    const Stopwatch process;
+    const Result r = detector.process(gray);
+    const double cpu_ms = process.elapsed().cpu_ms;
+
+    bench::SlicSamples& s = d.slic;
+    if (s.slic && i == 0) s.slic->time(gray);  // untimed warm-up call
+    if (slic_frame(a, s, i)) {
+      const bool ours_first = s.ms.size() % 2 == 0;
+      if (ours_first) ours.time(gray, s);
+      const Elapsed e = s.slic->time(gray);
+      s.ms.push_back(e.wall_ms);
+      s.cpu_ms.push_back(e.cpu_ms);
+      if (!ours_first) ours.time(gray, s);
+    }
+    if (i >= a.warmup) record(r, cpu_ms, render_ms, cvt_ms, d.samples);
+    total_ms += r.timings.total_ms;
+    progress.update(i + 1, total_ms / static_cast<double>(i + 1));
+  }
+  d.nodes = detector.nodes();
+  d.bytes_per_frame = detector.bytes_per_frame();
+  d.stored = detector.size();
+}
+
+void bench_command(const BenchArgs& args) {
+  const bench::Setup& a = args.setup;
+  if (a.warmup >= a.frames) {
+    throw InvalidArgument("--warmup " + std::to_string(a.warmup) +
+                          " must be smaller than --frames " + std::to_string(a.frames) +
+                          " (no frame would be measured)");
+  }
+  const DetectorOptions options = args.detector.resolve();
+  cv::setNumThreads(0);  // sequential, like the detector
+  bench::RunData d;
+  d.machine = bench::describe_machine();
+  d.load_start = bench::load_average();
+  run(a, options, d);
+  d.load_end = bench::load_average();
+  d.growth = bench::query_growth(d.samples.query, a.warmup, a.block,
+                                 options.search.mode == SearchMode::kExhaustive,
+                                 options.search.min_gap, d.bytes_per_frame);
+  bench::print_report(a, options, d, std::cout);
+  if (!args.json.empty()) {
+    write_json(bench::to_json(a, options, d), args.json);
+    std::cout << "wrote " << args.json << "\n";
+  }
+}
+
+}  // namespace
+
+void register_bench(CLI::App& app) {
+  auto args = std::make_shared<BenchArgs>();
+  bench::Setup& s = args->setup;
+  CLI::App* cmd = app.add_subcommand(
+      "bench", "time the whole pipeline per stage on a generated sequence, next to OpenCV's SLIC");
+  const auto at_least = [](std::int64_t lo) { return CLI::Range(lo, std::int64_t{1'000'000'000}); };
+  cmd->add_option(
+         "--frames", s.frames,
+         "frames to process; frame i shows route frame i % 1090 (default: KITTI 00's 4541)")
+      ->check(at_least(1));
+  cmd->add_option("--width", s.width, "frame width, pixels (default 1241, KITTI)")
+      ->check(CLI::Range(32, 4096));
+  cmd->add_option("--height", s.height, "frame height, pixels (default 376, KITTI)")
+      ->check(CLI::Range(32, 4096));
+  cmd->add_option("--warmup", s.warmup, "first frames left out of the statistics (default 20)")
+      ->check(at_least(0));
+  cmd->add_option("--opencv-frames", s.opencv_frames,
+                  "frames also segmented by OpenCV's SLIC, spread evenly (default 100; 0: none)")
+      ->check(at_least(0));
+  cmd->add_option("--block", s.block, "frames per row of the query-time-vs-N table (default 500)")
+      ->check(at_least(1));
+  cmd->add_option("--seed", s.seed, "seed of the synthetic world (default 1)");
+  cmd->add_option("--json", args->json, "also write the results as JSON here");
+  args->detector.add_to(*cmd);
+  cmd->callback([args] { bench_command(*args); });
+}
+
+}  // namespace lsgd::cli

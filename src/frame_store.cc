@@ -1,8 +1,21 @@
 #include "lsgd/frame_store.h"
 
+#include <algorithm>
+
 #include "internal/check.h"
 
 namespace lsgd {
+namespace {
+
+// Makes room for `more` elements with geometric growth (reserve(size + more)
+// alone would reallocate on every call).
+template <typename T>
+void grow(std::vector<T>& v, std::size_t more) {
+  if (v.capacity() - v.size() >= more) return;
+  v.reserve(std::max(v.size() + more, 2 * v.capacity()));
+}
+
+}  // namespace
 
 std::int64_t FrameStore::add(const Descriptor& descriptor) {
   const int cells = descriptor.grid.cells();
@@ -16,8 +29,24 @@ std::int64_t FrameStore::add(const Descriptor& descriptor) {
                             " differs from the stored frames' ", grid_.rows, "x", grid_.cols,
                             ": every frame must have the same image size");
   }
+  const std::size_t frame_bins = static_cast<std::size_t>(cells) * kBins;
+  const std::int64_t chunk_frames =
+      size_ > 0 ? chunk_frames_
+                : std::max<std::int64_t>(1, static_cast<std::int64_t>(kChunkBytes / (frame_bins * sizeof(Bin))));
+  // Allocate everything that can fail before changing any member.
+  std::unique_ptr<Bin[]> chunk;
+  const bool new_chunk = size_ % chunk_frames == 0;
+  if (new_chunk) {
+    chunk.reset(new Bin[static_cast<std::size_t>(chunk_frames) * frame_bins]);
+    grow(chunks_, 1);
+  }
+  grow(pixels_, descriptor.pixels.size());
+  // No allocation from here on.
+  if (new_chunk) chunks_.push_back(std::move(chunk));
   grid_ = descriptor.grid;
-  hist_.insert(hist_.end(), descriptor.hist.begin(), descriptor.hist.end());
+  chunk_frames_ = chunk_frames;
+  Bin* slot = chunks_.back().get() + static_cast<std::size_t>(size_ % chunk_frames) * frame_bins;
+  std::copy(descriptor.hist.begin(), descriptor.hist.end(), slot);
   pixels_.insert(pixels_.end(), descriptor.pixels.begin(), descriptor.pixels.end());
   return size_++;
 }
@@ -27,8 +56,10 @@ DescriptorView FrameStore::view(std::int64_t frame) const {
     internal::throw_invalid("frame ", frame, " is not stored (", size_, " frames)");
   }
   const std::size_t cells = static_cast<std::size_t>(grid_.cells());
-  const std::size_t f = static_cast<std::size_t>(frame);
-  return {hist_.data() + f * cells * kBins, pixels_.data() + f * cells, grid_.cells()};
+  const Bin* chunk = chunks_[static_cast<std::size_t>(frame / chunk_frames_)].get();
+  const std::size_t slot = static_cast<std::size_t>(frame % chunk_frames_);
+  return {chunk + slot * cells * kBins, pixels_.data() + static_cast<std::size_t>(frame) * cells,
+          grid_.cells()};
 }
 
 std::size_t FrameStore::bytes_per_frame() const {
@@ -38,7 +69,7 @@ std::size_t FrameStore::bytes_per_frame() const {
 void FrameStore::reserve(std::int64_t frames) {
   if (frames <= 0 || grid_.cells() == 0) return;
   const std::size_t cells = static_cast<std::size_t>(grid_.cells());
-  hist_.reserve(static_cast<std::size_t>(frames) * cells * kBins);
+  chunks_.reserve(static_cast<std::size_t>((frames + chunk_frames_ - 1) / chunk_frames_));
   pixels_.reserve(static_cast<std::size_t>(frames) * cells);
 }
 

@@ -1,10 +1,13 @@
-// Contiguous storage of every stored frame's descriptor: frame i occupies a
-// fixed-stride slot, so memory grows linearly with the number of frames and a
-// scan over frames walks memory in order. Frame ids are dense: 0, 1, 2, ...
+// Storage of every stored frame's descriptor in fixed-stride slots, in chunks
+// of about 4 MiB of consecutive frames: memory grows linearly with the number
+// of frames and never needs a copy of what is stored (peak memory = the store
+// plus at most one chunk), views stay valid while frames are added, and a scan
+// over frames walks memory in order. Frame ids are dense: 0, 1, 2, ...
 #pragma once
 
 #include <cstddef>
 #include <cstdint>
+#include <memory>
 #include <vector>
 
 #include "lsgd/descriptor.h"
@@ -16,7 +19,8 @@ class FrameStore {
   FrameStore() = default;
 
   // The grid is fixed by the first frame added; later frames must match it
-  // (throws InvalidArgument otherwise, leaving the store unchanged).
+  // (throws InvalidArgument otherwise, leaving the store unchanged). Strong
+  // guarantee: if allocation fails the store is unchanged too.
   std::int64_t add(const Descriptor& descriptor);
 
   std::int64_t size() const { return size_; }
@@ -27,12 +31,17 @@ class FrameStore {
   // Bytes of descriptor data held per frame.
   std::size_t bytes_per_frame() const;
   void reserve(std::int64_t frames);
+  // Frames per chunk (0 before the first frame).
+  std::int64_t chunk_frames() const { return chunk_frames_; }
 
  private:
+  static constexpr std::size_t kChunkBytes = std::size_t{4} << 20;
+
   GridSize grid_;
   std::int64_t size_ = 0;
-  std::vector<Bin> hist_;
-  std::vector<Count> pixels_;
+  std::int64_t chunk_frames_ = 0;
+  std::vector<std::unique_ptr<Bin[]>> chunks_;  // chunk_frames_ * cells * kBins bins each
+  std::vector<Count> pixels_;                   // cells per frame, all frames
 };
 
 }  // namespace lsgd

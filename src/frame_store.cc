@@ -17,6 +17,23 @@ void grow(std::vector<T>& v, std::size_t more) {
 
 }  // namespace
 
+FrameStore::FrameStore(const FrameStore& other)
+    : grid_(other.grid_), size_(other.size_), chunk_frames_(other.chunk_frames_),
+      pixels_(other.pixels_) {
+  const std::size_t chunk_bins =
+      static_cast<std::size_t>(chunk_frames_) * static_cast<std::size_t>(grid_.cells()) * kBins;
+  chunks_.reserve(other.chunks_.size());
+  for (const auto& chunk : other.chunks_) {
+    chunks_.emplace_back(new Bin[chunk_bins]);
+    std::copy(chunk.get(), chunk.get() + chunk_bins, chunks_.back().get());
+  }
+}
+
+FrameStore& FrameStore::operator=(const FrameStore& other) {
+  if (this != &other) *this = FrameStore(other);
+  return *this;
+}
+
 std::int64_t FrameStore::add(const Descriptor& descriptor) {
   const int cells = descriptor.grid.cells();
   if (cells <= 0 || descriptor.hist.size() != static_cast<std::size_t>(cells) * kBins ||

@@ -49,6 +49,20 @@ TEST(FrameStore, ManyChunksKeepEveryFrameAndViewsStayValid) {
   EXPECT_EQ(store.bytes_per_frame(), static_cast<std::size_t>(rows * cols) * (kBins * 2 + 4));
 }
 
+TEST(FrameStore, CopiesAreDeepAndIndependent) {
+  FrameStore a;
+  for (std::int64_t i = 0; i < 300; ++i) a.add(numbered(5, 16, i));
+  FrameStore b = a;
+  b.add(numbered(5, 16, 300));
+  EXPECT_EQ(a.size(), 300);
+  EXPECT_EQ(b.size(), 301);
+  EXPECT_NE(a.view(7).hist, b.view(7).hist);
+  EXPECT_TRUE(std::equal(a.view(7).hist, a.view(7).hist + 80 * kBins, b.view(7).hist));
+  FrameStore c;
+  c = b;
+  EXPECT_EQ(c.view(300).pixels[0], 300u);
+}
+
 TEST(FrameStore, RejectedFramesLeaveTheStoreUnchanged) {
   FrameStore store;
   store.add(numbered(2, 3, 0));

@@ -17,6 +17,10 @@ namespace lsgd {
 class FrameStore {
  public:
   FrameStore() = default;
+  FrameStore(const FrameStore& other);  // deep copy
+  FrameStore& operator=(const FrameStore& other);
+  FrameStore(FrameStore&&) noexcept = default;
+  FrameStore& operator=(FrameStore&&) noexcept = default;
 
   // The grid is fixed by the first frame added; later frames must match it
   // (throws InvalidArgument otherwise, leaving the store unchanged). Strong

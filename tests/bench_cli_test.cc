@@ -2,6 +2,8 @@
 // (tools/lsgd/bench_support.cc): the region size that matches OpenCV's SLIC
 // to our grid and the query-growth table.
 #include <gtest/gtest.h>
+
+#include "cli_util.h"
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -27,26 +29,12 @@ namespace {
 
 const fs::path kTmp = fs::path(LSGD_TEST_TMP) / ("bench-cli-" + std::to_string(getpid()));
 
-struct CmdResult {
-  int code = -1;
-  std::string out;
-  std::string err;
-};
+using lsgd::test::CmdResult;
+using lsgd::test::slurp;
 
-std::string slurp(const fs::path& path) {
-  std::ifstream in(path);
-  std::stringstream s;
-  s << in.rdbuf();
-  return s.str();
-}
-
+// Runs `lsgd ARGS`, capturing stdout and stderr.
 CmdResult lsgd(const std::string& args) {
-  fs::create_directories(kTmp);
-  const fs::path out = kTmp / "stdout.txt", err = kTmp / "stderr.txt";
-  const std::string cmd = std::string("'") + LSGD_CLI + "' " + args + " >'" + out.string() +
-                          "' 2>'" + err.string() + "' </dev/null";
-  const int status = std::system(cmd.c_str());
-  return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, slurp(out), slurp(err)};
+  return lsgd::test::run_command(LSGD_CLI, args, kTmp);
 }
 
 constexpr const char* kTiny = "bench --frames 60 --width 320 --height 240 --warmup 5 --block 20 ";

@@ -10,6 +10,8 @@
 #include <string>
 
 #include <gtest/gtest.h>
+
+#include "cli_util.h"
 #include <nlohmann/json.hpp>
 #include <opencv2/core.hpp>
 #include <opencv2/imgcodecs.hpp>
@@ -25,27 +27,12 @@ namespace {
 const fs::path kTmp = fs::path(LSGD_TEST_TMP) / ("cli-" + std::to_string(getpid()));
 const fs::path kShared = LSGD_SHARED_DIR;
 
-struct CmdResult {
-  int code = -1;
-  std::string out;
-  std::string err;
-};
-
-std::string slurp(const fs::path& path) {
-  std::ifstream in(path);
-  std::stringstream s;
-  s << in.rdbuf();
-  return s.str();
-}
+using lsgd::test::CmdResult;
+using lsgd::test::slurp;
 
 // Runs `lsgd ARGS`, capturing stdout and stderr.
 CmdResult lsgd(const std::string& args) {
-  fs::create_directories(kTmp);
-  const fs::path out = kTmp / "stdout.txt", err = kTmp / "stderr.txt";
-  const std::string cmd = std::string("'") + LSGD_CLI + "' " + args + " >'" + out.string() +
-                          "' 2>'" + err.string() + "' </dev/null";
-  const int status = std::system(cmd.c_str());
-  return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, slurp(out), slurp(err)};
+  return lsgd::test::run_command(LSGD_CLI, args, kTmp);
 }
 
 int lines_of(const std::string& text) {

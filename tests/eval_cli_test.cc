@@ -2,6 +2,8 @@
 // files, the lenient reference protocol, subsampling and dataset layouts.
 // They run the real binary on a short synthetic street and tiny layouts.
 #include <gtest/gtest.h>
+
+#include "cli_util.h"
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -26,29 +28,14 @@ namespace {
 
 const fs::path kTmp = fs::path(LSGD_TEST_TMP) / ("eval-cli-" + std::to_string(getpid()));
 
-struct CmdResult {
-  int code = -1;
-  std::string out;
-  std::string err;
-};
-
-std::string slurp(const fs::path& path) {
-  std::ifstream in(path);
-  std::stringstream s;
-  s << in.rdbuf();
-  return s.str();
-}
+using lsgd::test::CmdResult;
+using lsgd::test::slurp;
 
 std::string q(const fs::path& p) { return "'" + p.string() + "'"; }
 
 // Runs `lsgd ARGS`, capturing stdout and stderr.
 CmdResult lsgd(const std::string& args) {
-  fs::create_directories(kTmp);
-  const fs::path out = kTmp / "stdout.txt", err = kTmp / "stderr.txt";
-  const std::string cmd =
-      std::string("'") + LSGD_CLI + "' " + args + " >" + q(out) + " 2>" + q(err) + " </dev/null";
-  const int status = std::system(cmd.c_str());
-  return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, slurp(out), slurp(err)};
+  return lsgd::test::run_command(LSGD_CLI, args, kTmp);
 }
 
 nlohmann::json read_json(const fs::path& path) { return nlohmann::json::parse(slurp(path)); }

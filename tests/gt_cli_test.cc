@@ -1,5 +1,7 @@
 // End-to-end tests of `lsgd gt convert` and `lsgd gt stats`: they run the real binary.
 #include <gtest/gtest.h>
+
+#include "cli_util.h"
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -20,18 +22,8 @@ namespace {
 const fs::path kTmp = fs::path(LSGD_TEST_TMP) / ("gtcli-" + std::to_string(getpid()));
 const fs::path kGt = fs::path(LSGD_SHARED_DIR) / "groundtruth";
 
-struct CmdResult {
-  int code = -1;
-  std::string out;
-  std::string err;
-};
-
-std::string slurp(const fs::path& path) {
-  std::ifstream in(path);
-  std::stringstream s;
-  s << in.rdbuf();
-  return s.str();
-}
+using lsgd::test::CmdResult;
+using lsgd::test::slurp;
 
 fs::path write_file(const std::string& name, const std::string& text) {
   fs::create_directories(kTmp);
@@ -40,13 +32,9 @@ fs::path write_file(const std::string& name, const std::string& text) {
   return path;
 }
 
+// Runs `lsgd ARGS`, capturing stdout and stderr.
 CmdResult lsgd(const std::string& args) {
-  fs::create_directories(kTmp);
-  const fs::path out = kTmp / "stdout.txt", err = kTmp / "stderr.txt";
-  const std::string cmd = std::string("'") + LSGD_CLI + "' " + args + " >'" + out.string() +
-                          "' 2>'" + err.string() + "' </dev/null";
-  const int status = std::system(cmd.c_str());
-  return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, slurp(out), slurp(err)};
+  return lsgd::test::run_command(LSGD_CLI, args, kTmp);
 }
 
 bool contains(const std::string& text, const std::string& part) {

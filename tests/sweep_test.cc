@@ -14,6 +14,8 @@
 #include <vector>
 
 #include <gtest/gtest.h>
+
+#include "cli_util.h"
 #include <nlohmann/json.hpp>
 #include <opencv2/core.hpp>
 #include <opencv2/imgcodecs.hpp>
@@ -214,25 +216,12 @@ TEST(SweepDataset, BadSpecsNameTheSpec) {
 
 const fs::path kTmp = fs::path(LSGD_TEST_TMP) / ("sweep-" + std::to_string(getpid()));
 
-std::string slurp(const fs::path& path) {
-  std::ifstream in(path);
-  std::stringstream s;
-  s << in.rdbuf();
-  return s.str();
-}
+using lsgd::test::CmdResult;
+using lsgd::test::slurp;
 
-struct CmdResult {
-  int code = -1;
-  std::string out;
-  std::string err;
-};
-
+// Runs `lsgd ARGS`, capturing stdout and stderr.
 CmdResult lsgd_cli(const std::string& args) {
-  const fs::path out = kTmp / "stdout.txt", err = kTmp / "stderr.txt";
-  const std::string cmd = std::string("'") + LSGD_CLI + "' " + args + " >'" + out.string() +
-                          "' 2>'" + err.string() + "' </dev/null";
-  const int status = std::system(cmd.c_str());
-  return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, slurp(out), slurp(err)};
+  return lsgd::test::run_command(LSGD_CLI, args, kTmp);
 }
 
 std::vector<Strings> read_csv(const fs::path& path) {  // no quoted fields in these tables

@@ -47,15 +47,7 @@ void AssignRowSimd(const AssignRow& r) {
       step(seg.x1 + 1 - lanes);
       continue;
     }
-    for (; x <= seg.x1; ++x) {  // tail, same operations in the same order
-      const float dx = static_cast<float>(x) - seg.cx;
-      const float dI = static_cast<float>(r.pixels[x]) - seg.intensity;
-      const float d = ((dI * dI) * r.inv_intensity + (dx * dx) * r.inv_distance) + seg.row_term;
-      if (d < r.distance[x]) {
-        r.distance[x] = d;
-        r.labels[x] = seg.label;
-      }
-    }
+    for (; x <= seg.x1; ++x) assign_pixel(r, seg, x);  // short spans: the same operations
   }
 }
 
@@ -143,15 +135,7 @@ void assign_row(const AssignRow& row) { HWY_DYNAMIC_DISPATCH(AssignRowSimd)(row)
 void assign_row_scalar(const AssignRow& r) {
   for (int s = 0; s < r.count; ++s) {
     const RowSegment& seg = r.segments[s];
-    for (int x = seg.x0; x <= seg.x1; ++x) {
-      const float dx = static_cast<float>(x) - seg.cx;
-      const float dI = static_cast<float>(r.pixels[x]) - seg.intensity;
-      const float d = ((dI * dI) * r.inv_intensity + (dx * dx) * r.inv_distance) + seg.row_term;
-      if (d < r.distance[x]) {
-        r.distance[x] = d;
-        r.labels[x] = seg.label;
-      }
-    }
+    for (int x = seg.x0; x <= seg.x1; ++x) assign_pixel(r, seg, x);
   }
 }
 

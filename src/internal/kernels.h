@@ -33,6 +33,17 @@ struct AssignRow {
 void assign_row(const AssignRow& row);
 void assign_row_scalar(const AssignRow& row);
 
+// The scalar step of both: pixel x against one segment.
+inline void assign_pixel(const AssignRow& r, const RowSegment& seg, int x) {
+  const float dx = static_cast<float>(x) - seg.cx;
+  const float dI = static_cast<float>(r.pixels[x]) - seg.intensity;
+  const float d = ((dI * dI) * r.inv_intensity + (dx * dx) * r.inv_distance) + seg.row_term;
+  if (d < r.distance[x]) {
+    r.distance[x] = d;
+    r.labels[x] = seg.label;
+  }
+}
+
 // The k-means update sums of one image row from pixel `start` on: for every
 // run of equal labels k >= 0, sums[4k + 0] += sum of x, [4k + 1] += y * run
 // length, [4k + 2] += sum of pixels, [4k + 3] += run length. Stops at the

@@ -19,6 +19,7 @@
 #include <string>
 
 #include "lsgd/eval/groundtruth.h"
+#include "lsgd/eval/gt_formats.h"
 #include "lsgd/eval/gt_remap.h"
 #include "lsgd/eval/synthetic.h"
 
@@ -197,6 +198,48 @@ TEST_F(ShortStreet, ReportWithPosesAndLoopinfGroundTruth) {
                                  " --report " + q(html) + " --poses " + q(kTmp / "short-poses.txt"));
   EXPECT_NE(shorter.code, 0);
   EXPECT_NE(shorter.err.find("short-poses.txt"), std::string::npos) << shorter.err;
+}
+
+// The KITTI commands of docs/results.md on a KITTI-layout copy of the street:
+// images in sequences/00/image_0, times.txt, ground truth derived from poses.
+TEST_F(ShortStreet, KittiLayoutWithGroundTruthFromPoses) {
+  lsgd::eval::SyntheticOptions options;
+  options.width = 160;
+  options.height = 120;
+  options.route_scale = 0.3;
+  const lsgd::eval::SyntheticWorld world(options);
+  const fs::path seq = kTmp / "kitti" / "sequences" / "00";
+  fs::create_directories(seq / "image_0");
+  std::ostringstream times, poses;
+  std::vector<lsgd::eval::Pose> truth;
+  for (std::int64_t i = 0; i < frames_; ++i) {
+    std::ostringstream name;
+    name << std::setw(6) << std::setfill('0') << i << ".png";
+    std::ostringstream source;
+    source << std::setw(5) << std::setfill('0') << i << ".png";
+    fs::create_symlink(dir_ / "images" / source.str(), seq / "image_0" / name.str());
+    times << 0.1 * static_cast<double>(i) << "\n";
+    // 13 columns (timestamp first): the camera moves along x by the street's s.
+    poses << 0.1 * static_cast<double>(i) << " 1 0 0 " << world.place(i) << " 0 1 0 0 0 0 1 0\n";
+    truth.push_back({world.place(i), 0, 0});
+  }
+  write_text(seq / "times.txt", times.str());
+  write_text(kTmp / "poses00.txt", poses.str());
+  const fs::path json = kTmp / "kitti.json";
+  const CmdResult r =
+      lsgd("eval --sequence " + q(kTmp / "kitti") + " --layout kitti --kitti-sequence 0 --gt " +
+           q(kTmp / "poses00.txt") + " --gt-format kitti-poses --min-gap 50 --json " + q(json));
+  ASSERT_EQ(r.code, 0) << r.err;
+  const lsgd::eval::GroundTruth gt = lsgd::eval::groundtruth_from_poses(truth, 10.0, 100);
+  std::int64_t positives = 0;
+  for (std::int64_t i = 0; i < gt.frames(); ++i) positives += gt.has_loop(i, 50) ? 1 : 0;
+  const auto j = read_json(json);
+  EXPECT_EQ(j["frames"], frames_);
+  EXPECT_EQ(j["layout"], "kitti");
+  EXPECT_EQ(j["positives"], positives);
+  EXPECT_EQ(j["ground_truth_pairs"], gt.pairs());
+  EXPECT_GT(positives, 20);
+  EXPECT_GT(j["recall_at_1"].get<double>(), 0.2);  // the detector finds the revisits
 }
 
 // ---------------------------------------------------------------- detections files, layouts

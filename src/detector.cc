@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cmath>
 
 #include <opencv2/core.hpp>
 
@@ -139,6 +140,72 @@ void Detector::verify(Result& result) {
     temporal_.push(result.frame,
                    result.candidates.empty() ? -1 : result.candidates.front().frame);
   }
+}
+
+void Detector::restore_frame(int width, int height, const Descriptor& descriptor,
+                             const std::vector<float>& points,
+                             const std::vector<std::uint8_t>& orb) {
+  const std::int64_t frame = store_.size();
+  if (width <= 0 || height <= 0 || (frame > 0 && (width != width_ || height != height_))) {
+    internal::throw_invalid("restore_frame: frame ", frame, " is ", width, "x", height,
+                            " but the detector holds ", width_, "x", height_, " frames");
+  }
+  const GridSize expected = grid_size(width, height, options_.segmentation.superpixel_size);
+  const auto cells = static_cast<std::size_t>(expected.cells());
+  if (descriptor.grid != expected || descriptor.hist.size() != cells * kBins ||
+      descriptor.pixels.size() != cells) {
+    internal::throw_invalid("restore_frame: frame ", frame, " has a ", descriptor.grid.rows, "x",
+                            descriptor.grid.cols, " grid with ", descriptor.hist.size(), " bins and ",
+                            descriptor.pixels.size(), " cells, but ", width, "x", height,
+                            " frames have a ", expected.rows, "x", expected.cols, " grid");
+  }
+  if (!options_.verification.geometric && (!points.empty() || !orb.empty())) {
+    internal::throw_invalid("restore_frame: frame ", frame,
+                            " has ORB features but geometric verification is off");
+  }
+  // add_features() below validates too; checked here first so that a bad
+  // frame leaves the store unchanged.
+  if (points.size() % 2 != 0 || orb.size() != points.size() / 2 * 32 ||
+      !std::all_of(points.begin(), points.end(), [](float v) { return std::isfinite(v); })) {
+    internal::throw_invalid("restore_frame: frame ", frame, " has ", points.size(),
+                            " keypoint coordinates and ", orb.size(),
+                            " ORB bytes: not 2 finite coordinates and 32 bytes per keypoint");
+  }
+  store_.add(descriptor);
+  if (options_.verification.geometric) geometric_.add_features(points, orb);
+  width_ = width;
+  height_ = height;
+}
+
+void Detector::restore_nodes(std::vector<std::vector<std::int64_t>> nodes) {
+  if (options_.search.mode != SearchMode::kDynamicNodes) {
+    internal::throw_invalid("restore_nodes: the search mode is ", to_string(options_.search.mode));
+  }
+  for (const auto& node : nodes) {
+    for (const std::int64_t id : node) {
+      if (id >= store_.size()) {
+        internal::throw_invalid("restore_nodes: frame ", id, " is not stored (", store_.size(),
+                                " frames)");
+      }
+    }
+  }
+  nodes_.restore(std::move(nodes));
+}
+
+void Detector::restore_temporal(std::int64_t last_query, std::vector<std::int64_t> places) {
+  if (!options_.verification.temporal) {
+    internal::throw_invalid("restore_temporal: temporal verification is off");
+  }
+  if (last_query != store_.size() - 1) {
+    internal::throw_invalid("restore_temporal: last query ", last_query, " but ", store_.size(),
+                            " frames are stored");
+  }
+  for (const std::int64_t place : places) {
+    if (place >= store_.size()) {
+      internal::throw_invalid("restore_temporal: place ", place, " is not stored");
+    }
+  }
+  temporal_.restore(last_query, std::move(places));
 }
 
 }  // namespace lsgd

@@ -372,4 +372,36 @@ GeometricCheck GeometricVerifier::verify(std::int64_t query, std::int64_t candid
   return check;
 }
 
+void GeometricVerifier::features(std::int64_t frame, std::vector<float>& points,
+                                 std::vector<std::uint8_t>& descriptors) const {
+  const int n = keypoints(frame);  // throws InvalidArgument for ids not added
+  const auto begin = static_cast<std::size_t>(offsets_[static_cast<std::size_t>(frame)]);
+  points.assign(points_.begin() + 2 * begin, points_.begin() + 2 * (begin + n));
+  descriptors.assign(descriptors_.begin() + begin * kDescriptorBytes,
+                     descriptors_.begin() + (begin + n) * kDescriptorBytes);
+}
+
+void GeometricVerifier::add_features(const std::vector<float>& points,
+                                     const std::vector<std::uint8_t>& descriptors) {
+  const std::size_t n = points.size() / 2;
+  if (points.size() != 2 * n || descriptors.size() != n * kDescriptorBytes) {
+    internal::throw_invalid("GeometricVerifier::add_features: ", points.size(), " coordinates and ",
+                            descriptors.size(), " descriptor bytes do not describe whole keypoints (",
+                            "2 coordinates and ", kDescriptorBytes, " bytes each)");
+  }
+  for (const float v : points) {
+    if (!std::isfinite(v)) internal::throw_invalid("GeometricVerifier::add_features: coordinate ", v);
+  }
+  const std::size_t old_points = points_.size(), old_descriptors = descriptors_.size();
+  try {
+    points_.insert(points_.end(), points.begin(), points.end());
+    descriptors_.insert(descriptors_.end(), descriptors.begin(), descriptors.end());
+    offsets_.push_back(offsets_.back() + static_cast<std::int64_t>(n));
+  } catch (...) {
+    points_.resize(old_points);
+    descriptors_.resize(old_descriptors);
+    throw;
+  }
+}
+
 }  // namespace lsgd

@@ -111,4 +111,17 @@ DynamicNodes::Outcome DynamicNodes::assign(const FrameStore& store, const Descri
   return outcome;
 }
 
+void DynamicNodes::restore(std::vector<std::vector<std::int64_t>> nodes) {
+  for (std::size_t k = 0; k < nodes.size(); ++k) {
+    if (nodes[k].empty()) internal::throw_invalid("DynamicNodes::restore: node ", k, " is empty");
+    for (std::size_t i = 0; i < nodes[k].size(); ++i) {
+      if (nodes[k][i] < 0 || (i > 0 && nodes[k][i] <= nodes[k][i - 1])) {
+        internal::throw_invalid("DynamicNodes::restore: node ", k, " member ", i, " is frame ",
+                                nodes[k][i], ": ids must be >= 0 and increasing");
+      }
+    }
+  }
+  nodes_ = std::move(nodes);
+}
+
 }  // namespace lsgd

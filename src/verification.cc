@@ -134,4 +134,22 @@ void TemporalVerifier::push(std::int64_t query, std::int64_t place) {
   }
 }
 
+void TemporalVerifier::restore(std::int64_t last_query, std::vector<std::int64_t> places) {
+  const std::size_t capacity = static_cast<std::size_t>(std::max(options_.agree, 1));
+  if (places.size() > capacity) {
+    internal::throw_invalid("TemporalVerifier::restore: ", places.size(),
+                            " places but at most ", capacity, " are kept (agree = ",
+                            options_.agree, ")");
+  }
+  if (last_query < -1 || last_query + 1 < static_cast<std::int64_t>(places.size())) {
+    internal::throw_invalid("TemporalVerifier::restore: last query ", last_query, " cannot have ",
+                            places.size(), " places");
+  }
+  for (const std::int64_t place : places) {
+    if (place < -1) internal::throw_invalid("TemporalVerifier::restore: place ", place, " < -1");
+  }
+  places_.assign(places.begin(), places.end());
+  last_query_ = last_query;
+}
+
 }  // namespace lsgd

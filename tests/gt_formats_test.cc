@@ -290,6 +290,17 @@ TEST(ReadMat, TruncatedAndCorruptFiles) {
   EXPECT_THROW(lsgd::eval::read_mat((kTmp / "absent.mat").string()), lsgd::IoError);
 }
 
+// Found by fuzz/fuzz_gt: without a v5 header matio reads MAT v4 and mallocs the
+// first name length unchecked (here 0x756e696c, ~2 GB, from 104 bytes).
+TEST(ReadMat, V4NameLengthBeyondTheFileIsFormatError) {
+  std::string bytes(4, '\0');
+  bytes += ": x86_64-pc-linu";  // mrows, ncols, imagf, namelen (little-endian)
+  bytes += std::string(84, 'x');
+  const fs::path p = write_file("v4name.mat", bytes);
+  const std::string e = message_of<lsgd::FormatError>([&] { lsgd::eval::read_mat(p.string()); });
+  EXPECT_TRUE(contains(e, p.string()) && contains(e, "name length")) << e;
+}
+
 // ---- KITTI poses ------------------------------------------------------------------
 
 std::string pose_line(double x, double y, double z, bool timestamp, double t = 0) {

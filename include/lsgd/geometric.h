@@ -91,6 +91,16 @@ class GeometricVerifier {
   // 8 (x, y) + 32 (descriptor) per keypoint, plus the frame's offset.
   std::size_t bytes_per_frame() const;
 
+  // Persistence (lsgd::io::Database): copies frame i's stored features into
+  // `points` (x, y per keypoint) and `descriptors` (32 bytes per keypoint);
+  // throws InvalidArgument for ids not added.
+  void features(std::int64_t frame, std::vector<float>& points,
+                std::vector<std::uint8_t>& descriptors) const;
+  // Appends the next frame's features as add() computed them, without the
+  // image. Throws InvalidArgument, leaving the verifier unchanged, when
+  // points.size() != 2 n or descriptors.size() != 32 n, or a point is not finite.
+  void add_features(const std::vector<float>& points, const std::vector<std::uint8_t>& descriptors);
+
  private:
   friend struct GeometricVerifierTestPeer;  // tests read the stored keypoints
 

@@ -75,6 +75,12 @@ class DynamicNodes {
   std::int64_t size() const { return static_cast<std::int64_t>(nodes_.size()); }
   const std::vector<std::int64_t>& members(std::int64_t node) const { return nodes_.at(node); }
 
+  // Persistence (lsgd::io::Database): replaces the nodes by `nodes` (frame ids
+  // of each node, first frame first, in creation order), as assign() would
+  // have built them. Throws InvalidArgument, leaving the nodes unchanged, for
+  // an empty node, a negative id or ids not increasing within a node.
+  void restore(std::vector<std::vector<std::int64_t>> nodes);
+
  private:
   std::vector<std::vector<std::int64_t>> nodes_;  // frame ids, first frame first
 };

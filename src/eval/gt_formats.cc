@@ -8,7 +8,9 @@
 #include <cctype>
 #include <charconv>
 #include <cmath>
+#include <cstdint>
 #include <cstring>
+#include <filesystem>
 #include <fstream>
 #include <memory>
 #include <mutex>
@@ -617,12 +619,48 @@ GroundTruth load_groundtruth(const std::string& path, const GtOptions& options) 
   throw FormatError(concat("cannot read '", path, "': no format"));
 }
 
+namespace {
+
+// matio 1.5.23 takes a file without a v5 / v7.3 header for MAT v4 and mallocs
+// the first variable's name length unchecked: 20 corrupt bytes can ask for
+// gigabytes (found by fuzz/fuzz_gt). A v4 name must fit in the file.
+void check_v4_name_length(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  std::array<unsigned char, 128> head{};
+  in.read(reinterpret_cast<char*>(head.data()), head.size());
+  const std::size_t got = static_cast<std::size_t>(in.gcount());
+  if (got == head.size() && ((head[126] == 'I' && head[127] == 'M') ||
+                             (head[126] == 'M' && head[127] == 'I'))) {
+    return;  // v5 / v7.3 header: matio checks those itself
+  }
+  if (got < 20) return;  // matio rejects a header this short
+  auto int32_at = [&](std::size_t at, bool little) {
+    std::uint32_t v = 0;
+    for (int i = 0; i < 4; ++i) v |= std::uint32_t{head[at + (little ? i : 3 - i)]} << (8 * i);
+    return static_cast<std::int32_t>(v);
+  };
+  // The type field (MOPT, < 5000) tells the byte order, as in matio.
+  const std::int32_t type_le = int32_at(0, true);
+  const bool little = type_le >= 0 && type_le < 5000;
+  const std::int64_t name_length = int32_at(16, little);
+  std::error_code ec;
+  const auto size = std::filesystem::file_size(path, ec);
+  if (ec) throw IoError(concat("cannot read MAT file '", path, "': ", ec.message()));
+  if (name_length < 1 || static_cast<std::uint64_t>(name_length) > size - 20) {
+    throw FormatError(concat("'", path, "' is not a readable MAT file: v4 variable name length ",
+                             name_length, " does not fit in the file's ", size, " bytes"));
+  }
+}
+
+}  // namespace
+
 // ---- readers --------------------------------------------------------------------
 
 GroundTruth read_mat(const std::string& path, std::int64_t frames, const std::string& variable) {
   static std::once_flag log_once;
   std::call_once(log_once, [] { Mat_LogInitFunc("lsgd", matio_log); });
   if (!std::ifstream(path)) throw IoError(concat("cannot open MAT file '", path, "'"));
+  check_v4_name_length(path);
   matio_last_message.clear();
   MatFile mat{Mat_Open(path.c_str(), MAT_ACC_RDONLY)};
   if (!mat) {

@@ -1,5 +1,6 @@
 #include "lsgd/io/config.h"
 
+#include <yaml-cpp/eventhandler.h>
 #include <yaml-cpp/yaml.h>
 
 #include <charconv>
@@ -319,8 +320,38 @@ void read_root(const YAML::Node& root, const std::string& source, DetectorOption
         [&](const YAML::Node& v, const std::string&) { read_decision(v, source, o.decision); }}});
 }
 
+// Counts parser events; used to bound the number of documents (below).
+class DocumentCounter : public YAML::EventHandler {
+ public:
+  void OnDocumentStart(const YAML::Mark&) override {}
+  void OnDocumentEnd() override {}
+  void OnNull(const YAML::Mark&, YAML::anchor_t) override {}
+  void OnAlias(const YAML::Mark&, YAML::anchor_t) override {}
+  void OnScalar(const YAML::Mark&, const std::string&, YAML::anchor_t,
+                const std::string&) override {}
+  void OnSequenceStart(const YAML::Mark&, const std::string&, YAML::anchor_t,
+                       YAML::EmitterStyle::value) override {}
+  void OnSequenceEnd() override {}
+  void OnMapStart(const YAML::Mark&, const std::string&, YAML::anchor_t,
+                  YAML::EmitterStyle::value) override {}
+  void OnMapEnd() override {}
+};
+
 std::vector<YAML::Node> load_documents(const std::string& text, const std::string& source) {
   try {
+    // yaml-cpp < 0.8.1 (Debian 12 ships 0.7) loops forever in LoadAll, growing
+    // memory, on some malformed streams such as "," (yaml-cpp issue #1040,
+    // fixed by PR #1319). Every document takes at least one byte, so more
+    // documents than bytes + 1 means that loop: reject it before LoadAll.
+    std::istringstream stream(text);
+    YAML::Parser parser(stream);
+    DocumentCounter counter;
+    for (std::size_t documents = 0; parser.HandleNextDocument(counter);) {
+      if (++documents > text.size() + 1) {
+        throw FormatError(concat(source, ": invalid YAML: the parser makes no progress (",
+                                 documents, " documents from ", text.size(), " bytes)"));
+      }
+    }
     return YAML::LoadAll(text);
   } catch (const YAML::Exception& e) {
     const std::string line = e.mark.is_null() ? "" : concat(" (line ", e.mark.line + 1, ")");

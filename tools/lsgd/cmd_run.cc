@@ -1,12 +1,19 @@
-// lsgd run --sequence PATH [--config FILE] [--output FILE]
+// lsgd run --sequence PATH [--config FILE] [--output FILE] [--database FILE [--session N]]
+#include <algorithm>
+#include <fstream>
 #include <iostream>
 #include <memory>
+#include <optional>
 
 #include <CLI/CLI.hpp>
+#include <opencv2/core.hpp>
 
 #include "commands.h"
 #include "common.h"
+#include "lsgd/error.h"
 #include "lsgd/eval/runner.h"
+#include "lsgd/io/config.h"
+#include "lsgd/io/database.h"
 #include "lsgd/io/layouts.h"
 
 namespace lsgd::cli {
@@ -17,9 +24,69 @@ struct RunArgs {
   std::string output;
   DetectorFlags detector;
   SequenceFlags layout;
+  std::string database;                 // SQLite file to create or resume; empty: none
+  std::optional<std::int64_t> session;  // session id of this run's frames
 };
 
+// --database: creates FILE or resumes the detector it holds, appends every
+// frame (one transaction each). Resuming takes the stored options; flags and
+// --config must agree with them except --threshold. Frame ids (CSV column
+// frame) continue after the stored frames.
+void run_database(const RunArgs& args, const io::Sequence& sequence) {
+  const DetectorFlags& flags = args.detector;
+  const bool exists = std::ifstream(args.database).good();
+  std::optional<io::Database> db;
+  DetectorOptions options;
+  if (exists) {
+    db.emplace(io::Database::open(args.database));
+    options = flags.config.empty() ? db->options() : io::load_config(flags.config);
+    if (!flags.mode.empty()) options.search.mode = parse_search_mode(flags.mode.c_str());
+    if (flags.min_gap) options.search.min_gap = *flags.min_gap;
+    if (flags.threshold) options.decision.threshold = *flags.threshold;
+    if (!flags.verify.empty()) parse_verification_stages(flags.verify, options.verification);
+    options.check();
+  } else {
+    options = flags.resolve();
+    db.emplace(io::Database::create(args.database, options));
+  }
+  Detector detector(options);
+  db->restore(detector);  // checks the options against the stored ones
+  const std::int64_t session = args.session ? *args.session : db->last_session() + 1;
+  std::cerr << (exists ? "resumed " : "created ") << args.database << ": " << detector.size()
+            << " frames stored, appending session " << session << "\n";
+  const eval::FrameSource source = eval::sequence_source(sequence);
+  CsvWriter csv(args.output);
+  Progress progress(source.frames, "run");
+  double total_ms = 0;
+  for (std::int64_t i = 0; i < source.frames; ++i) {
+    Result result;
+    try {
+      result = detector.process(source.load(i));
+    } catch (const Error& e) {
+      throw Error("frame " + std::to_string(i) + " (" + source.name(i) + "): " + e.what());
+    }
+    db->append(detector, result, session, source.name(i));
+    csv.write(result, source.name(i));
+    total_ms += result.timings.total_ms;
+    progress.update(i + 1, total_ms / static_cast<double>(i + 1));
+  }
+  std::cerr << "processed " << source.frames << " frames, " << csv.loops() << " loops, "
+            << total_ms / static_cast<double>(std::max<std::int64_t>(source.frames, 1))
+            << " ms/frame mean; " << args.database << " holds " << db->frames() << " frames"
+            << (args.output.empty() ? "" : ", rows in " + args.output) << "\n";
+}
+
 void run(const RunArgs& args) {
+  if (args.session && args.database.empty()) {
+    throw InvalidArgument("--session needs --database");
+  }
+  if (args.session && *args.session < 0) {
+    throw InvalidArgument("--session " + std::to_string(*args.session) + " must be >= 0");
+  }
+  if (!args.database.empty()) {
+    run_database(args, io::open_sequence(args.sequence, args.layout.resolve()));
+    return;
+  }
   const DetectorOptions options = args.detector.resolve();
   const io::Sequence sequence = io::open_sequence(args.sequence, args.layout.resolve());
   const eval::FrameSource source = eval::sequence_source(sequence);
@@ -44,6 +111,12 @@ void register_run(CLI::App& app) {
   cmd->add_option("--output", args->output, "CSV file to write (default: standard output)");
   args->detector.add_to(*cmd);
   args->layout.add_to(*cmd);
+  cmd->add_option("--database", args->database,
+                  "SQLite file keeping the detector's state: created when missing, else resumed "
+                  "(its options apply; frames are appended, one transaction each)");
+  cmd->add_option("--session", args->session,
+                  "session id of this run's frames in --database (default: last session + 1, "
+                  "0 for a new database)");
   cmd->callback([args] { run(*args); });
 }
 

@@ -13,5 +13,6 @@ void register_demo(CLI::App& app);  // lsgd demo: the built-in synthetic world
 void register_sweep(CLI::App& app);  // lsgd sweep: a grid of configurations on datasets, one table
 void register_bench(CLI::App& app);  // lsgd bench: per-stage timing on a generated sequence
 void register_gt(CLI::App& app);     // lsgd gt: convert ground-truth formats, print statistics
+void register_db(CLI::App& app);     // lsgd db info: what a detector database holds
 
 }  // namespace lsgd::cli

@@ -16,6 +16,7 @@ int main(int argc, char** argv) {
   lsgd::cli::register_sweep(app);
   lsgd::cli::register_bench(app);
   lsgd::cli::register_gt(app);
+  lsgd::cli::register_db(app);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

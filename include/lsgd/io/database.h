@@ -1,0 +1,131 @@
+// Persistence of the detector's state in an SQLite file, so that a run
+// survives restarts and later runs (sessions) append to it. One row per
+// frame, one transaction per appended frame: a crash loses at most the frame
+// being written, and the file stays inspectable with the sqlite3 shell.
+//
+// Schema (format version 1; docs/reliability.md, "Persistence"):
+//
+//   meta(key TEXT PRIMARY KEY, value NOT NULL)
+//     format_version   1 (integer)
+//     library_version  e.g. "0.1.0", the lsgd that created the file
+//     options          the DetectorOptions as YAML (io::to_yaml)
+//     width, height    frame size (0 until the first frame)
+//     grid_rows, grid_cols
+//     checksum         CRC-32 of every other "key=value\n", keys in order
+//   frames(id INTEGER PRIMARY KEY,  -- detector frame id: 0, 1, 2, ... dense
+//          session INTEGER NOT NULL, -- >= 0, chosen by the writer
+//          name TEXT NOT NULL,       -- image name or path ('' when unknown)
+//          histogram BLOB NOT NULL,  -- cells * 256 uint16, little-endian
+//          pixels BLOB NOT NULL,     -- cells uint32, little-endian
+//          node INTEGER,             -- dynamic node joined/created; NULL in exhaustive mode
+//          place INTEGER,            -- temporal verifier's best place of this query
+//                                    -- (-1: none); NULL when temporal is off or unknown
+//          features BLOB,            -- ORB: n * 2 float32 (x, y), then n * 32 bytes;
+//                                    -- NULL when geometric verification is off
+//          crc32 INTEGER NOT NULL)   -- CRC-32 of every other column (see database.cc)
+//
+// Node membership is derived from frames.node (node k = its frames in id
+// order; node k is created by its first frame, so first frames increase with
+// k); the temporal verifier's state is the place of the last max(agree, 1)
+// frames. Neither needs a table of its own, so appending a frame is one row.
+//
+// Errors: a missing or unwritable file is IoError; a file that is not SQLite,
+// is truncated, damaged (SQLite's quick_check, the checksums, blob sizes, ids,
+// node order) or of a newer format is FormatError naming the file; options
+// that do not match the stored ones are InvalidArgument naming the key.
+//
+// Thread safety: a Database is used by one thread at a time (it owns one
+// sqlite3 connection and its prepared statements). Two processes may read the
+// same file; only one should append.
+#pragma once
+
+#include <cstdint>
+#include <memory>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "lsgd/detector.h"
+
+namespace lsgd::io {
+
+// The format this lsgd writes and the newest it reads.
+constexpr int kDatabaseFormatVersion = 1;
+
+struct DatabaseInfo {
+  std::string path;
+  int format_version = 0;
+  std::string library_version;
+  std::string options_yaml;
+  int width = 0;  // 0 until the first frame
+  int height = 0;
+  GridSize grid;
+  std::int64_t frames = 0;
+  std::vector<std::pair<std::int64_t, std::int64_t>> sessions;  // (session, frames), by session
+  std::int64_t nodes = 0;  // dynamic nodes (0 in exhaustive mode)
+  std::int64_t bytes = 0;  // size of the file plus its write-ahead log
+};
+
+class Database {
+ public:
+  enum class Mode { kReadOnly, kReadWrite };
+
+  // Creates a new, empty database for detectors with `options` (validated).
+  // Atomic: written to a temporary file beside `path` and linked into place,
+  // so `path` either does not exist or is complete. Throws IoError when
+  // `path` already exists or cannot be written.
+  static Database create(const std::string& path, const DetectorOptions& options);
+
+  // Opens an existing database and validates its header: SQLite quick_check,
+  // tables, format version, meta checksum, options, dense frame ids. Throws
+  // IoError when the file cannot be opened and FormatError when it is damaged,
+  // not an lsgd database, or of a newer format.
+  static Database open(const std::string& path, Mode mode = Mode::kReadWrite);
+
+  ~Database();
+  Database(Database&& other) noexcept;
+  Database& operator=(Database&& other) noexcept;
+  Database(const Database&) = delete;
+  Database& operator=(const Database&) = delete;
+
+  const std::string& path() const;
+  // The options stored at creation.
+  const DetectorOptions& options() const;
+  std::int64_t frames() const;
+  // Session of the last frame; -1 when there is none.
+  std::int64_t last_session() const;
+  DatabaseInfo info() const;
+
+  // Throws InvalidArgument naming the first key whose value differs from the
+  // stored one, with both values. Every option must match except
+  // decision.threshold; options of a disabled stage or of the other search
+  // mode are not compared.
+  void check_compatible(const DetectorOptions& options) const;
+
+  // Loads every stored frame into `detector`, which must be new (size() 0)
+  // and have compatible options, in one read transaction. Afterwards the
+  // detector processes the next frame exactly as one that had processed every
+  // stored frame itself. Throws FormatError naming the file and frame for
+  // damaged rows (detector then holds part of the frames: discard it).
+  void restore(Detector& detector) const;
+
+  // Appends the frame `result` describes, just processed by `detector`
+  // (result.frame must be frames() and the detector's last frame), in one
+  // transaction. `session` >= 0; `name` is free text (the image path).
+  void append(const Detector& detector, const Result& result, std::int64_t session,
+              const std::string& name = "");
+
+  // Appends every frame of `detector` not stored yet (ids frames() ..
+  // detector.size() - 1) in one transaction, with empty names. Node
+  // membership comes from the detector; temporal places are known only for
+  // its last max(agree, 1) frames (earlier rows get NULL, which restore()
+  // never reads).
+  void append_all(const Detector& detector, std::int64_t session);
+
+ private:
+  struct Impl;
+  explicit Database(std::unique_ptr<Impl> impl);
+  std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace lsgd::io

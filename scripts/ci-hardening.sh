@@ -1,0 +1,47 @@
+#!/usr/bin/env bash
+# CI hardening (docs/reliability.md): (a) the whole test suite built with
+# AddressSanitizer + UndefinedBehaviorSanitizer (g++), (b) the libFuzzer
+# targets in fuzz/ (clang++), each run for a bounded time from its generated
+# seed corpus. Non-zero exit on any build failure, test failure, sanitizer
+# report or fuzzer finding.
+#   FUZZ_SECONDS   seconds per fuzz target (default 60)
+#   JOBS           build/test parallelism (default 2)
+set -euo pipefail
+cd "$(dirname "$0")/.."
+
+fuzz_seconds=${FUZZ_SECONDS:-60}
+jobs=${JOBS:-2}
+export ASAN_OPTIONS=${ASAN_OPTIONS:-detect_leaks=1:abort_on_error=1:strict_string_checks=1}
+export UBSAN_OPTIONS=${UBSAN_OPTIONS:-print_stacktrace=1:halt_on_error=1}
+
+echo "ci-hardening: (a) ASan+UBSan test suite in build-asan"
+cmake -S . -B build-asan -DCMAKE_BUILD_TYPE=RelWithDebInfo -DLSGD_SANITIZE=address,undefined \
+  -DLSGD_BUILD_TESTS=ON -DLSGD_BUILD_TOOLS=ON -DLSGD_BUILD_BENCH=OFF
+cmake --build build-asan -j"$jobs"
+ctest --test-dir build-asan --output-on-failure -j"$jobs"
+
+echo "ci-hardening: (b) libFuzzer targets in build-fuzz"
+cmake -S . -B build-fuzz -DCMAKE_CXX_COMPILER=clang++ -DCMAKE_BUILD_TYPE=RelWithDebInfo \
+  -DLSGD_SANITIZE=address,undefined -DLSGD_BUILD_FUZZERS=ON \
+  -DLSGD_BUILD_TESTS=OFF -DLSGD_BUILD_TOOLS=OFF -DLSGD_BUILD_BENCH=OFF
+cmake --build build-fuzz -j"$jobs"
+
+status=0
+for target in config pairs gt; do
+  corpus=build-fuzz/fuzz/corpus/$target
+  artifacts=build-fuzz/fuzz/artifacts/$target/
+  mkdir -p "$corpus" "$artifacts"
+  log=build-fuzz/fuzz/fuzz_$target.log
+  echo "ci-hardening: fuzz_$target for ${fuzz_seconds}s"
+  # New inputs go to corpus/ (kept between runs of the same build dir); seeds are read only.
+  if ! "build-fuzz/fuzz/fuzz_$target" -max_total_time="$fuzz_seconds" -rss_limit_mb=2048 \
+      -max_len=8192 -timeout=10 -print_final_stats=1 -artifact_prefix="$artifacts" \
+      "$corpus" "build-fuzz/fuzz/seeds/$target" >"$log" 2>&1; then
+    echo "ci-hardening: fuzz_$target FAILED; reproducer in $artifacts, log:" >&2
+    tail -n 60 "$log" >&2
+    status=1
+  fi
+  runs=$(sed -n 's/^stat::number_of_executed_units: *//p' "$log" | tail -n 1)
+  echo "ci-hardening: fuzz_$target: ${runs:-?} executions in ${fuzz_seconds}s"
+done
+exit $status

@@ -1,0 +1,893 @@
+#include "lsgd/io/database.h"
+
+#include <errno.h>
+#include <fcntl.h>
+#include <sqlite3.h>
+#include <sys/stat.h>
+#include <unistd.h>
+#include <yaml-cpp/yaml.h>
+#include <zlib.h>
+
+#include <algorithm>
+#include <cstring>
+#include <deque>
+#include <limits>
+#include <map>
+#include <type_traits>
+
+#include "internal/check.h"
+#include "lsgd/error.h"
+#include "lsgd/io/config.h"
+
+#ifndef LSGD_VERSION
+#define LSGD_VERSION "unknown"
+#endif
+
+namespace lsgd::io {
+namespace {
+
+using internal::concat;
+
+constexpr int kOrbBytes = 32;                                             // per keypoint
+constexpr std::size_t kFeatureBytes = 2 * sizeof(float) + kOrbBytes;      // x, y, descriptor
+constexpr std::int64_t kNull = std::numeric_limits<std::int64_t>::min();  // NULL in checksums
+
+template <typename... Parts>
+[[noreturn]] void format_error(const std::string& path, const Parts&... parts) {
+  throw FormatError(concat("database ", path, ": ", parts...));
+}
+
+template <typename... Parts>
+[[noreturn]] void io_error(const std::string& path, const Parts&... parts) {
+  throw IoError(concat("database ", path, ": ", parts...));
+}
+
+// ---- little-endian blobs (memcpy on little-endian hosts)
+
+constexpr bool kLittleEndian = __BYTE_ORDER__ == __ORDER_LITTLE_ENDIAN__;
+
+template <typename T>
+void encode_le(const T* values, std::size_t n, std::vector<std::uint8_t>& out) {
+  static_assert(std::is_unsigned_v<T>);
+  const std::size_t start = out.size();
+  out.resize(start + n * sizeof(T));
+  std::uint8_t* dst = out.data() + start;
+  if constexpr (kLittleEndian) {
+    if (n > 0) std::memcpy(dst, values, n * sizeof(T));
+  } else {
+    for (std::size_t i = 0; i < n; ++i) {
+      for (std::size_t b = 0; b < sizeof(T); ++b)
+        dst[i * sizeof(T) + b] = (values[i] >> (8 * b)) & 0xFF;
+    }
+  }
+}
+
+template <typename T>
+void decode_le(const std::uint8_t* src, std::size_t n, T* values) {
+  static_assert(std::is_unsigned_v<T>);
+  if constexpr (kLittleEndian) {
+    if (n > 0) std::memcpy(values, src, n * sizeof(T));
+  } else {
+    for (std::size_t i = 0; i < n; ++i) {
+      T v = 0;
+      for (std::size_t b = 0; b < sizeof(T); ++b)
+        v |= static_cast<T>(src[i * sizeof(T) + b]) << (8 * b);
+      values[i] = v;
+    }
+  }
+}
+
+// ---- checksums (zlib's CRC-32; python3 -c "import zlib" recomputes them)
+
+std::uint32_t crc_bytes(std::uint32_t crc, const void* data, std::size_t n) {
+  const auto* p = static_cast<const Bytef*>(data);
+  while (n > 0) {  // crc32() takes a uInt length
+    const auto chunk = static_cast<uInt>(std::min<std::size_t>(n, 1u << 30));
+    crc = static_cast<std::uint32_t>(crc32(crc, p, chunk));
+    p += chunk;
+    n -= chunk;
+  }
+  return crc;
+}
+
+std::uint32_t crc_int(std::uint32_t crc, std::int64_t v) {
+  std::uint8_t b[8];
+  for (int i = 0; i < 8; ++i)
+    b[i] = static_cast<std::uint8_t>(static_cast<std::uint64_t>(v) >> (8 * i));
+  return crc_bytes(crc, b, 8);
+}
+
+// A blob: its length as an int64 (-1 for NULL), then its bytes.
+std::uint32_t crc_blob(std::uint32_t crc, const void* data, std::int64_t n) {
+  crc = crc_int(crc, n);
+  return n > 0 ? crc_bytes(crc, data, static_cast<std::size_t>(n)) : crc;
+}
+
+struct RowBytes {
+  std::int64_t id = 0, session = 0, node = kNull, place = kNull;
+  const void* name = nullptr;
+  std::int64_t name_size = 0;
+  const void* hist = nullptr;
+  std::int64_t hist_size = 0;
+  const void* pixels = nullptr;
+  std::int64_t pixels_size = 0;
+  const void* features = nullptr;
+  std::int64_t features_size = -1;  // -1: NULL
+};
+
+// CRC-32 of a frame row: id, session, node, place as int64 little-endian
+// (NULL = INT64_MIN), then name, histogram, pixels, features as blobs.
+std::uint32_t row_checksum(const RowBytes& r) {
+  std::uint32_t crc = static_cast<std::uint32_t>(crc32(0, Z_NULL, 0));
+  crc = crc_int(crc, r.id);
+  crc = crc_int(crc, r.session);
+  crc = crc_int(crc, r.node);
+  crc = crc_int(crc, r.place);
+  crc = crc_blob(crc, r.name, r.name_size);
+  crc = crc_blob(crc, r.hist, r.hist_size);
+  crc = crc_blob(crc, r.pixels, r.pixels_size);
+  crc = crc_blob(crc, r.features, r.features_size);
+  return crc;
+}
+
+// CRC-32 of "key=value\n" for every meta key but "checksum", keys in order.
+std::uint32_t meta_checksum(const std::map<std::string, std::string>& meta) {
+  std::string text;
+  for (const auto& [key, value] : meta) {
+    if (key != "checksum") text += key + "=" + value + "\n";
+  }
+  return crc_bytes(static_cast<std::uint32_t>(crc32(0, Z_NULL, 0)), text.data(), text.size());
+}
+
+// ---- SQLite helpers
+
+class Statement {
+ public:
+  Statement() = default;
+  Statement(sqlite3* db, const std::string& path, const char* sql) {
+    if (sqlite3_prepare_v2(db, sql, -1, &stmt_, nullptr) != SQLITE_OK) {
+      const std::string message = sqlite3_errmsg(db);
+      sqlite3_finalize(stmt_);
+      stmt_ = nullptr;
+      format_error(path, "cannot read (", message, ") in: ", sql);
+    }
+  }
+  ~Statement() { sqlite3_finalize(stmt_); }
+  Statement(Statement&& o) noexcept : stmt_(o.stmt_) { o.stmt_ = nullptr; }
+  Statement& operator=(Statement&& o) noexcept {
+    std::swap(stmt_, o.stmt_);
+    return *this;
+  }
+  Statement(const Statement&) = delete;
+  Statement& operator=(const Statement&) = delete;
+  sqlite3_stmt* get() const { return stmt_; }
+
+ private:
+  sqlite3_stmt* stmt_ = nullptr;
+};
+
+// Runs statements that return no rows; any failure is an IoError (writing).
+void exec_write(sqlite3* db, const std::string& path, const char* sql) {
+  char* error = nullptr;
+  if (sqlite3_exec(db, sql, nullptr, nullptr, &error) != SQLITE_OK) {
+    const std::string message = error ? error : sqlite3_errmsg(db);
+    sqlite3_free(error);
+    io_error(path, "cannot write (", message, ")");
+  }
+}
+
+// Steps a reading statement: true for a row, false when done; an error is a FormatError.
+bool step_read(sqlite3* db, sqlite3_stmt* stmt, const std::string& path) {
+  const int rc = sqlite3_step(stmt);
+  if (rc == SQLITE_ROW) return true;
+  if (rc == SQLITE_DONE) return false;
+  const int primary = rc & 0xFF;
+  if (primary == SQLITE_BUSY || primary == SQLITE_LOCKED || primary == SQLITE_CANTOPEN ||
+      primary == SQLITE_PERM || primary == SQLITE_NOMEM) {
+    io_error(path, "cannot read (", sqlite3_errmsg(db), ")");
+  }
+  format_error(path, "damaged or not an lsgd database (SQLite: ", sqlite3_errmsg(db), ")");
+}
+
+std::string column_text(sqlite3_stmt* stmt, int column) {
+  const auto* text = sqlite3_column_text(stmt, column);
+  return text ? std::string(reinterpret_cast<const char*>(text),
+                            static_cast<std::size_t>(sqlite3_column_bytes(stmt, column)))
+              : std::string();
+}
+
+std::int64_t file_size(const std::string& path) {
+  struct stat st;
+  return ::stat(path.c_str(), &st) == 0 ? static_cast<std::int64_t>(st.st_size) : 0;
+}
+
+// Option keys "a.b.c" -> scalar text of io::to_yaml's output.
+void flatten(const YAML::Node& node, const std::string& prefix,
+             std::map<std::string, std::string>& out) {
+  if (node.IsMap()) {
+    for (const auto& item : node) {
+      const std::string key = item.first.as<std::string>();
+      flatten(item.second, prefix.empty() ? key : prefix + "." + key, out);
+    }
+  } else {
+    out[prefix] = node.Scalar();
+  }
+}
+
+std::map<std::string, std::string> flat_options(const DetectorOptions& options) {
+  std::map<std::string, std::string> out;
+  flatten(YAML::Load(to_yaml(options)), "", out);
+  return out;
+}
+
+bool starts_with(const std::string& s, const char* prefix) {
+  return s.compare(0, std::strlen(prefix), prefix) == 0;
+}
+
+const char* kSchema =
+    "CREATE TABLE meta(key TEXT PRIMARY KEY, value NOT NULL);"
+    "CREATE TABLE frames("
+    "id INTEGER PRIMARY KEY, session INTEGER NOT NULL, name TEXT NOT NULL,"
+    "histogram BLOB NOT NULL, pixels BLOB NOT NULL, node INTEGER, place INTEGER,"
+    "features BLOB, crc32 INTEGER NOT NULL);";
+
+const char* kSelectFrames =
+    "SELECT id, session, name, histogram, pixels, node, place, features, crc32 FROM frames "
+    "ORDER BY id";
+
+const char* kInsertFrame =
+    "INSERT INTO frames(id, session, name, histogram, pixels, node, place, features, crc32) "
+    "VALUES(?1, ?2, ?3, ?4, ?5, ?6, ?7, ?8, ?9)";
+
+const std::vector<std::string> kIntegerMeta = {"format_version", "width",     "height",
+                                               "grid_rows",      "grid_cols", "checksum"};
+
+}  // namespace
+
+struct Database::Impl {
+  std::string path;
+  sqlite3* db = nullptr;
+  bool writable = false;
+  std::map<std::string, std::string> meta;  // text of every value
+  DetectorOptions options;
+  int width = 0;
+  int height = 0;
+  GridSize grid{0, 0};
+  std::int64_t frames = 0;
+  std::int64_t last_session = -1;
+  std::string checked_yaml;  // options YAML already found compatible
+  Statement insert;
+  // Scratch of append(), reused between frames.
+  std::vector<std::uint8_t> hist_bytes, pixel_bytes, feature_bytes;
+  std::vector<float> points;
+  std::vector<std::uint8_t> orb;
+
+  ~Impl() {
+    insert = Statement();
+    if (db) sqlite3_close_v2(db);
+  }
+
+  void check_writable() const {
+    if (!writable) internal::throw_invalid("database ", path, " was opened read-only");
+  }
+
+  // Writes every meta row with a fresh checksum (inside the caller's transaction).
+  void write_meta() {
+    meta["checksum"] = std::to_string(meta_checksum(meta));
+    sqlite3_stmt* raw = nullptr;
+    if (sqlite3_prepare_v2(db, "INSERT OR REPLACE INTO meta(key, value) VALUES(?1, ?2)", -1, &raw,
+                           nullptr) != SQLITE_OK) {
+      sqlite3_finalize(raw);
+      io_error(path, "cannot write meta (", sqlite3_errmsg(db), ")");
+    }
+    const std::unique_ptr<sqlite3_stmt, int (*)(sqlite3_stmt*)> stmt(raw, sqlite3_finalize);
+    for (const auto& [key, value] : meta) {
+      sqlite3_bind_text(stmt.get(), 1, key.c_str(), -1, SQLITE_TRANSIENT);
+      if (std::find(kIntegerMeta.begin(), kIntegerMeta.end(), key) != kIntegerMeta.end()) {
+        sqlite3_bind_int64(stmt.get(), 2, std::stoll(value));
+      } else {
+        sqlite3_bind_text(stmt.get(), 2, value.c_str(), -1, SQLITE_TRANSIENT);
+      }
+      if (sqlite3_step(stmt.get()) != SQLITE_DONE) {
+        io_error(path, "cannot write meta key ", key, " (", sqlite3_errmsg(db), ")");
+      }
+      sqlite3_reset(stmt.get());
+    }
+  }
+
+  void load_header();
+  void insert_frame(const Detector& detector, std::int64_t frame, std::int64_t session,
+                    const std::string& name, std::int64_t node, std::int64_t place);
+};
+
+void Database::Impl::load_header() {
+  // 1. SQLite's own structural check: catches truncation and damaged pages.
+  {
+    Statement check(db, path, "PRAGMA quick_check");
+    if (step_read(db, check.get(), path)) {
+      const std::string verdict = column_text(check.get(), 0);
+      if (verdict != "ok") format_error(path, "damaged (SQLite quick_check: ", verdict, ")");
+    }
+  }
+  // A file cut at a page boundary, or cut inside its last page's unused tail,
+  // may pass quick_check (SQLite reads missing bytes as zeros): the size must
+  // be the page count times the page size. Pages still in a write-ahead log
+  // (a writer is active or crashed) are not in the file yet: skipped then.
+  if (file_size(path + "-wal") == 0) {
+    Statement size(db, path,
+                   "SELECT page_size * page_count, page_size FROM pragma_page_size, "
+                   "pragma_page_count");
+    step_read(db, size.get(), path);
+    const std::int64_t expected = sqlite3_column_int64(size.get(), 0);
+    const std::int64_t page = sqlite3_column_int64(size.get(), 1);
+    const std::int64_t actual = file_size(path);
+    if (actual != 0 && (actual < expected || actual % std::max<std::int64_t>(page, 1) != 0)) {
+      format_error(path, "truncated or damaged: ", actual, " bytes, but its header counts ",
+                   expected / std::max<std::int64_t>(page, 1), " pages of ", page, " bytes");
+    }
+  }
+  // 2. Our tables.
+  {
+    Statement tables(db, path,
+                     "SELECT count(*) FROM sqlite_schema WHERE type = 'table' AND "
+                     "name IN ('meta', 'frames')");
+    if (!step_read(db, tables.get(), path) || sqlite3_column_int(tables.get(), 0) != 2) {
+      format_error(path, "not an lsgd database (no meta and frames tables)");
+    }
+  }
+  // 3. Meta, the format version first: a newer format may change the rest.
+  std::map<std::string, int> types;
+  {
+    Statement rows(db, path, "SELECT key, value FROM meta");
+    while (step_read(db, rows.get(), path)) {
+      const std::string key = column_text(rows.get(), 0);
+      types[key] = sqlite3_column_type(rows.get(), 1);
+      meta[key] = column_text(rows.get(), 1);
+    }
+  }
+  const auto version = meta.find("format_version");
+  if (version == meta.end()) format_error(path, "not an lsgd database (no format_version in meta)");
+  if (types["format_version"] != SQLITE_INTEGER) {
+    format_error(path, "format_version '", version->second, "' is not an integer");
+  }
+  const long long format = std::stoll(version->second);
+  if (format > kDatabaseFormatVersion) {
+    format_error(path, "format version ", format, " is newer than this lsgd (", LSGD_VERSION,
+                 ") reads (", kDatabaseFormatVersion, "): use a newer lsgd");
+  }
+  if (format < 1) format_error(path, "unknown format version ", format);
+  for (const char* key :
+       {"library_version", "options", "width", "height", "grid_rows", "grid_cols", "checksum"}) {
+    if (meta.find(key) == meta.end()) format_error(path, "meta has no ", key);
+  }
+  for (const auto& key : kIntegerMeta) {
+    if (types[key] != SQLITE_INTEGER) {
+      format_error(path, "meta ", key, " '", meta[key], "' is not an integer");
+    }
+  }
+  const std::uint32_t checksum = meta_checksum(meta);
+  if (std::to_string(checksum) != meta["checksum"]) {
+    format_error(path, "meta checksum ", meta["checksum"], " does not match its content (",
+                 checksum, "): the file was modified or damaged");
+  }
+  try {
+    options = parse_config(meta["options"], "database " + path + " meta options");
+  } catch (const InvalidArgument& e) {
+    throw FormatError(e.what());
+  }
+  const auto integer = [&](const char* key, long long lo, long long hi) {
+    const long long v = std::stoll(meta[key]);
+    if (v < lo || v > hi) format_error(path, "meta ", key, " = ", v, " is out of range");
+    return static_cast<int>(v);
+  };
+  width = integer("width", 0, 1 << 20);
+  height = integer("height", 0, 1 << 20);
+  grid.rows = integer("grid_rows", 0, 1 << 20);
+  grid.cols = integer("grid_cols", 0, 1 << 20);
+  const bool sized = width > 0 && height > 0;
+  if ((width > 0) != (height > 0) ||
+      (sized && grid != grid_size(width, height, options.segmentation.superpixel_size)) ||
+      (!sized && (grid.rows != 0 || grid.cols != 0))) {
+    format_error(path, "meta frame size ", width, "x", height, " and grid ", grid.rows, "x",
+                 grid.cols, " do not match segmentation.superpixel_size ",
+                 options.segmentation.superpixel_size);
+  }
+  // 4. Frames: columns present, ids dense.
+  { Statement columns(db, path, (std::string(kSelectFrames) + " LIMIT 0").c_str()); }
+  {
+    Statement count(db, path, "SELECT count(*), min(id), max(id) FROM frames");
+    step_read(db, count.get(), path);
+    frames = sqlite3_column_int64(count.get(), 0);
+    if (frames > 0 && (sqlite3_column_int64(count.get(), 1) != 0 ||
+                       sqlite3_column_int64(count.get(), 2) != frames - 1)) {
+      format_error(path, "frame ids are not 0 .. ", frames - 1, " (", frames, " rows, ids ",
+                   sqlite3_column_int64(count.get(), 1), " .. ",
+                   sqlite3_column_int64(count.get(), 2), ")");
+    }
+    if (frames > 0 && !sized) format_error(path, frames, " frames but no frame size in meta");
+  }
+  if (frames > 0) {
+    Statement last(db, path, "SELECT session FROM frames ORDER BY id DESC LIMIT 1");
+    step_read(db, last.get(), path);
+    last_session = sqlite3_column_int64(last.get(), 0);
+  }
+}
+
+Database::Database(std::unique_ptr<Impl> impl) : impl_(std::move(impl)) {}
+Database::~Database() = default;
+Database::Database(Database&& other) noexcept = default;
+Database& Database::operator=(Database&& other) noexcept = default;
+
+Database Database::open(const std::string& path, Mode mode) {
+  struct stat st;
+  if (::stat(path.c_str(), &st) != 0) io_error(path, "cannot open (", std::strerror(errno), ")");
+  if (!S_ISREG(st.st_mode)) io_error(path, "is not a regular file");
+  auto impl = std::make_unique<Impl>();
+  impl->path = path;
+  impl->writable = mode == Mode::kReadWrite;
+  const int flags = impl->writable ? SQLITE_OPEN_READWRITE : SQLITE_OPEN_READONLY;
+  if (sqlite3_open_v2(path.c_str(), &impl->db, flags, nullptr) != SQLITE_OK) {
+    io_error(path, "cannot open (", impl->db ? sqlite3_errmsg(impl->db) : "out of memory", ")");
+  }
+  sqlite3_extended_result_codes(impl->db, 1);
+  sqlite3_busy_timeout(impl->db, 5000);
+  impl->load_header();
+  if (impl->writable) {
+    // WAL: an append writes its pages once, sequentially, to the log; FULL:
+    // the log is synced at every commit, so a committed frame survives a
+    // power loss too (docs/reliability.md, "Persistence").
+    exec_write(impl->db, path, "PRAGMA journal_mode=WAL; PRAGMA synchronous=FULL;");
+    Statement insert(impl->db, path, kInsertFrame);
+    impl->insert = std::move(insert);
+  }
+  return Database(std::move(impl));
+}
+
+Database Database::create(const std::string& path, const DetectorOptions& options) {
+  options.check();
+  struct stat st;
+  if (::stat(path.c_str(), &st) == 0) io_error(path, "already exists");
+  const std::string tmp = path + ".tmp-" + std::to_string(::getpid());
+  for (const char* suffix : {"", "-journal", "-wal", "-shm"}) ::unlink((tmp + suffix).c_str());
+  {
+    Impl impl;  // closes the temporary database on every path
+    impl.path = path;
+    if (sqlite3_open_v2(tmp.c_str(), &impl.db, SQLITE_OPEN_READWRITE | SQLITE_OPEN_CREATE,
+                        nullptr) != SQLITE_OK) {
+      const std::string message = impl.db ? sqlite3_errmsg(impl.db) : "out of memory";
+      io_error(path, "cannot create ", tmp, " (", message, ")");
+    }
+    try {
+      exec_write(impl.db, path, "PRAGMA synchronous=FULL; BEGIN;");
+      exec_write(impl.db, path, kSchema);
+      impl.meta = {{"format_version", std::to_string(kDatabaseFormatVersion)},
+                   {"library_version", LSGD_VERSION},
+                   {"options", to_yaml(options)},
+                   {"width", "0"},
+                   {"height", "0"},
+                   {"grid_rows", "0"},
+                   {"grid_cols", "0"}};
+      impl.write_meta();
+      exec_write(impl.db, path, "COMMIT; PRAGMA journal_mode=WAL;");
+    } catch (...) {
+      sqlite3_close_v2(impl.db);
+      impl.db = nullptr;
+      for (const char* suffix : {"", "-journal", "-wal", "-shm"}) ::unlink((tmp + suffix).c_str());
+      throw;
+    }
+    if (sqlite3_close(impl.db) != SQLITE_OK) io_error(path, "cannot close ", tmp);
+    impl.db = nullptr;
+  }
+  // link() fails when path exists (no silent overwrite); fall back to rename()
+  // on file systems without hard links.
+  if (::link(tmp.c_str(), path.c_str()) != 0) {
+    const int error = errno;
+    if (error == EEXIST || ::stat(path.c_str(), &st) == 0) {
+      ::unlink(tmp.c_str());
+      io_error(path, "already exists");
+    }
+    if (::rename(tmp.c_str(), path.c_str()) != 0) {
+      const int rename_error = errno;
+      ::unlink(tmp.c_str());
+      io_error(path, "cannot create (", std::strerror(error), "; ", std::strerror(rename_error),
+               ")");
+    }
+  } else {
+    ::unlink(tmp.c_str());
+  }
+  // Make the new name durable.
+  const auto slash = path.find_last_of('/');
+  const std::string dir = slash == std::string::npos ? "."
+                          : slash == 0               ? "/"
+                                                     : path.substr(0, slash);
+  const int fd = ::open(dir.c_str(), O_RDONLY | O_DIRECTORY);
+  if (fd >= 0) {
+    ::fsync(fd);
+    ::close(fd);
+  }
+  return open(path, Mode::kReadWrite);
+}
+
+const std::string& Database::path() const { return impl_->path; }
+const DetectorOptions& Database::options() const { return impl_->options; }
+std::int64_t Database::frames() const { return impl_->frames; }
+std::int64_t Database::last_session() const { return impl_->last_session; }
+
+DatabaseInfo Database::info() const {
+  const Impl& m = *impl_;
+  DatabaseInfo info;
+  info.path = m.path;
+  info.format_version = std::stoi(m.meta.at("format_version"));
+  info.library_version = m.meta.at("library_version");
+  info.options_yaml = m.meta.at("options");
+  info.width = m.width;
+  info.height = m.height;
+  info.grid = m.grid;
+  info.frames = m.frames;
+  {
+    Statement stmt(m.db, m.path,
+                   "SELECT session, count(*) FROM frames GROUP BY session ORDER BY session");
+    while (step_read(m.db, stmt.get(), m.path)) {
+      info.sessions.emplace_back(sqlite3_column_int64(stmt.get(), 0),
+                                 sqlite3_column_int64(stmt.get(), 1));
+    }
+  }
+  {
+    Statement stmt(m.db, m.path, "SELECT max(node) FROM frames");
+    if (step_read(m.db, stmt.get(), m.path) &&
+        sqlite3_column_type(stmt.get(), 0) == SQLITE_INTEGER) {
+      info.nodes = sqlite3_column_int64(stmt.get(), 0) + 1;
+    }
+  }
+  info.bytes = file_size(m.path) + file_size(m.path + "-wal");
+  return info;
+}
+
+void Database::check_compatible(const DetectorOptions& options) const {
+  const DetectorOptions& stored = impl_->options;
+  const auto mine = flat_options(stored);
+  const auto theirs = flat_options(options);
+  const std::string stages = verification_stages(stored.verification);
+  for (const auto& [key, value] : mine) {
+    if (key == "decision.threshold") continue;
+    if (stored.search.mode != SearchMode::kDynamicNodes && starts_with(key, "search.nodes."))
+      continue;
+    if (!stored.verification.temporal && starts_with(key, "verification.temporal.")) continue;
+    if (!stored.verification.geometric && starts_with(key, "verification.geometric.")) continue;
+    if (stages == "none" && key == "verification.max_candidates") continue;
+    const auto other = theirs.find(key);
+    const std::string given = other == theirs.end() ? "(missing)" : other->second;
+    if (given != value) {
+      internal::throw_invalid("database ", impl_->path, ": option ", key, " = ", given,
+                              " differs from the stored ", value,
+                              " (only decision.threshold may change when resuming)");
+    }
+  }
+}
+
+void Database::restore(Detector& detector) const {
+  const Impl& m = *impl_;
+  if (detector.size() != 0) {
+    internal::throw_invalid("database ", m.path, ": restore needs a new detector, this one holds ",
+                            detector.size(), " frames");
+  }
+  check_compatible(detector.options());
+  if (m.frames == 0) return;
+  const DetectorOptions& o = detector.options();
+  const bool nodes_mode = o.search.mode == SearchMode::kDynamicNodes;
+  const bool temporal = o.verification.temporal;
+  const bool geometric = o.verification.geometric;
+  const std::size_t keep =
+      static_cast<std::size_t>(std::max(o.verification.temporal_options.agree, 1));
+  const auto cells = static_cast<std::size_t>(m.grid.cells());
+
+  Descriptor descriptor;
+  descriptor.grid = m.grid;
+  descriptor.hist.resize(cells * kBins);
+  descriptor.pixels.resize(cells);
+  std::vector<float> points;
+  std::vector<std::uint8_t> orb;
+  std::vector<std::vector<std::int64_t>> nodes;
+  std::deque<std::int64_t> places;  // last `keep` places; kNull when not recorded
+
+  Statement stmt(m.db, m.path, kSelectFrames);
+  std::int64_t id = 0;
+  for (; step_read(m.db, stmt.get(), m.path); ++id) {
+    sqlite3_stmt* s = stmt.get();
+    const auto bad = [&](const auto&... parts) {
+      format_error(m.path, "frame ", id, ": ", parts...);
+    };
+    const auto type = [&](int column) { return sqlite3_column_type(s, column); };
+    if (type(0) != SQLITE_INTEGER || sqlite3_column_int64(s, 0) != id) bad("id is not ", id);
+    if (type(1) != SQLITE_INTEGER || sqlite3_column_int64(s, 1) < 0)
+      bad("session is not an integer >= 0");
+    if (type(2) != SQLITE_TEXT) bad("name is not text");
+    if (type(3) != SQLITE_BLOB || type(4) != SQLITE_BLOB) bad("histogram or pixels is not a blob");
+    if (type(8) != SQLITE_INTEGER) bad("crc32 is not an integer");
+    RowBytes row;
+    row.id = id;
+    row.session = sqlite3_column_int64(s, 1);
+    row.hist = sqlite3_column_blob(s, 3);
+    row.hist_size = sqlite3_column_bytes(s, 3);
+    row.pixels = sqlite3_column_blob(s, 4);
+    row.pixels_size = sqlite3_column_bytes(s, 4);
+    if (row.hist_size != static_cast<std::int64_t>(cells * kBins * sizeof(Bin))) {
+      bad("histogram blob has ", row.hist_size, " bytes, expected ", cells * kBins * sizeof(Bin),
+          " (", m.grid.rows, "x", m.grid.cols, " cells of ", kBins, " 16-bit bins)");
+    }
+    if (row.pixels_size != static_cast<std::int64_t>(cells * sizeof(Count))) {
+      bad("pixels blob has ", row.pixels_size, " bytes, expected ", cells * sizeof(Count));
+    }
+    if (nodes_mode) {
+      if (type(5) != SQLITE_INTEGER) bad("node is not an integer (search mode nodes)");
+      row.node = sqlite3_column_int64(s, 5);
+    } else if (type(5) != SQLITE_NULL) {
+      bad("has a node but the search mode is exhaustive");
+    }
+    if (type(6) == SQLITE_INTEGER) {
+      row.place = sqlite3_column_int64(s, 6);
+      if (!temporal) bad("has a temporal place but temporal verification is off");
+      if (row.place < -1 || row.place >= id)
+        bad("temporal place ", row.place, " is not an earlier frame");
+    } else if (type(6) != SQLITE_NULL) {
+      bad("place is not an integer");
+    }
+    if (geometric) {
+      if (type(7) != SQLITE_BLOB) bad("features is not a blob (geometric verification is on)");
+      row.features = sqlite3_column_blob(s, 7);
+      row.features_size = sqlite3_column_bytes(s, 7);
+      if (row.features_size % static_cast<std::int64_t>(kFeatureBytes) != 0) {
+        bad("features blob has ", row.features_size, " bytes, not a multiple of ", kFeatureBytes);
+      }
+    } else if (type(7) != SQLITE_NULL) {
+      bad("has ORB features but geometric verification is off");
+    }
+    const std::string name = column_text(s, 2);  // after the blobs: text conversion is not needed
+    row.name = name.data();
+    row.name_size = static_cast<std::int64_t>(name.size());
+    const std::uint32_t crc = row_checksum(row);
+    if (static_cast<std::int64_t>(crc) != sqlite3_column_int64(s, 8)) {
+      bad("checksum ", sqlite3_column_int64(s, 8), " does not match the row (", crc,
+          "): the file was modified or damaged");
+    }
+
+    decode_le(static_cast<const std::uint8_t*>(row.hist), cells * kBins, descriptor.hist.data());
+    decode_le(static_cast<const std::uint8_t*>(row.pixels), cells, descriptor.pixels.data());
+    points.clear();
+    orb.clear();
+    if (geometric) {
+      const auto n = static_cast<std::size_t>(row.features_size) / kFeatureBytes;
+      const auto* bytes = static_cast<const std::uint8_t*>(row.features);
+      points.resize(2 * n);
+      std::vector<std::uint32_t> bits(2 * n);
+      decode_le(bytes, 2 * n, bits.data());
+      std::memcpy(points.data(), bits.data(), bits.size() * sizeof(float));
+      orb.assign(bytes + 2 * n * sizeof(float), bytes + n * kFeatureBytes);
+    }
+    try {
+      detector.restore_frame(m.width, m.height, descriptor, points, orb);
+    } catch (const InvalidArgument& e) {
+      bad(e.what());
+    }
+    if (nodes_mode) {
+      if (row.node == static_cast<std::int64_t>(nodes.size())) {
+        nodes.emplace_back();
+      } else if (row.node < 0 || row.node > static_cast<std::int64_t>(nodes.size())) {
+        bad("node ", row.node, " does not exist yet (", nodes.size(), " nodes before this frame)");
+      }
+      nodes[static_cast<std::size_t>(row.node)].push_back(id);
+    }
+    if (temporal) {
+      places.push_back(row.place);
+      if (places.size() > keep) places.pop_front();
+    }
+  }
+  if (id != m.frames) {
+    format_error(m.path, "read ", id, " frames but the database held ", m.frames, " at open");
+  }
+  try {
+    if (nodes_mode) detector.restore_nodes(std::move(nodes));
+    if (temporal) {
+      for (std::size_t i = 0; i < places.size(); ++i) {
+        if (places[i] == kNull) {
+          format_error(m.path, "frame ", id - static_cast<std::int64_t>(places.size() - i),
+                       " has no temporal place, needed to resume temporal verification");
+        }
+      }
+      detector.restore_temporal(id - 1, {places.begin(), places.end()});
+    }
+  } catch (const InvalidArgument& e) {
+    throw FormatError(concat("database ", m.path, ": ", e.what()));
+  }
+}
+
+void Database::Impl::insert_frame(const Detector& detector, std::int64_t frame,
+                                  std::int64_t session, const std::string& name, std::int64_t node,
+                                  std::int64_t place) {
+  const DescriptorView view = detector.store().view(frame);
+  const auto cells = static_cast<std::size_t>(view.cells);
+  hist_bytes.clear();
+  pixel_bytes.clear();
+  encode_le(view.hist, cells * kBins, hist_bytes);
+  encode_le(view.pixels, cells, pixel_bytes);
+  const bool geometric = detector.options().verification.geometric;
+  feature_bytes.clear();
+  if (geometric) {
+    detector.geometric_verifier().features(frame, points, orb);
+    std::vector<std::uint32_t> bits(points.size());
+    if (!points.empty()) std::memcpy(bits.data(), points.data(), points.size() * sizeof(float));
+    encode_le(bits.data(), bits.size(), feature_bytes);
+    feature_bytes.insert(feature_bytes.end(), orb.begin(), orb.end());
+  }
+  RowBytes row;
+  row.id = frame;
+  row.session = session;
+  row.node = node;
+  row.place = place;
+  row.name = name.data();
+  row.name_size = static_cast<std::int64_t>(name.size());
+  row.hist = hist_bytes.data();
+  row.hist_size = static_cast<std::int64_t>(hist_bytes.size());
+  row.pixels = pixel_bytes.data();
+  row.pixels_size = static_cast<std::int64_t>(pixel_bytes.size());
+  if (geometric) {
+    row.features = feature_bytes.data();
+    row.features_size = static_cast<std::int64_t>(feature_bytes.size());
+  }
+  sqlite3_stmt* s = insert.get();
+  sqlite3_reset(s);
+  sqlite3_clear_bindings(s);
+  sqlite3_bind_int64(s, 1, frame);
+  sqlite3_bind_int64(s, 2, session);
+  sqlite3_bind_text(s, 3, name.c_str(), static_cast<int>(name.size()), SQLITE_STATIC);
+  sqlite3_bind_blob(s, 4, hist_bytes.data(), static_cast<int>(hist_bytes.size()), SQLITE_STATIC);
+  sqlite3_bind_blob(s, 5, pixel_bytes.data(), static_cast<int>(pixel_bytes.size()), SQLITE_STATIC);
+  if (node != kNull) sqlite3_bind_int64(s, 6, node);
+  if (place != kNull) sqlite3_bind_int64(s, 7, place);
+  if (geometric) {
+    if (feature_bytes.empty()) {
+      sqlite3_bind_zeroblob(s, 8, 0);
+    } else {
+      sqlite3_bind_blob(s, 8, feature_bytes.data(), static_cast<int>(feature_bytes.size()),
+                        SQLITE_STATIC);
+    }
+  }
+  sqlite3_bind_int64(s, 9, row_checksum(row));
+  const int rc = sqlite3_step(s);
+  sqlite3_reset(s);
+  if (rc != SQLITE_DONE)
+    io_error(path, "cannot write frame ", frame, " (", sqlite3_errmsg(db), ")");
+}
+
+namespace {
+
+// Runs `write` in one IMMEDIATE transaction; rolls back if it throws.
+template <typename F>
+void transaction(sqlite3* db, const std::string& path, F&& write) {
+  exec_write(db, path, "BEGIN IMMEDIATE");
+  try {
+    write();
+    exec_write(db, path, "COMMIT");
+  } catch (...) {
+    sqlite3_exec(db, "ROLLBACK", nullptr, nullptr, nullptr);
+    throw;
+  }
+}
+
+}  // namespace
+
+void Database::append(const Detector& detector, const Result& result, std::int64_t session,
+                      const std::string& name) {
+  Impl& m = *impl_;
+  m.check_writable();
+  if (session < 0) internal::throw_invalid("database ", m.path, ": session ", session, " < 0");
+  if (result.frame != m.frames || detector.size() != m.frames + 1) {
+    internal::throw_invalid("database ", m.path, ": append of frame ", result.frame,
+                            " from a detector holding ", detector.size(),
+                            " frames, but the database holds ", m.frames,
+                            " (append each frame right after process())");
+  }
+  const std::string yaml = to_yaml(detector.options());
+  if (yaml != m.checked_yaml) {
+    check_compatible(detector.options());
+    m.checked_yaml = yaml;
+  }
+  const DetectorOptions& o = detector.options();
+  std::int64_t node = kNull, place = kNull;
+  if (o.search.mode == SearchMode::kDynamicNodes) node = result.node;
+  if (o.verification.temporal) {
+    const TemporalVerifier& t = detector.temporal_verifier();
+    if (t.last_query() != result.frame || t.places().empty()) {
+      internal::throw_invalid("database ", m.path, ": the temporal verifier's last query is ",
+                              t.last_query(), ", not frame ", result.frame);
+    }
+    place = t.places().back();
+  }
+  transaction(m.db, m.path, [&] {
+    std::map<std::string, std::string> saved = m.meta;
+    if (m.frames == 0) {
+      m.meta["width"] = std::to_string(detector.width());
+      m.meta["height"] = std::to_string(detector.height());
+      m.meta["grid_rows"] = std::to_string(detector.store().grid().rows);
+      m.meta["grid_cols"] = std::to_string(detector.store().grid().cols);
+      try {
+        m.write_meta();
+      } catch (...) {
+        m.meta = saved;
+        throw;
+      }
+    }
+    try {
+      m.insert_frame(detector, result.frame, session, name, node, place);
+    } catch (...) {
+      m.meta = saved;
+      throw;
+    }
+  });
+  if (m.frames == 0) {
+    m.width = detector.width();
+    m.height = detector.height();
+    m.grid = detector.store().grid();
+  }
+  ++m.frames;
+  m.last_session = session;
+}
+
+void Database::append_all(const Detector& detector, std::int64_t session) {
+  Impl& m = *impl_;
+  m.check_writable();
+  if (session < 0) internal::throw_invalid("database ", m.path, ": session ", session, " < 0");
+  if (detector.size() < m.frames) {
+    internal::throw_invalid("database ", m.path, ": the detector holds ", detector.size(),
+                            " frames, fewer than the ", m.frames, " stored");
+  }
+  if (detector.size() == m.frames) return;
+  check_compatible(detector.options());
+  const DetectorOptions& o = detector.options();
+  std::vector<std::int64_t> node_of;
+  if (o.search.mode == SearchMode::kDynamicNodes) {
+    node_of.assign(static_cast<std::size_t>(detector.size()), kNull);
+    const DynamicNodes& nodes = detector.dynamic_nodes();
+    for (std::int64_t k = 0; k < nodes.size(); ++k) {
+      for (const std::int64_t f : nodes.members(k)) node_of[static_cast<std::size_t>(f)] = k;
+    }
+  }
+  std::vector<std::int64_t> places;
+  std::int64_t first_place = detector.size();
+  if (o.verification.temporal) {
+    places = detector.temporal_verifier().places();
+    first_place =
+        detector.temporal_verifier().last_query() + 1 - static_cast<std::int64_t>(places.size());
+  }
+  const std::int64_t first = m.frames;
+  transaction(m.db, m.path, [&] {
+    const std::map<std::string, std::string> saved = m.meta;
+    try {
+      if (first == 0) {
+        m.meta["width"] = std::to_string(detector.width());
+        m.meta["height"] = std::to_string(detector.height());
+        m.meta["grid_rows"] = std::to_string(detector.store().grid().rows);
+        m.meta["grid_cols"] = std::to_string(detector.store().grid().cols);
+        m.write_meta();
+      }
+      for (std::int64_t f = first; f < detector.size(); ++f) {
+        const std::int64_t node = node_of.empty() ? kNull : node_of[static_cast<std::size_t>(f)];
+        const std::int64_t place =
+            f >= first_place ? places[static_cast<std::size_t>(f - first_place)] : kNull;
+        m.insert_frame(detector, f, session, "", node, place);
+      }
+    } catch (...) {
+      m.meta = saved;
+      throw;
+    }
+  });
+  if (first == 0) {
+    m.width = detector.width();
+    m.height = detector.height();
+    m.grid = detector.store().grid();
+  }
+  m.frames = detector.size();
+  m.last_session = session;
+}
+
+}  // namespace lsgd::io

@@ -1,0 +1,586 @@
+// Tests of the persistence of the detector (include/lsgd/io/database.h):
+// resuming gives exactly the results of an uninterrupted run (both search
+// modes, temporal and temporal+geometric verification), sessions, option
+// compatibility, damaged files (not SQLite, truncated at many lengths, bytes
+// flipped anywhere, edited rows and meta) and `lsgd run --database` /
+// `lsgd db info` end to end.
+#include "lsgd/io/database.h"
+
+#include <gtest/gtest.h>
+#include <sqlite3.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <cstdio>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <iterator>
+#include <map>
+#include <nlohmann/json.hpp>
+#include <opencv2/core.hpp>
+#include <opencv2/imgcodecs.hpp>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "lsgd/error.h"
+#include "lsgd/eval/synthetic.h"
+#include "test_util.h"
+
+namespace lsgd::io {
+namespace {
+
+namespace fs = std::filesystem;
+using test::message_of;
+
+// The synthetic street at 160x120, route_scale 0.3: 327 frames, the first
+// revisit (A') from frame ~90.
+const eval::SyntheticWorld& world() {
+  static const eval::SyntheticWorld w([] {
+    eval::SyntheticOptions o;
+    o.width = 160;
+    o.height = 120;
+    o.route_scale = 0.3;
+    return o;
+  }());
+  return w;
+}
+
+const cv::Mat& frame(std::int64_t i) {
+  static std::vector<cv::Mat> frames(static_cast<std::size_t>(world().frames()));
+  cv::Mat& f = frames[static_cast<std::size_t>(i)];
+  if (f.empty()) f = world().render(i);
+  return f;
+}
+
+std::string temp_path(const std::string& name) {
+  fs::create_directories(LSGD_TEST_TMP);
+  const std::string path = std::string(LSGD_TEST_TMP) + "/database_" + name;
+  fs::remove_all(path);
+  for (const char* suffix : {"-wal", "-shm", "-journal"}) fs::remove(path + suffix);
+  return path;
+}
+
+DetectorOptions options(SearchMode mode, const std::string& stages) {
+  DetectorOptions o;
+  o.search.mode = mode;
+  o.search.min_gap = 20;
+  parse_verification_stages(stages, o.verification);
+  return o;
+}
+
+// Everything a Result reports except timings.
+void expect_same(const Result& a, const Result& b) {
+  SCOPED_TRACE("frame " + std::to_string(a.frame));
+  EXPECT_EQ(a.frame, b.frame);
+  EXPECT_EQ(a.loop, b.loop);
+  EXPECT_EQ(a.best.frame, b.best.frame);
+  EXPECT_EQ(a.best.score, b.best.score);
+  ASSERT_EQ(a.candidates.size(), b.candidates.size());
+  for (std::size_t i = 0; i < a.candidates.size(); ++i) {
+    EXPECT_EQ(a.candidates[i].frame, b.candidates[i].frame);
+    EXPECT_EQ(a.candidates[i].score, b.candidates[i].score);
+  }
+  ASSERT_EQ(a.verification.size(), b.verification.size());
+  for (std::size_t i = 0; i < a.verification.size(); ++i) {
+    EXPECT_EQ(a.verification[i].candidate, b.verification[i].candidate);
+    EXPECT_EQ(a.verification[i].stage, b.verification[i].stage);
+    EXPECT_EQ(a.verification[i].accepted, b.verification[i].accepted);
+    EXPECT_EQ(a.verification[i].reason, b.verification[i].reason);
+  }
+  EXPECT_EQ(a.node, b.node);
+  EXPECT_EQ(a.node_created, b.node_created);
+}
+
+// The full state two detectors hold: descriptors, nodes, temporal places, features.
+void expect_same_state(const Detector& a, const Detector& b) {
+  ASSERT_EQ(a.size(), b.size());
+  EXPECT_EQ(a.width(), b.width());
+  EXPECT_EQ(a.height(), b.height());
+  for (std::int64_t f = 0; f < a.size(); ++f) {
+    const DescriptorView x = a.store().view(f), y = b.store().view(f);
+    ASSERT_EQ(x.cells, y.cells);
+    ASSERT_TRUE(std::equal(x.hist, x.hist + x.cells * kBins, y.hist)) << "frame " << f;
+    ASSERT_TRUE(std::equal(x.pixels, x.pixels + x.cells, y.pixels)) << "frame " << f;
+  }
+  ASSERT_EQ(a.nodes(), b.nodes());
+  for (std::int64_t k = 0; k < a.nodes(); ++k) {
+    EXPECT_EQ(a.dynamic_nodes().members(k), b.dynamic_nodes().members(k));
+  }
+  EXPECT_EQ(a.temporal_verifier().last_query(), b.temporal_verifier().last_query());
+  EXPECT_EQ(a.temporal_verifier().places(), b.temporal_verifier().places());
+  ASSERT_EQ(a.geometric_verifier().size(), b.geometric_verifier().size());
+  std::vector<float> pa, pb;
+  std::vector<std::uint8_t> da, db;
+  for (std::int64_t f = 0; f < a.geometric_verifier().size(); ++f) {
+    a.geometric_verifier().features(f, pa, da);
+    b.geometric_verifier().features(f, pb, db);
+    EXPECT_EQ(pa, pb);
+    EXPECT_EQ(da, db);
+  }
+}
+
+// Frames [first, last) through `detector`, each appended to `db` when given.
+std::vector<Result> run(Detector& detector, std::int64_t first, std::int64_t last,
+                        Database* db = nullptr, std::int64_t session = 0) {
+  std::vector<Result> results;
+  for (std::int64_t i = first; i < last; ++i) {
+    results.push_back(detector.process(frame(i)));
+    if (db) db->append(detector, results.back(), session, "frame" + std::to_string(i));
+  }
+  return results;
+}
+
+struct ResumeCase {
+  SearchMode mode;
+  const char* stages;
+  std::int64_t frames;  // M
+  std::int64_t split;   // N
+  bool append_all;      // save with append_all() instead of per-frame append()
+};
+
+void PrintTo(const ResumeCase& c, std::ostream* out) {
+  *out << to_string(c.mode) << " " << c.stages << ", frames " << c.frames << ", split at "
+       << c.split << (c.append_all ? ", append_all" : "");
+}
+
+class Resume : public ::testing::TestWithParam<ResumeCase> {};
+
+TEST_P(Resume, EqualsUninterruptedRun) {
+  const ResumeCase c = GetParam();
+  const DetectorOptions o = options(c.mode, c.stages);
+  Detector reference(o);
+  const std::vector<Result> expected = run(reference, 0, c.frames);
+
+  std::string stages = c.stages;
+  std::replace(stages.begin(), stages.end(), ',', '_');
+  const std::string path = temp_path(std::string("resume_") + to_string(c.mode) + "_" + stages +
+                                     (c.append_all ? "_all" : ""));
+  {
+    Database db = Database::create(path, o);
+    Detector first(o);
+    const auto head = run(first, 0, c.split, c.append_all ? nullptr : &db);
+    if (c.append_all) db.append_all(first, 0);
+    EXPECT_EQ(db.frames(), c.split);
+  }
+  Database db = Database::open(path);
+  Detector resumed(o);
+  db.restore(resumed);
+  ASSERT_EQ(resumed.size(), c.split);
+  const auto tail = run(resumed, c.split, c.frames, &db);
+  std::int64_t loops_to_before_split = 0;
+  for (std::size_t i = 0; i < tail.size(); ++i) {
+    expect_same(tail[i], expected[static_cast<std::size_t>(c.split) + i]);
+    if (tail[i].loop && tail[i].best.frame < c.split) ++loops_to_before_split;
+  }
+  // The comparison means something: the resumed detector found loops (B' to B)
+  // to frames it only loaded.
+  EXPECT_GE(loops_to_before_split, 10);
+  EXPECT_EQ(db.frames(), c.frames);
+  expect_same_state(resumed, reference);
+
+  // The whole file, loaded again, is the uninterrupted detector's state.
+  Detector again(o);
+  Database::open(path, Database::Mode::kReadOnly).restore(again);
+  expect_same_state(again, reference);
+}
+
+INSTANTIATE_TEST_SUITE_P(
+    Modes, Resume,
+    ::testing::Values(ResumeCase{SearchMode::kExhaustive, "temporal", 260, 110, false},
+                      ResumeCase{SearchMode::kDynamicNodes, "temporal", 260, 125, false},
+                      ResumeCase{SearchMode::kExhaustive, "none", 260, 100, false},
+                      ResumeCase{SearchMode::kDynamicNodes, "temporal", 260, 140, true},
+                      ResumeCase{SearchMode::kExhaustive, "temporal,geometric", 190, 150, false},
+                      ResumeCase{SearchMode::kDynamicNodes, "temporal,geometric", 190, 163, false}),
+    [](const ::testing::TestParamInfo<ResumeCase>& param) {
+      std::string name = std::string(to_string(param.param.mode)) + "_" + param.param.stages +
+                         (param.param.append_all ? "_append_all" : "");
+      std::replace(name.begin(), name.end(), ',', '_');
+      return name;
+    });
+
+TEST(Database, SessionsFindLoopsAcrossSessions) {
+  // Session 0 drives A and B, session 1 drives C, B' (the revisit of B, with
+  // moving objects) and D.
+  const auto& route = world().route();
+  ASSERT_GE(route.size(), 6u);
+  ASSERT_TRUE(route[4].revisit);
+  const DetectorOptions o = options(SearchMode::kExhaustive, "temporal");
+  const std::string path = temp_path("sessions");
+  std::int64_t session0 = 0;
+  {
+    Database db = Database::create(path, o);
+    EXPECT_EQ(db.last_session(), -1);
+    Detector detector(o);
+    run(detector, 0, route[1].last_frame + 1, &db, 0);
+    session0 = db.frames();
+  }
+  Database db = Database::open(path);
+  EXPECT_EQ(db.last_session(), 0);
+  Detector detector(o);
+  db.restore(detector);
+  std::int64_t cross = 0, correct = 0;
+  const std::int64_t first = route[3].first_frame, last = route[5].last_frame;
+  for (std::int64_t i = first; i <= last; ++i) {
+    const Result r = detector.process(frame(i));
+    db.append(detector, r, 1, "revisit");
+    if (r.loop && r.best.frame < session0) {
+      ++cross;
+      // Map the result's frame id back to the world's frame to check the place.
+      const std::int64_t world_frame = first + (r.frame - session0);
+      correct += world().ground_truth().is_loop(world_frame, r.best.frame) ? 1 : 0;
+    }
+  }
+  EXPECT_GE(cross, 15);
+  EXPECT_GE(correct, cross * 9 / 10);
+  const DatabaseInfo info = db.info();
+  ASSERT_EQ(info.sessions.size(), 2u);
+  EXPECT_EQ(info.sessions[0], std::make_pair(std::int64_t{0}, session0));
+  EXPECT_EQ(info.sessions[1].first, 1);
+  EXPECT_EQ(info.sessions[1].second, last - first + 1);
+  EXPECT_EQ(info.frames, db.frames());
+  EXPECT_EQ(info.width, 160);
+  EXPECT_EQ(info.height, 120);
+  EXPECT_EQ(info.format_version, kDatabaseFormatVersion);
+  EXPECT_GT(info.bytes, info.frames * 12 * 512);
+}
+
+TEST(Database, OptionsMustMatchExceptThreshold) {
+  const DetectorOptions o = options(SearchMode::kExhaustive, "temporal");
+  const std::string path = temp_path("options");
+  Database db = Database::create(path, o);
+  DetectorOptions other = o;
+  other.search.min_gap = 40;
+  const std::string message = message_of<InvalidArgument>([&] { db.check_compatible(other); });
+  EXPECT_NE(message.find("search.min_gap = 40"), std::string::npos) << message;
+  EXPECT_NE(message.find("stored 20"), std::string::npos) << message;
+  EXPECT_NE(message.find(path), std::string::npos) << message;
+  Detector wrong(other);
+  EXPECT_NE(message_of<InvalidArgument>([&] { db.restore(wrong); }).find("search.min_gap"),
+            std::string::npos);
+
+  other = o;
+  other.segmentation.superpixel_size = 30;
+  EXPECT_NE(message_of<InvalidArgument>([&] {
+              db.check_compatible(other);
+            }).find("segmentation.superpixel_size = 30"),
+            std::string::npos);
+  other = o;
+  parse_verification_stages("temporal,geometric", other.verification);
+  EXPECT_NE(
+      message_of<InvalidArgument>([&] { db.check_compatible(other); }).find("verification.stages"),
+      std::string::npos);
+  other = o;
+  other.similarity.metric = SimilarityMetric::kL1;
+  EXPECT_NE(
+      message_of<InvalidArgument>([&] { db.check_compatible(other); }).find("similarity.metric"),
+      std::string::npos);
+
+  // The decision threshold, and options of stages and modes not in use, may differ.
+  other = o;
+  other.decision.threshold = 0.5;
+  other.verification.geometric_options.min_inliers = 50;
+  other.search.nodes.beta = 1.1;
+  EXPECT_NO_THROW(db.check_compatible(other));
+  Detector fine(other);
+  EXPECT_NO_THROW(db.restore(fine));
+
+  // A detector that already holds frames cannot be restored into.
+  Detector used(o);
+  used.process(frame(0));
+  EXPECT_NE(message_of<InvalidArgument>([&] { db.restore(used); }).find("new detector"),
+            std::string::npos);
+  // Appends must follow the database's frame count.
+  Result r = used.process(frame(1));
+  EXPECT_NE(message_of<InvalidArgument>([&] { db.append(used, r, 0); }).find("holds 0"),
+            std::string::npos);
+}
+
+TEST(Database, CreateIsAtomicAndNeverOverwrites) {
+  const std::string path = temp_path("create");
+  const DetectorOptions o = options(SearchMode::kExhaustive, "temporal");
+  { Database db = Database::create(path, o); }
+  const std::string dir = fs::path(path).parent_path();
+  for (const auto& entry : fs::directory_iterator(dir)) {
+    EXPECT_EQ(entry.path().string().find(".tmp-"), std::string::npos) << entry.path();
+  }
+  EXPECT_NE(message_of<IoError>([&] { Database::create(path, o); }).find("already exists"),
+            std::string::npos);
+  const std::string missing = temp_path("missing");
+  EXPECT_NE(message_of<IoError>([&] { Database::open(missing); }).find(missing), std::string::npos);
+  const std::string no_dir = std::string(LSGD_TEST_TMP) + "/no/such/dir/x.db";
+  EXPECT_NE(message_of<IoError>([&] { Database::create(no_dir, o); }).find(no_dir),
+            std::string::npos);
+  // Read-only handles refuse to append.
+  Database ro = Database::open(path, Database::Mode::kReadOnly);
+  Detector d(o);
+  const Result r = d.process(frame(0));
+  EXPECT_NE(message_of<InvalidArgument>([&] { ro.append(d, r, 0); }).find("read-only"),
+            std::string::npos);
+}
+
+// ---- damaged files
+
+// A small valid database: 12 frames, nodes mode, temporal + geometric (every column in use).
+const std::string& small_database() {
+  static const std::string path = [] {
+    // Per process: ctest runs the tests that share this file in parallel.
+    const std::string p = temp_path("small_" + std::to_string(::getpid()));
+    DetectorOptions o = options(SearchMode::kDynamicNodes, "temporal,geometric");
+    o.search.min_gap = 2;
+    o.verification.geometric_options.max_features = 32;
+    Database db = Database::create(p, o);
+    Detector d(o);
+    run(d, 0, 12, &db);
+    return p;
+  }();
+  return path;
+}
+
+std::string read_bytes(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
+}
+
+void write_bytes(const std::string& path, const std::string& bytes) {
+  for (const char* suffix : {"-wal", "-shm", "-journal"}) fs::remove(path + suffix);
+  std::ofstream out(path, std::ios::binary | std::ios::trunc);
+  out.write(bytes.data(), static_cast<std::streamsize>(bytes.size()));
+}
+
+// Opens and restores `path`; returns the FormatError's message, or "" when it loaded.
+std::string load(const std::string& path, Detector* out = nullptr) {
+  try {
+    Database db = Database::open(path, Database::Mode::kReadOnly);
+    Detector d(db.options());
+    db.restore(d);
+    if (out) {
+      Detector copy(db.options());
+      Database::open(path, Database::Mode::kReadOnly).restore(copy);
+      expect_same_state(copy, d);
+    }
+    return "";
+  } catch (const FormatError& e) {
+    return e.what();
+  }
+}
+
+TEST(DatabaseDamage, NotSqliteOrEmpty) {
+  const std::string path = temp_path("text");
+  write_bytes(path, "frame,image,loop_frame\n0,a.png,-1\n");
+  std::string m = load(path);
+  EXPECT_NE(m.find(path), std::string::npos) << m;
+  write_bytes(path, "");
+  m = load(path);
+  EXPECT_NE(m.find("not an lsgd database"), std::string::npos) << m;
+  EXPECT_NE(m.find(path), std::string::npos) << m;
+  EXPECT_EQ(fs::file_size(path), 0u);  // opening did not turn it into a database
+  // An SQLite file of another program.
+  fs::remove(path);
+  sqlite3* db = nullptr;
+  ASSERT_EQ(sqlite3_open(path.c_str(), &db), SQLITE_OK);
+  sqlite3_exec(db, "CREATE TABLE t(x); INSERT INTO t VALUES(1);", nullptr, nullptr, nullptr);
+  sqlite3_close(db);
+  m = load(path);
+  EXPECT_NE(m.find("not an lsgd database"), std::string::npos) << m;
+}
+
+TEST(DatabaseDamage, EveryTruncationIsAFormatError) {
+  const std::string good = read_bytes(small_database());
+  ASSERT_EQ(load(small_database()), "");
+  const std::string path = temp_path("truncated");
+  std::vector<std::size_t> lengths;
+  for (std::size_t n = 0; n <= 128; ++n) lengths.push_back(n);  // the 100-byte header and a bit
+  for (std::size_t n = 129; n < good.size(); n += 97) lengths.push_back(n);
+  for (std::size_t page = 4096; page < good.size(); page += 4096) {  // page boundaries
+    lengths.push_back(page);
+    lengths.push_back(page - 1);
+  }
+  lengths.push_back(good.size() - 1);
+  for (const std::size_t n : lengths) {
+    write_bytes(path, good.substr(0, n));
+    const std::string m = load(path);
+    ASSERT_NE(m.find(path), std::string::npos) << "truncated to " << n << " bytes: '" << m << "'";
+  }
+}
+
+TEST(DatabaseDamage, FlippedBytesAnywhereAreDetectedOrHarmless) {
+  const std::string good = read_bytes(small_database());
+  Detector original(Database::open(small_database()).options());
+  Database::open(small_database()).restore(original);
+  const std::string path = temp_path("flipped");
+  int errors = 0, harmless = 0;
+  for (std::size_t at = 0; at < good.size(); at += 61) {
+    std::string bad = good;
+    bad[at] = static_cast<char>(bad[at] ^ 0x5A);
+    write_bytes(path, bad);
+    Detector loaded(original.options());
+    const std::string m = [&]() -> std::string {
+      try {
+        Database db = Database::open(path, Database::Mode::kReadOnly);
+        db.restore(loaded);
+        return "";
+      } catch (const FormatError& e) {
+        return e.what();
+      }
+    }();
+    if (m.empty()) {
+      // Not detected: then it must not have changed anything the detector uses.
+      SCOPED_TRACE("byte " + std::to_string(at) + " flipped, no error");
+      expect_same_state(loaded, original);
+      ++harmless;
+    } else {
+      ASSERT_NE(m.find(path), std::string::npos) << m;
+      ++errors;
+    }
+  }
+  EXPECT_GT(errors, 10);
+}
+
+// Edits the database with SQL, then expects a FormatError containing `expected`.
+void expect_edit_detected(const std::string& sql, const std::string& expected) {
+  const std::string path = temp_path("edited");
+  fs::copy_file(small_database(), path);
+  sqlite3* db = nullptr;
+  ASSERT_EQ(sqlite3_open(path.c_str(), &db), SQLITE_OK);
+  char* error = nullptr;
+  ASSERT_EQ(sqlite3_exec(db, sql.c_str(), nullptr, nullptr, &error), SQLITE_OK) << error;
+  sqlite3_close(db);
+  const std::string m = load(path);
+  EXPECT_NE(m.find(path), std::string::npos) << sql << ": " << m;
+  EXPECT_NE(m.find(expected), std::string::npos) << sql << ": " << m;
+}
+
+// Flips one byte of a blob in place (same size), then expects a FormatError.
+void expect_flip_detected(const char* column, std::int64_t row, int offset,
+                          const std::string& expected) {
+  const std::string path = temp_path("edited");
+  fs::copy_file(small_database(), path);
+  sqlite3* db = nullptr;
+  ASSERT_EQ(sqlite3_open(path.c_str(), &db), SQLITE_OK);
+  sqlite3_blob* blob = nullptr;
+  ASSERT_EQ(sqlite3_blob_open(db, "main", "frames", column, row, 1, &blob), SQLITE_OK);
+  ASSERT_GT(sqlite3_blob_bytes(blob), offset);
+  unsigned char byte = 0;
+  ASSERT_EQ(sqlite3_blob_read(blob, &byte, 1, offset), SQLITE_OK);
+  byte ^= 0x01;
+  ASSERT_EQ(sqlite3_blob_write(blob, &byte, 1, offset), SQLITE_OK);
+  sqlite3_blob_close(blob);
+  sqlite3_close(db);
+  const std::string m = load(path);
+  EXPECT_NE(m.find(path), std::string::npos) << column << ": " << m;
+  EXPECT_NE(m.find(expected), std::string::npos) << column << ": " << m;
+}
+
+TEST(DatabaseDamage, EditedRowsAndMeta) {
+  expect_edit_detected("UPDATE frames SET histogram = zeroblob(10) WHERE id = 3",
+                       "frame 3: histogram blob has 10 bytes");
+  expect_edit_detected("UPDATE frames SET pixels = zeroblob(4) WHERE id = 0", "pixels blob");
+  expect_flip_detected("histogram", 5, 100, "frame 5: checksum");
+  expect_flip_detected("pixels", 7, 0, "frame 7: checksum");
+  expect_flip_detected("features", 9, 3, "frame 9: checksum");
+  expect_edit_detected("UPDATE frames SET features = x'00' WHERE id = 2", "features blob");
+  expect_edit_detected("UPDATE frames SET node = node + 7 WHERE id = 4", "frame 4");
+  expect_edit_detected("UPDATE frames SET session = 3 WHERE id = 4", "frame 4: checksum");
+  expect_edit_detected("UPDATE frames SET name = 'x' WHERE id = 4", "frame 4: checksum");
+  expect_edit_detected("DELETE FROM frames WHERE id = 6", "frame ids are not 0 .. 10");
+  expect_edit_detected("UPDATE meta SET value = 'x1' WHERE key = 'format_version'",
+                       "format_version 'x1' is not an integer");
+  expect_edit_detected("UPDATE meta SET value = 2 WHERE key = 'format_version'",
+                       "format version 2 is newer");
+  expect_edit_detected("UPDATE meta SET value = 0 WHERE key = 'format_version'",
+                       "unknown format version 0");
+  expect_edit_detected(
+      "UPDATE meta SET value = replace(value, 'min_gap: 2', 'min_gap: 3') WHERE key = 'options'",
+      "meta checksum");
+  expect_edit_detected("UPDATE meta SET value = 'garbage: [' WHERE key = 'options'",
+                       "meta checksum");
+  expect_edit_detected("DELETE FROM meta WHERE key = 'width'", "meta has no width");
+  expect_edit_detected("DROP TABLE frames", "not an lsgd database");
+}
+
+// ---- the command line
+
+#ifdef LSGD_CLI
+int run_cli(const std::string& args, const std::string& out = "") {
+  const std::string command =
+      std::string(LSGD_CLI) + " " + args + (out.empty() ? "" : " > " + out) + " 2>/dev/null";
+  return std::system(command.c_str());
+}
+
+std::vector<std::string> csv_columns(const std::string& path, std::vector<int> keep) {
+  std::ifstream in(path);
+  std::vector<std::string> rows;
+  std::string line;
+  while (std::getline(in, line)) {
+    std::vector<std::string> fields;
+    std::stringstream s(line);
+    std::string f;
+    while (std::getline(s, f, ',')) fields.push_back(f);
+    std::string row;
+    for (const int k : keep) row += (k < static_cast<int>(fields.size()) ? fields[k] : "?") + ",";
+    rows.push_back(row);
+  }
+  return rows;
+}
+
+TEST(DatabaseCli, RunResumesAndDbInfo) {
+  const std::string dir = temp_path("cli_frames");
+  fs::remove_all(dir);
+  fs::create_directories(dir + "/a");
+  fs::create_directories(dir + "/b");
+  std::ofstream all(dir + "/all.txt");
+  for (std::int64_t i = 0; i < 150; ++i) {
+    char name[32];
+    std::snprintf(name, sizeof(name), "/%04d.png", static_cast<int>(i));
+    const std::string file = dir + (i < 100 ? "/a" : "/b") + name;
+    cv::imwrite(file, frame(i));
+    all << file << "\n";
+  }
+  all.close();
+  const std::string db = temp_path("cli.db");
+  const std::string flags = " --min-gap 20 --mode nodes";
+  ASSERT_EQ(run_cli("run --sequence " + dir + "/all.txt --layout list" + flags + " --output " +
+                    dir + "/all.csv"),
+            0);
+  ASSERT_EQ(run_cli("run --sequence " + dir + "/a --database " + db + flags + " --output " + dir +
+                    "/a.csv"),
+            0);
+  // Resuming takes the stored options; a different min_gap is refused.
+  EXPECT_NE(run_cli("run --sequence " + dir + "/b --database " + db + " --min-gap 30"), 0);
+  ASSERT_EQ(run_cli("run --sequence " + dir + "/b --database " + db + " --session 7 --output " +
+                    dir + "/b.csv"),
+            0);
+  // frame, loop_frame, candidate_frame, score: equal to the uninterrupted run.
+  const auto expected = csv_columns(dir + "/all.csv", {0, 2, 3, 4});
+  auto split = csv_columns(dir + "/a.csv", {0, 2, 3, 4});
+  const auto tail = csv_columns(dir + "/b.csv", {0, 2, 3, 4});
+  split.insert(split.end(), tail.begin() + 1, tail.end());  // skip b.csv's header
+  EXPECT_EQ(split, expected);
+
+  ASSERT_EQ(run_cli("db info " + db + " --json", dir + "/info.json"), 0);
+  std::ifstream in(dir + "/info.json");
+  const nlohmann::json info = nlohmann::json::parse(in);
+  EXPECT_EQ(info["frames"], 150);
+  EXPECT_EQ(info["format_version"], kDatabaseFormatVersion);
+  ASSERT_EQ(info["sessions"].size(), 2u);
+  EXPECT_EQ(info["sessions"][0]["session"], 0);
+  EXPECT_EQ(info["sessions"][0]["frames"], 100);
+  EXPECT_EQ(info["sessions"][1]["session"], 7);
+  EXPECT_EQ(info["sessions"][1]["frames"], 50);
+  EXPECT_GT(info["nodes"].get<int>(), 0);
+  EXPECT_NE(info["options"].get<std::string>().find("mode: nodes"), std::string::npos);
+  ASSERT_EQ(run_cli("db info " + db, dir + "/info.txt"), 0);
+  const std::string text = read_bytes(dir + "/info.txt");
+  EXPECT_NE(text.find("frames: 150"), std::string::npos) << text;
+  EXPECT_NE(text.find("session 7: 50 frames"), std::string::npos) << text;
+
+  write_bytes(dir + "/bad.db", "not a database at all, just text that is long enough");
+  EXPECT_NE(run_cli("db info " + dir + "/bad.db"), 0);
+}
+#endif
+
+}  // namespace
+}  // namespace lsgd::io

@@ -1,0 +1,72 @@
+// lsgd db info FILE [--json]: what a detector database (lsgd run --database) holds.
+#include <CLI/CLI.hpp>
+#include <iostream>
+#include <memory>
+#include <nlohmann/json.hpp>
+#include <sstream>
+
+#include "commands.h"
+#include "lsgd/io/database.h"
+
+namespace lsgd::cli {
+namespace {
+
+struct DbInfoArgs {
+  std::string path;
+  bool json = false;
+};
+
+void db_info(const DbInfoArgs& args) {
+  const io::Database db = io::Database::open(args.path, io::Database::Mode::kReadOnly);
+  const io::DatabaseInfo info = db.info();
+  if (args.json) {
+    nlohmann::json sessions = nlohmann::json::array();
+    for (const auto& [session, frames] : info.sessions) {
+      sessions.push_back({{"session", session}, {"frames", frames}});
+    }
+    const nlohmann::json j = {{"path", info.path},
+                              {"format_version", info.format_version},
+                              {"library_version", info.library_version},
+                              {"width", info.width},
+                              {"height", info.height},
+                              {"grid", {{"rows", info.grid.rows}, {"cols", info.grid.cols}}},
+                              {"frames", info.frames},
+                              {"sessions", sessions},
+                              {"nodes", info.nodes},
+                              {"bytes", info.bytes},
+                              {"options", info.options_yaml}};
+    std::cout << j.dump(2) << "\n";
+    return;
+  }
+  std::cout << "database: " << info.path << "\n"
+            << "format version: " << info.format_version << " (written by lsgd "
+            << info.library_version << ")\n"
+            << "frame size: " << info.width << "x" << info.height << ", grid " << info.grid.rows
+            << "x" << info.grid.cols << "\n"
+            << "frames: " << info.frames << "\n"
+            << "sessions: " << info.sessions.size() << "\n";
+  for (const auto& [session, frames] : info.sessions) {
+    std::cout << "  session " << session << ": " << frames << " frames\n";
+  }
+  std::cout << "nodes: " << info.nodes << "\n"
+            << "bytes: " << info.bytes << "\n"
+            << "options:\n";
+  std::string line;
+  std::istringstream yaml(info.options_yaml);
+  while (std::getline(yaml, line)) std::cout << "  " << line << "\n";
+}
+
+}  // namespace
+
+void register_db(CLI::App& app) {
+  CLI::App* cmd = app.add_subcommand("db", "inspect a detector database (lsgd run --database)");
+  cmd->require_subcommand(1);
+  auto args = std::make_shared<DbInfoArgs>();
+  CLI::App* info = cmd->add_subcommand(
+      "info", "format version, options, frames per session, nodes and size of a database");
+  info->add_option("FILE", args->path, "database written by lsgd run --database")->required();
+  info->add_flag("--json", args->json, "print JSON instead of text");
+  info->callback([args] { db_info(*args); });
+}
+
+}  // namespace lsgd::cli

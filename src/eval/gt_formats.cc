@@ -222,6 +222,24 @@ Container check_container(const std::string& path, mat_ft version) {
       read_at(pos, b, 8);
       const V5Element e{pos, u32(b, c.swapped), u32(b + 4, c.swapped)};
       if (e.bytes > size - pos - 8) throw truncated(pos, std::uint64_t{e.bytes} + 8);
+      if (e.type == kMiMatrix) {
+        // matio allocates what the flags, dimensions and name sub-elements
+        // claim before reading them: each must fit its matrix element.
+        std::uint64_t at = pos + 8;
+        const std::uint64_t end = at + e.bytes;
+        for (int sub = 0; sub < 3 && at < end; ++sub) {
+          if (end - at < 8) throw truncated(at, 8);
+          read_at(at, b, 8);
+          const std::uint32_t first = u32(b, c.swapped);
+          if ((first >> 16) != 0) {  // small element: type and size in one word, data inline
+            at += 8;
+            continue;
+          }
+          const std::uint64_t bytes = u32(b + 4, c.swapped);
+          if (bytes > end - at - 8) throw truncated(at, bytes + 8);
+          at += 8 + (bytes + 7) / 8 * 8;
+        }
+      }
       c.elements.push_back(e);
       pos += 8 + std::uint64_t{e.bytes};
       if (e.type != kMiCompressed) pos = std::min(size, (pos + 7) / 8 * 8);

@@ -2,8 +2,6 @@
 // files, the lenient reference protocol, subsampling and dataset layouts.
 // They run the real binary on a short synthetic street and tiny layouts.
 #include <gtest/gtest.h>
-
-#include "cli_util.h"
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -18,6 +16,7 @@
 #include <sstream>
 #include <string>
 
+#include "cli_util.h"
 #include "lsgd/eval/groundtruth.h"
 #include "lsgd/eval/gt_formats.h"
 #include "lsgd/eval/gt_remap.h"
@@ -35,9 +34,7 @@ using lsgd::test::slurp;
 std::string q(const fs::path& p) { return "'" + p.string() + "'"; }
 
 // Runs `lsgd ARGS`, capturing stdout and stderr.
-CmdResult lsgd(const std::string& args) {
-  return lsgd::test::run_command(LSGD_CLI, args, kTmp);
-}
+CmdResult lsgd(const std::string& args) { return lsgd::test::run_command(LSGD_CLI, args, kTmp); }
 
 nlohmann::json read_json(const fs::path& path) { return nlohmann::json::parse(slurp(path)); }
 
@@ -117,6 +114,11 @@ TEST_F(ShortStreet, RunCsvScoredAsDetectionsMatchesEval) {
                    y["recall_at_100_precision"].get<double>());
   EXPECT_DOUBLE_EQ(x["average_precision"].get<double>(), y["average_precision"].get<double>());
   EXPECT_EQ(y["detections"], (dir_ / "run.csv").string());
+  // Per-stage p95 and peak memory, as the protocol asks.
+  EXPECT_GT(x["stage_ms_p95"]["segment"].get<double>(), 0.0);
+  EXPECT_GE(x["stage_ms_p95"]["segment"].get<double>(),
+            x["stage_ms_median"]["segment"].get<double>());
+  EXPECT_GT(x["peak_rss_mb"].get<double>(), 1.0);
   EXPECT_NE(b.out.find("no detector run"), std::string::npos) << b.out;
 }
 
@@ -194,8 +196,9 @@ TEST_F(ShortStreet, ReportWithPosesAndLoopinfGroundTruth) {
   EXPECT_NE(lone.code, 0);
   EXPECT_NE(lone.err.find("--report"), std::string::npos) << lone.err;
   write_text(kTmp / "short-poses.txt", "1 0 0 0 0 1 0 0 0 0 1 0\n");
-  const CmdResult shorter = lsgd("eval --detections " + q(dir_ / "run.csv") + common(json) +
-                                 " --report " + q(html) + " --poses " + q(kTmp / "short-poses.txt"));
+  const CmdResult shorter =
+      lsgd("eval --detections " + q(dir_ / "run.csv") + common(json) + " --report " + q(html) +
+           " --poses " + q(kTmp / "short-poses.txt"));
   EXPECT_NE(shorter.code, 0);
   EXPECT_NE(shorter.err.find("short-poses.txt"), std::string::npos) << shorter.err;
 }

@@ -120,6 +120,8 @@ TEST(Evaluate, TimingsAndPrt) {
   EXPECT_DOUBLE_EQ(m.ms_per_frame_p95, 10.0);
   EXPECT_DOUBLE_EQ(m.ms_per_frame_mean, 5.5);
   EXPECT_DOUBLE_EQ(m.segment_ms_median, 0.0);
+  EXPECT_DOUBLE_EQ(m.segment_ms_p95, 7.0);  // nearest rank: the 10th of 10 values
+  EXPECT_DOUBLE_EQ(m.search_ms_p95, 0.0);
   EXPECT_DOUBLE_EQ(m.prt, 0.0);  // AP 0 without reports
 }
 

@@ -125,6 +125,12 @@ void fill_timings(const std::vector<FrameRecord>& records, Metrics& m) {
   m.describe_ms_median = percentile(describe, 0.5);
   m.search_ms_median = percentile(search, 0.5);
   m.verify_ms_median = percentile(verify, 0.5);
+  m.load_ms_p95 = percentile(load, 0.95);
+  m.convert_ms_p95 = percentile(convert, 0.95);
+  m.segment_ms_p95 = percentile(segment, 0.95);
+  m.describe_ms_p95 = percentile(describe, 0.95);
+  m.search_ms_p95 = percentile(search, 0.95);
+  m.verify_ms_p95 = percentile(verify, 0.95);
   m.prt = m.average_precision / (1.0 + 10.0 * m.ms_per_frame_mean * 1e-3);
 }
 

@@ -9,6 +9,7 @@
 
 #include <CLI/CLI.hpp>
 
+#include "bench_support.h"
 #include "lsgd/error.h"
 #include "lsgd/io/config.h"
 
@@ -172,6 +173,11 @@ nlohmann::json metrics_json(const eval::Metrics& m) {
   j["stage_ms_median"] = {{"load", m.load_ms_median},         {"convert", m.convert_ms_median},
                           {"segment", m.segment_ms_median},   {"describe", m.describe_ms_median},
                           {"search", m.search_ms_median},     {"verify", m.verify_ms_median}};
+  j["stage_ms_p95"] = {{"load", m.load_ms_p95},         {"convert", m.convert_ms_p95},
+                       {"segment", m.segment_ms_p95},   {"describe", m.describe_ms_p95},
+                       {"search", m.search_ms_p95},     {"verify", m.verify_ms_p95}};
+  // Peak resident memory of the whole process so far (getrusage), MB.
+  j["peak_rss_mb"] = static_cast<double>(bench::peak_rss_bytes()) / (1024.0 * 1024.0);
   nlohmann::json curve = nlohmann::json::array();
   for (const auto& p : m.curve) curve.push_back({p.threshold, p.precision, p.recall});
   j["pr_curve"] = {{"columns", {"threshold", "precision", "recall"}}, {"points", curve}};

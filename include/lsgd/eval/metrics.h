@@ -63,6 +63,13 @@ struct Metrics {
   double describe_ms_median = 0;
   double search_ms_median = 0;
   double verify_ms_median = 0;
+  // Per-stage 95th percentiles (nearest rank), milliseconds.
+  double load_ms_p95 = 0;
+  double convert_ms_p95 = 0;
+  double segment_ms_p95 = 0;
+  double describe_ms_p95 = 0;
+  double search_ms_p95 = 0;
+  double verify_ms_p95 = 0;
   // PRT = AP / (1 + omega * t), t = mean seconds per frame, omega = 10 (paper Sec. IV-D).
   double prt = 0;
   std::vector<PrPoint> curve;  // one point per distinct score, decreasing threshold

@@ -14,27 +14,13 @@
 #include <vector>
 
 #include "lsgd/error.h"
+#include "test_util.h"
 
 namespace lsgd::io {
 namespace {
 
 namespace fs = std::filesystem;
-
-// Expects `call` to throw E with a message containing every one of `parts`.
-template <typename E, typename F>
-void expect_error(F call, const std::vector<std::string>& parts) {
-  try {
-    call();
-    ADD_FAILURE() << "no exception thrown";
-  } catch (const E& e) {
-    for (const std::string& part : parts) {
-      EXPECT_NE(std::string(e.what()).find(part), std::string::npos)
-          << "message '" << e.what() << "' lacks '" << part << "'";
-    }
-  } catch (const std::exception& e) {
-    ADD_FAILURE() << "wrong exception type: " << e.what();
-  }
-}
+using lsgd::test::expect_error;
 
 std::string kitti_name(int i) {
   char name[32];

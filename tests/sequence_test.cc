@@ -13,11 +13,13 @@
 #include <vector>
 
 #include "lsgd/error.h"
+#include "test_util.h"
 
 namespace lsgd::io {
 namespace {
 
 namespace fs = std::filesystem;
+using lsgd::test::expect_error;
 
 // A fresh folder under LSGD_TEST_TMP per test, removed afterwards.
 class SequenceTest : public ::testing::Test {
@@ -61,22 +63,6 @@ cv::Mat random_image(int type) {
 
 bool same(const cv::Mat& a, const cv::Mat& b) {
   return a.size() == b.size() && a.type() == b.type() && cv::norm(a, b, cv::NORM_INF) == 0;
-}
-
-// Expects `call` to throw E with a message containing every one of `parts`.
-template <typename E, typename F>
-void expect_error(F call, const std::vector<std::string>& parts) {
-  try {
-    call();
-    ADD_FAILURE() << "no exception thrown";
-  } catch (const E& e) {
-    for (const std::string& part : parts) {
-      EXPECT_NE(std::string(e.what()).find(part), std::string::npos)
-          << "message '" << e.what() << "' lacks '" << part << "'";
-    }
-  } catch (const std::exception& e) {
-    ADD_FAILURE() << "wrong exception type: " << e.what();
-  }
 }
 
 // ---------------------------------------------------------------- natural_less

@@ -6,7 +6,11 @@
 #include <cstddef>
 #include <cstdint>
 #include <string>
+#include <exception>
 #include <utility>
+#include <vector>
+
+#include <gtest/gtest.h>
 
 #include "lsgd/image.h"
 
@@ -54,6 +58,22 @@ std::string message_of(F&& f) {
     return "<other exception>";
   }
   return "<no exception>";
+}
+
+// Expects `call` to throw E with a message containing every one of `parts`.
+template <typename E, typename F>
+void expect_error(F call, const std::vector<std::string>& parts) {
+  try {
+    call();
+    ADD_FAILURE() << "no exception thrown";
+  } catch (const E& e) {
+    for (const std::string& part : parts) {
+      EXPECT_NE(std::string(e.what()).find(part), std::string::npos)
+          << "message '" << e.what() << "' lacks '" << part << "'";
+    }
+  } catch (const std::exception& e) {
+    ADD_FAILURE() << "wrong exception type: " << e.what();
+  }
 }
 
 }  // namespace lsgd::test

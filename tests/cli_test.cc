@@ -164,7 +164,7 @@ TEST(Cli, UnknownConfigKeyFailsNamingIt) {
   EXPECT_EQ(lines_of(r.err), 1) << r.err;
 }
 
-TEST(Cli, CorruptImageStopsTheRunAndKeepsEarlierRows) {
+TEST(Cli, CorruptImageUnderStrictStopsTheRunAndKeepsEarlierRows) {
   const fs::path dir = kTmp / "corrupt";
   fs::remove_all(dir);
   fs::create_directories(dir);
@@ -172,7 +172,8 @@ TEST(Cli, CorruptImageStopsTheRunAndKeepsEarlierRows) {
   for (int i = 0; i < 3; ++i) ASSERT_TRUE(cv::imwrite((dir / (std::to_string(i) + ".png")).string(), image));
   std::ofstream(dir / "3.png") << "this is not a png";
   const fs::path csv = kTmp / "corrupt.csv";
-  const CmdResult r = lsgd("run --sequence '" + dir.string() + "' --output '" + csv.string() + "'");
+  const CmdResult r =
+      lsgd("run --strict --sequence '" + dir.string() + "' --output '" + csv.string() + "'");
   EXPECT_NE(r.code, 0);
   EXPECT_NE(r.err.find("3.png"), std::string::npos) << r.err;
   EXPECT_EQ(lines_of(slurp(csv)), 4);  // header + frames 0, 1, 2

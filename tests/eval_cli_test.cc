@@ -247,6 +247,28 @@ TEST_F(ShortStreet, KittiLayoutWithGroundTruthFromPoses) {
 
 // ---------------------------------------------------------------- detections files, layouts
 
+// Bad images in a sequence: skipped and reported by default, fatal with --strict.
+TEST(EvalCli, BadImagesAreSkippedAndReportedOrStopTheRunUnderStrict) {
+  const fs::path dir = kTmp / "bad-images";
+  for (int i = 0; i < 6; ++i) write_image(dir / (std::to_string(i) + ".png"), i);
+  write_text(dir / "2.png", "");  // zero bytes
+  fs::create_directories(dir);
+  ASSERT_TRUE(cv::imwrite((dir / "4.png").string(), cv::Mat(20, 30, CV_8UC1, cv::Scalar(9))));
+  const fs::path csv = kTmp / "bad-images.csv";
+  CmdResult r = lsgd("run --sequence " + q(dir) + " --output " + q(csv));
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_NE(r.err.find("skipped frame 2 (" + (dir / "2.png").string()), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("skipped frame 4 (" + (dir / "4.png").string()), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("(2 skipped)"), std::string::npos) << r.err;
+  const std::string rows = slurp(csv);
+  EXPECT_EQ(lines_of(rows), 5);  // header + frames 0, 1, 3, 5 under their own indices
+  EXPECT_NE(rows.find("\n3," + (dir / "3.png").string() + ","), std::string::npos) << rows;
+  EXPECT_NE(rows.find("\n5," + (dir / "5.png").string() + ","), std::string::npos) << rows;
+  r = lsgd("run --sequence " + q(dir) + " --strict");
+  EXPECT_EQ(r.code, 1);
+  EXPECT_NE(r.err.find("frame 2 (" + (dir / "2.png").string() + ")"), std::string::npos) << r.err;
+}
+
 TEST(EvalCli, DetectionsErrorNamesFileAndLine) {
   const fs::path dir = kTmp / "badcsv";
   write_text(dir / "gt.txt", "8 0\n");

@@ -32,13 +32,22 @@ FrameSource sequence_source(const io::Sequence& sequence) {
 }
 
 std::vector<FrameRecord> run_detector(Detector& detector, const FrameSource& source,
-                                      const FrameCallback& on_frame) {
+                                      const FrameCallback& on_frame, const RunOptions& options,
+                                      const SkipCallback& on_skip) {
   if (source.frames <= 0 || !source.load) {
     internal::throw_invalid("run_detector: the frame source is empty (", source.frames,
                             " frames)");
   }
   std::vector<FrameRecord> records;
   records.reserve(static_cast<std::size_t>(source.frames));
+  // Source index of every frame the detector stored (its ids are dense).
+  std::vector<std::int64_t> source_of;
+  source_of.reserve(static_cast<std::size_t>(source.frames));
+  const auto to_source = [&](std::int64_t id) {
+    return id >= 0 && id < static_cast<std::int64_t>(source_of.size())
+               ? source_of[static_cast<std::size_t>(id)]
+               : id;
+  };
   for (std::int64_t i = 0; i < source.frames; ++i) {
     const auto start = std::chrono::steady_clock::now();
     Result result;
@@ -49,8 +58,21 @@ std::vector<FrameRecord> run_detector(Detector& detector, const FrameSource& sou
                     .count();
       result = detector.process(image);
     } catch (const Error& e) {
-      rethrow_for_frame(e, i, source.name ? source.name(i) : std::to_string(i));
+      const std::string name = source.name ? source.name(i) : std::to_string(i);
+      if (!options.skip_bad_frames) rethrow_for_frame(e, i, name);
+      if (on_skip) on_skip(i, name, e.what());
+      FrameRecord skipped;
+      skipped.frame = i;
+      skipped.load_ms = load_ms;
+      skipped.skipped = true;
+      records.push_back(skipped);
+      continue;
     }
+    source_of.push_back(i);
+    result.frame = i;
+    result.best.frame = to_source(result.best.frame);
+    for (Candidate& c : result.candidates) c.frame = to_source(c.frame);
+    for (StageVerdict& v : result.verification) v.candidate = to_source(v.candidate);
     if (on_frame) on_frame(result, load_ms);
     records.push_back({result.frame, result.best, result.candidates, result.timings, load_ms});
   }

@@ -94,7 +94,8 @@ void check_flags(const EvalArgs& args, io::Layout layout) {
         "give --sequence (run the detector) or --detections (score a CSV), exactly one");
   }
   if (!args.detections.empty()) {
-    for (const char* flag : {"--output", "--config", "--mode", "--threshold", "--verify"}) {
+    for (const char* flag :
+         {"--output", "--config", "--mode", "--threshold", "--verify", "--strict"}) {
       if (cmd.count(flag) > 0) {
         throw InvalidArgument(std::string(flag) +
                               " applies when the detector runs (--sequence), "
@@ -206,13 +207,15 @@ void evaluate_sequence(const EvalArgs& args, const io::SequenceOptions& options)
   std::unique_ptr<CsvWriter> csv;
   if (!args.output.empty()) csv = std::make_unique<CsvWriter>(args.output);
   Detector detector(detector_options);
-  const auto records = run_with_progress(detector, source, "eval", csv.get());
+  const auto records =
+      run_with_progress(detector, source, "eval", csv.get(), !args.layout.strict);
   const eval::Metrics metrics = score(args, records, gt, detector_options.search.min_gap);
 
   nlohmann::json json = metrics_json(metrics);
   json["mode"] = to_string(detector_options.search.mode);
   json["verification"] = verification_stages(detector_options.verification);
   json["nodes"] = detector.nodes();
+  json["skipped_frames"] = skipped_frames(records);
   json["bytes_per_frame"] = detector.bytes_per_frame();
   json["sequence"] = args.sequence;
   describe_inputs(args, options, layout, gt, json);
@@ -221,6 +224,10 @@ void evaluate_sequence(const EvalArgs& args, const io::SequenceOptions& options)
   std::cout << args.sequence << " (" << to_string(detector_options.search.mode) << ", verification "
             << verification_stages(detector_options.verification) << ")\n";
   print_metrics(metrics, detector.nodes(), std::cout);
+  if (const std::int64_t skipped = skipped_frames(records); skipped > 0) {
+    std::cout << "  skipped " << skipped
+              << " frames (unreadable or rejected images; scored as frames without a report)\n";
+  }
   if (!args.report.empty()) {
     eval::ReportInput input = report_input(args, metrics, records, gt);
     input.sequence = args.sequence;

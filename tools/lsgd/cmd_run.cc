@@ -63,7 +63,10 @@ void run_database(const RunArgs& args, const io::Sequence& sequence) {
     try {
       result = detector.process(source.load(i));
     } catch (const Error& e) {
-      throw Error("frame " + std::to_string(i) + " (" + source.name(i) + "): " + e.what());
+      const std::string where = "frame " + std::to_string(i) + " (" + source.name(i) + "): ";
+      if (args.layout.strict) throw Error(where + e.what());
+      std::cerr << "lsgd: skipped " << where << e.what() << " (--strict stops here instead)\n";
+      continue;  // nothing stored: the database only ever holds processed frames
     }
     db->append(detector, result, session, source.name(i));
     csv.write(result, source.name(i));
@@ -92,11 +95,16 @@ void run(const RunArgs& args) {
   const eval::FrameSource source = eval::sequence_source(sequence);
   CsvWriter csv(args.output);
   Detector detector(options);
-  const auto records = run_with_progress(detector, source, "run", &csv);
+  const auto records = run_with_progress(detector, source, "run", &csv, !args.layout.strict);
   double total_ms = 0;
   for (const auto& r : records) total_ms += r.timings.total_ms;
-  std::cerr << "processed " << records.size() << " frames, " << csv.loops() << " loops, "
-            << total_ms / static_cast<double>(records.size()) << " ms/frame mean"
+  const std::int64_t skipped = skipped_frames(records);
+  const auto processed = static_cast<std::int64_t>(records.size()) - skipped;
+  std::cerr << "processed " << processed << " frames"
+            << (skipped > 0 ? " (" + std::to_string(skipped) + " skipped)" : std::string()) << ", "
+            << csv.loops() << " loops, "
+            << total_ms / static_cast<double>(std::max<std::int64_t>(processed, 1))
+            << " ms/frame mean"
             << (args.output.empty() ? "" : ", rows in " + args.output) << "\n";
 }
 

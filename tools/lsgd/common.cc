@@ -68,6 +68,10 @@ void SequenceFlags::add_to(CLI::App& command) {
   command.add_option("--every", every,
                      "keep frames first, first + K, first + 2K, ...; frame ids, --min-gap and "
                      "the CSV count kept frames");
+  command.add_flag("--strict", strict,
+                   "stop at the first image that cannot be read or is rejected (corrupt, "
+                   "truncated, not an image, other size, 16-bit); default: skip it, report it on "
+                   "stderr and count it as a frame without a report");
 }
 
 io::SequenceOptions SequenceFlags::resolve() const {
@@ -139,14 +143,32 @@ void CsvWriter::write(const Result& r, const std::string& image) {
 
 std::vector<eval::FrameRecord> run_with_progress(Detector& detector,
                                                  const eval::FrameSource& source,
-                                                 const std::string& label, CsvWriter* csv) {
+                                                 const std::string& label, CsvWriter* csv,
+                                                 bool skip_bad_frames) {
   Progress progress(source.frames, label);
   double total_ms = 0;
-  return eval::run_detector(detector, source, [&](const Result& r, double) {
-    if (csv) csv->write(r, source.name(r.frame));
-    total_ms += r.timings.total_ms;
-    progress.update(r.frame + 1, total_ms / static_cast<double>(r.frame + 1));
-  });
+  std::int64_t done = 0;
+  eval::RunOptions options;
+  options.skip_bad_frames = skip_bad_frames;
+  return eval::run_detector(
+      detector, source,
+      [&](const Result& r, double) {
+        if (csv) csv->write(r, source.name(r.frame));
+        total_ms += r.timings.total_ms;
+        ++done;
+        progress.update(r.frame + 1, total_ms / static_cast<double>(done));
+      },
+      options,
+      [](std::int64_t frame, const std::string& name, const std::string& error) {
+        std::cerr << "lsgd: skipped frame " << frame << " (" << name << "): " << error
+                  << " (--strict stops here instead)\n";
+      });
+}
+
+std::int64_t skipped_frames(const std::vector<eval::FrameRecord>& records) {
+  std::int64_t n = 0;
+  for (const auto& r : records) n += r.skipped ? 1 : 0;
+  return n;
 }
 
 nlohmann::json metrics_json(const eval::Metrics& m) {

@@ -44,6 +44,7 @@ struct SequenceFlags {
   std::int64_t first = 0;
   std::int64_t last = -1;
   std::int64_t every = 1;
+  bool strict = false;  // stop at the first unreadable or rejected image
 
   void add_to(CLI::App& command);
   // Validated options. InvalidArgument for a flag that does not apply to the
@@ -80,10 +81,15 @@ class CsvWriter {
 };
 
 // Runs the detector over the source with a progress bar labelled `label`,
-// writing each frame's CSV row to `csv` when given.
+// writing each frame's CSV row to `csv` when given. With skip_bad_frames, an
+// unreadable or rejected image is reported on stderr ("skipped frame ...")
+// and the run goes on (eval::RunOptions).
 std::vector<eval::FrameRecord> run_with_progress(Detector& detector,
                                                  const eval::FrameSource& source,
-                                                 const std::string& label, CsvWriter* csv);
+                                                 const std::string& label, CsvWriter* csv,
+                                                 bool skip_bad_frames = false);
+// Frames of `records` that were skipped.
+std::int64_t skipped_frames(const std::vector<eval::FrameRecord>& records);
 
 nlohmann::json metrics_json(const eval::Metrics& m);
 // Prints the headline numbers of an evaluation, one per line.

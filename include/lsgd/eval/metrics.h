@@ -21,6 +21,7 @@ struct FrameRecord {
   std::vector<Candidate> candidates;  // ranked candidates, best first (for Recall@N)
   Timings timings;                    // zeros when unknown (detections from another system)
   double load_ms = 0;                 // reading and decoding the image (outside process())
+  bool skipped = false;  // the image could not be read or was rejected: no report
 };
 
 struct PrPoint {

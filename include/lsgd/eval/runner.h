@@ -27,15 +27,30 @@ struct FrameSource {
 // The images of a sequence, read with io::read_image.
 FrameSource sequence_source(const io::Sequence& sequence);
 
-// Called after each frame with its result and the milliseconds spent loading it.
+// Called after each frame with its result and the milliseconds spent loading
+// it. Frame ids in the result (its frame, best, candidates, verdicts) are
+// source indices, also when earlier frames were skipped.
 using FrameCallback = std::function<void(const Result& result, double load_ms)>;
+// Called for each skipped frame: its source index, name and the error.
+using SkipCallback =
+    std::function<void(std::int64_t frame, const std::string& name, const std::string& error)>;
 
-// Feeds every frame to the detector in order. A frame that fails to load or is
-// rejected by the detector stops the run with an lsgd::Error whose message
-// names the frame and its source; frames already processed were already
-// passed to `on_frame` (a CSV writer keeps them). Throws InvalidArgument for
-// an empty source.
+struct RunOptions {
+  // false: a frame that fails to load (missing, truncated, corrupt, not an
+  // image) or that the detector rejects (other size, 16-bit) stops the run
+  // with an lsgd::Error naming the frame and its source.
+  // true: such a frame is skipped: `on_skip` is told, the detector never sees
+  // it, and its record has no report (skipped = true), so a skipped
+  // ground-truth loop counts as missed. Later frames keep their source index.
+  bool skip_bad_frames = false;
+};
+
+// Feeds every frame to the detector in order. Frames already processed were
+// passed to `on_frame` (a CSV writer keeps them) before any error. Throws
+// InvalidArgument for an empty source.
 std::vector<FrameRecord> run_detector(Detector& detector, const FrameSource& source,
-                                      const FrameCallback& on_frame = {});
+                                      const FrameCallback& on_frame = {},
+                                      const RunOptions& options = {},
+                                      const SkipCallback& on_skip = {});
 
 }  // namespace lsgd::eval

@@ -12,7 +12,11 @@
 #include <string>
 #include <vector>
 
+#include <opencv2/core.hpp>
+
+#include "lsgd/detector.h"
 #include "lsgd/io/config.h"
+#include "lsgd/io/database.h"
 
 namespace fs = std::filesystem;
 
@@ -25,6 +29,30 @@ void put(const fs::path& path, const std::string& bytes) {
     std::fprintf(stderr, "make_seeds: cannot write %s\n", path.c_str());
     std::exit(1);
   }
+}
+
+// A small valid place database (64x48 frames, the given verification) as bytes.
+std::string db_bytes(const fs::path& scratch, const char* stages, int frames) {
+  fs::remove(scratch);
+  fs::remove(scratch.string() + "-wal");
+  fs::remove(scratch.string() + "-shm");
+  lsgd::DetectorOptions options;
+  options.segmentation.superpixel_size = 8;
+  options.search.min_gap = 1;
+  lsgd::parse_verification_stages(stages, options.verification);
+  {
+    lsgd::io::Database db = lsgd::io::Database::create(scratch.string(), options);
+    lsgd::Detector detector(options);
+    for (int i = 0; i < frames; ++i) {
+      cv::Mat frame(48, 64, CV_8UC1);
+      cv::randu(frame, 0, 255);
+      frame.at<unsigned char>(0, 0) = static_cast<unsigned char>(i % 2);
+      const lsgd::Result r = detector.process(frame);
+      db.append(detector, r, 0, "frame" + std::to_string(i));
+    }
+  }  // closed: the WAL is checkpointed into the file
+  std::ifstream in(scratch, std::ios::binary);
+  return std::string(std::istreambuf_iterator<char>(in), {});
 }
 
 // A 6 x 6 loop matrix (pairs {4,0}, {5,1}) as a MAT file read back as bytes;
@@ -65,7 +93,10 @@ int main(int argc, char** argv) {
     return 2;
   }
   const fs::path out = argv[1];
-  for (const char* d : {"config", "pairs", "gt"}) fs::create_directories(out / d);
+  for (const char* d : {"config", "pairs", "gt", "db"}) fs::create_directories(out / d);
+  put(out / "db" / "temporal", db_bytes(out / "scratch.db", "temporal", 4));
+  put(out / "db" / "none", db_bytes(out / "scratch.db", "none", 2));
+  put(out / "db" / "geometric", db_bytes(out / "scratch.db", "temporal,geometric", 3));
 
   // config: the defaults as written by to_yaml, and a flow-style partial file.
   put(out / "config" / "defaults.yaml", lsgd::io::to_yaml(lsgd::DetectorOptions{}));

@@ -32,18 +32,21 @@ cmake -S . -B build-fuzz -DCMAKE_CXX_COMPILER=clang++ -DCMAKE_BUILD_TYPE=RelWith
 cmake --build build-fuzz -j"$jobs"
 
 status=0
-for target in config pairs gt; do
+for target in config pairs gt db; do
   corpus=build-fuzz/fuzz/corpus/$target
   artifacts=build-fuzz/fuzz/artifacts/$target/
   mkdir -p "$corpus" "$artifacts"
   log=build-fuzz/fuzz/fuzz_$target.log
-  echo "ci-hardening: fuzz_$target, $fuzz_runs inputs"
+  # Databases are bigger (seeds 40-100 KB) and slower to open: longer inputs, fewer runs.
+  max_len=8192 runs=$fuzz_runs
+  if [ "$target" = db ]; then max_len=131072 runs=$((fuzz_runs / 3)); fi
+  echo "ci-hardening: fuzz_$target, $runs inputs"
   # New inputs go to corpus/ (kept between runs of the same build dir); seeds are read only.
   # -malloc_limit_mb 4096: matio (Debian 1.5.23) allocates what a corrupt .mat
   # header claims before reading (3 GB seen); such a request is lazily mapped,
   # not a crash. docs/reliability.md lists it as open.
-  if ! "build-fuzz/fuzz/fuzz_$target" -seed=1 -runs="$fuzz_runs" -rss_limit_mb=2048 -malloc_limit_mb=4096 \
-      -max_len=8192 -timeout=10 -print_final_stats=1 -artifact_prefix="$artifacts" \
+  if ! "build-fuzz/fuzz/fuzz_$target" -seed=1 -runs="$runs" -rss_limit_mb=2048 -malloc_limit_mb=4096 \
+      -max_len="$max_len" -timeout=10 -print_final_stats=1 -artifact_prefix="$artifacts" \
       "$corpus" "build-fuzz/fuzz/seeds/$target" >"$log" 2>&1; then
     echo "ci-hardening: fuzz_$target FAILED; reproducer in $artifacts, log:" >&2
     tail -n 60 "$log" >&2

@@ -179,9 +179,10 @@ void cell_l1_scalar(const Bin* a, const Bin* b, int cells, std::uint32_t* out) {
 
 std::vector<std::int64_t> simd_targets() {
   std::vector<std::int64_t> out;
-  const std::int64_t supported = hwy::SupportedTargets() & HWY_TARGETS;
-  for (std::int64_t bit = 1; bit != 0 && bit <= supported; bit <<= 1) {
-    if (supported & bit) out.push_back(bit);
+  const auto supported = static_cast<std::uint64_t>(hwy::SupportedTargets() & HWY_TARGETS);
+  for (int shift = 0; shift < 64; ++shift) {  // unsigned: no shift into the sign bit
+    const std::uint64_t bit = std::uint64_t{1} << shift;
+    if (supported & bit) out.push_back(static_cast<std::int64_t>(bit));
   }
   return out;  // lower bits are the better targets on x86
 }

@@ -68,22 +68,14 @@ class SyntheticCli : public ::testing::Test {
   static void SetUpTestSuite() {
     dir_ = kTmp / "synthetic";
     fs::remove_all(dir_);
-    fs::create_directories(dir_ / "images");
     const lsgd::eval::SyntheticWorld world;
     frames_ = world.frames();
-    std::ofstream list(dir_ / "sequence.txt");
-    for (std::int64_t i = 0; i < frames_; ++i) {
-      std::ostringstream name;
-      name << "images/" << std::setw(5) << std::setfill('0') << i << ".png";
-      ASSERT_TRUE(cv::imwrite((dir_ / name.str()).string(), world.render(i)));
-      list << name.str() << "\n";
-    }
-    lsgd::eval::write_pairs(world.ground_truth(), (dir_ / "gt.txt").string());
+    lsgd::eval::write_synthetic_dataset(world, dir_.string());
   }
   static void TearDownTestSuite() { fs::remove_all(dir_); }
   static std::string eval_args(const std::string& mode, const fs::path& json) {
     return "eval --sequence '" + (dir_ / "sequence.txt").string() + "' --gt '" +
-           (dir_ / "gt.txt").string() + "' --min-gap 50 --mode " + mode + " --json '" +
+           (dir_ / "groundtruth.txt").string() + "' --min-gap 50 --mode " + mode + " --json '" +
            json.string() + "'";
   }
   static fs::path dir_;
@@ -126,7 +118,7 @@ TEST_F(SyntheticCli, RunWritesOneRowPerFrame) {
   EXPECT_EQ(text.rfind("frame,image,loop_frame,candidate_frame,score,ms\n", 0), 0u);
   EXPECT_EQ(lines_of(text), frames_ + 1);
   EXPECT_NE(text.find("\n0,"), std::string::npos);
-  EXPECT_NE(text.find("images/00000.png"), std::string::npos);
+  EXPECT_NE(text.find("images/000000.png"), std::string::npos);
 }
 
 TEST(Cli, RunOrdersAFolderNaturallyAndWritesToStdout) {

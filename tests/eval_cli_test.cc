@@ -63,7 +63,6 @@ class ShortStreet : public ::testing::Test {
   static void SetUpTestSuite() {
     dir_ = kTmp / "street";
     fs::remove_all(dir_);
-    fs::create_directories(dir_ / "images");
     lsgd::eval::SyntheticOptions options;
     options.width = 160;
     options.height = 120;
@@ -71,15 +70,7 @@ class ShortStreet : public ::testing::Test {
     const lsgd::eval::SyntheticWorld world(options);
     frames_ = world.frames();
     gt_ = world.ground_truth();
-    std::ofstream list(dir_ / "sequence.txt");
-    for (std::int64_t i = 0; i < frames_; ++i) {
-      std::ostringstream name;
-      name << "images/" << std::setw(5) << std::setfill('0') << i << ".png";
-      ASSERT_TRUE(cv::imwrite((dir_ / name.str()).string(), world.render(i)));
-      list << name.str() << "\n";
-    }
-    list.close();
-    lsgd::eval::write_pairs(gt_, (dir_ / "gt.txt").string());
+    lsgd::eval::write_synthetic_dataset(world, dir_.string());
     const CmdResult r =
         lsgd("run --sequence " + q(dir_ / "sequence.txt") + " --output " + q(dir_ / "run.csv"));
     ASSERT_EQ(r.code, 0) << r.err;
@@ -87,7 +78,7 @@ class ShortStreet : public ::testing::Test {
   static void TearDownTestSuite() { fs::remove_all(dir_); }
 
   static std::string common(const fs::path& json) {
-    return " --gt " + q(dir_ / "gt.txt") + " --min-gap 50 --json " + q(json);
+    return " --gt " + q(dir_ / "groundtruth.txt") + " --min-gap 50 --json " + q(json);
   }
 
   static fs::path dir_;
@@ -142,7 +133,7 @@ TEST_F(ShortStreet, LenientProtocolSaysSoAndIsNeverStricter) {
 TEST_F(ShortStreet, EveryKeepsEveryKthFrameAndRemapsTheGroundTruth) {
   const fs::path json = kTmp / "every.json", csv = kTmp / "every.csv";
   const CmdResult r =
-      lsgd("eval --sequence " + q(dir_ / "sequence.txt") + " --gt " + q(dir_ / "gt.txt") +
+      lsgd("eval --sequence " + q(dir_ / "sequence.txt") + " --gt " + q(dir_ / "groundtruth.txt") +
            " --min-gap 16 --every 3 --json " + q(json) + " --output " + q(csv));
   ASSERT_EQ(r.code, 0) << r.err;
   const lsgd::eval::GroundTruth sub = lsgd::eval::subsample(gt_, 3);
@@ -156,8 +147,8 @@ TEST_F(ShortStreet, EveryKeepsEveryKthFrameAndRemapsTheGroundTruth) {
   EXPECT_GT(positives, 10);
   const std::string rows = slurp(csv);
   // Frame 1 is image 3, frame 2 image 6.
-  EXPECT_NE(rows.find("\n1," + (dir_ / "images/00003.png").string() + ","), std::string::npos);
-  EXPECT_NE(rows.find("\n2," + (dir_ / "images/00006.png").string() + ","), std::string::npos);
+  EXPECT_NE(rows.find("\n1," + (dir_ / "images/000003.png").string() + ","), std::string::npos);
+  EXPECT_NE(rows.find("\n2," + (dir_ / "images/000006.png").string() + ","), std::string::npos);
 }
 
 TEST_F(ShortStreet, ReportWithPosesAndLoopinfGroundTruth) {
@@ -219,7 +210,7 @@ TEST_F(ShortStreet, KittiLayoutWithGroundTruthFromPoses) {
     std::ostringstream name;
     name << std::setw(6) << std::setfill('0') << i << ".png";
     std::ostringstream source;
-    source << std::setw(5) << std::setfill('0') << i << ".png";
+    source << std::setw(6) << std::setfill('0') << i << ".png";
     fs::create_symlink(dir_ / "images" / source.str(), seq / "image_0" / name.str());
     times << 0.1 * static_cast<double>(i) << "\n";
     // 13 columns (timestamp first): the camera moves along x by the street's s.

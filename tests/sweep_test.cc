@@ -244,21 +244,13 @@ class SweepCli : public ::testing::Test {
   static void SetUpTestSuite() {
     dir_ = kTmp / "street";
     fs::remove_all(dir_);
-    fs::create_directories(dir_ / "images");
     lsgd::eval::SyntheticOptions options;
     options.width = 160;
     options.height = 120;
     options.route_scale = 0.2;
     const lsgd::eval::SyntheticWorld world(options);
-    std::ofstream list(dir_ / "sequence.txt");
-    for (std::int64_t i = 0; i < world.frames(); ++i) {
-      std::ostringstream name;
-      name << "images/" << std::setw(4) << std::setfill('0') << i << ".png";
-      ASSERT_TRUE(cv::imwrite((dir_ / name.str()).string(), world.render(i)));
-      list << name.str() << "\n";
-    }
     frames_ = world.frames();
-    lsgd::eval::write_pairs(world.ground_truth(), (dir_ / "groundtruth.txt").string());
+    lsgd::eval::write_synthetic_dataset(world, dir_.string());
   }
   static void TearDownTestSuite() { fs::remove_all(kTmp); }
 
@@ -394,7 +386,7 @@ TEST_F(SweepCli, AFailingCellKeepsTheRowsBefore) {
   std::ofstream(broken / "bad.png") << "not a png";
   std::ofstream list(broken / "sequence.txt");
   for (std::int64_t i = 0; i < 30; ++i)
-    list << (dir_ / "images").string() << "/" << std::setw(4) << std::setfill('0') << i << ".png\n";
+    list << (dir_ / "images").string() << "/" << std::setw(6) << std::setfill('0') << i << ".png\n";
   list << "bad.png\n";
   list.close();
   std::ofstream(broken / "groundtruth.txt") << "25 1\n";

@@ -6,12 +6,17 @@
 #include <cmath>
 #include <cstdint>
 #include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <unistd.h>
 #include <opencv2/core.hpp>
+#include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 #include <string>
 #include <vector>
 
 #include "lsgd/error.h"
+#include "lsgd/eval/groundtruth.h"
 
 namespace lsgd::eval {
 namespace {
@@ -299,6 +304,43 @@ TEST(SyntheticWorld, FramesBeforeTheAppendedStretchesAreUnchanged) {
   }
   EXPECT_EQ(pairs, 3561);
   EXPECT_EQ(h, 0x5ba9d623d7c9625eull) << "ground-truth hash 0x" << std::hex << h;
+}
+
+TEST(WriteSyntheticDataset, WritesImagesListAndGroundTruth) {
+  namespace fs = std::filesystem;
+  SyntheticOptions options;
+  options.width = 64;
+  options.height = 48;
+  options.route_scale = 0.1;
+  const SyntheticWorld world(options);
+  const fs::path dir = fs::path(LSGD_TEST_TMP) / ("synthetic-ds-" + std::to_string(getpid()));
+  fs::remove_all(dir);
+  write_synthetic_dataset(world, dir.string());
+  std::ifstream list(dir / "sequence.txt");
+  std::string line;
+  std::int64_t n = 0;
+  while (std::getline(list, line)) {
+    if (n == 3) {
+      EXPECT_EQ(line, "images/000003.png");
+      const cv::Mat image = cv::imread((dir / line).string(), cv::IMREAD_UNCHANGED);
+      ASSERT_FALSE(image.empty());
+      EXPECT_EQ(cv::norm(image, world.render(3), cv::NORM_INF), 0.0);  // lossless PNG
+    }
+    ++n;
+  }
+  EXPECT_EQ(n, world.frames());
+  const GroundTruth gt = read_pairs((dir / "groundtruth.txt").string(), world.frames());
+  EXPECT_EQ(gt.pairs(), world.ground_truth().pairs());
+  // A folder that cannot be created: IoError naming it.
+  std::ofstream(dir / "file") << "x";
+  const std::string bad = (dir / "file" / "sub").string();
+  try {
+    write_synthetic_dataset(world, bad);
+    FAIL() << "expected IoError";
+  } catch (const IoError& e) {
+    EXPECT_NE(std::string(e.what()).find(bad), std::string::npos) << e.what();
+  }
+  fs::remove_all(dir);
 }
 
 TEST(SyntheticWorld, RouteScaleScalesFrameCount) {

@@ -2,10 +2,17 @@
 
 #include <algorithm>
 #include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <iomanip>
+#include <sstream>
+
 #include <opencv2/core.hpp>
+#include <opencv2/imgcodecs.hpp>
 
 #include "internal/check.h"
 #include "lsgd/error.h"
+#include "lsgd/eval/groundtruth.h"
 
 // Frames must be bit-identical on every platform: forbid fusing a * b + c into
 // one FMA instruction (which rounds once instead of twice). With that, the
@@ -657,6 +664,28 @@ cv::Mat SyntheticWorld::render(std::int64_t frame) const {
   cv::Mat out(height, width, CV_8UC3);
   expose(options_, seg, frame, image, out);
   return out;
+}
+
+void write_synthetic_dataset(const SyntheticWorld& world, const std::string& dir) {
+  namespace fs = std::filesystem;
+  const fs::path root(dir);
+  std::error_code ec;
+  fs::create_directories(root / "images", ec);
+  if (ec) throw IoError("cannot create '" + (root / "images").string() + "': " + ec.message());
+  std::ofstream list(root / "sequence.txt");
+  if (!list) throw IoError("cannot write '" + (root / "sequence.txt").string() + "'");
+  for (std::int64_t i = 0; i < world.frames(); ++i) {
+    std::ostringstream name;
+    name << "images/" << std::setw(6) << std::setfill('0') << i << ".png";
+    const fs::path file = root / name.str();
+    if (!cv::imwrite(file.string(), world.render(i))) {
+      throw IoError("cannot write image '" + file.string() + "'");
+    }
+    list << name.str() << '\n';
+  }
+  list.close();
+  if (!list) throw IoError("cannot write '" + (root / "sequence.txt").string() + "'");
+  write_pairs(world.ground_truth(), (root / "groundtruth.txt").string());
 }
 
 }  // namespace lsgd::eval

@@ -40,24 +40,6 @@ void print_route(const eval::SyntheticWorld& world) {
   }
 }
 
-// Writes the frames as PNG with sequence.txt and groundtruth.txt, so that
-// `lsgd eval --sequence DIR/sequence.txt --gt DIR/groundtruth.txt` reproduces the demo.
-void write_dataset(const eval::SyntheticWorld& world, const fs::path& dir) {
-  fs::create_directories(dir / "images");
-  std::ofstream list(dir / "sequence.txt");
-  if (!list) throw IoError("cannot write '" + (dir / "sequence.txt").string() + "'");
-  for (std::int64_t i = 0; i < world.frames(); ++i) {
-    std::ostringstream name;
-    name << "images/" << std::setw(6) << std::setfill('0') << i << ".png";
-    const fs::path file = dir / name.str();
-    if (!cv::imwrite(file.string(), world.render(i))) {
-      throw IoError("cannot write image '" + file.string() + "'");
-    }
-    list << name.str() << '\n';
-  }
-  eval::write_pairs(world.ground_truth(), (dir / "groundtruth.txt").string());
-}
-
 void demo(const DemoArgs& args) {
   DetectorOptions options = args.detector.resolve();
   eval::SyntheticOptions world_options;
@@ -65,7 +47,7 @@ void demo(const DemoArgs& args) {
   const eval::SyntheticWorld world(world_options);
   print_route(world);
   const fs::path dir(args.output);
-  if (!args.output.empty()) write_dataset(world, dir);
+  if (!args.output.empty()) eval::write_synthetic_dataset(world, dir);
 
   eval::FrameSource source;
   source.frames = world.frames();

@@ -98,6 +98,14 @@ struct RouteSegment {
   bool dense_objects = false;
 };
 
+class SyntheticWorld;
+
+// Writes every frame of `world` as DIR/images/NNNNNN.png (6 digits), the list
+// DIR/sequence.txt and the ground truth DIR/groundtruth.txt (pairs text), so
+// that `lsgd eval --sequence DIR/sequence.txt --gt DIR/groundtruth.txt` runs on
+// it. Creates DIR; throws IoError naming the file that cannot be written.
+void write_synthetic_dataset(const SyntheticWorld& world, const std::string& dir);
+
 class SyntheticWorld {
  public:
   // Validates the options (throws InvalidArgument) and lays out world and route.

@@ -309,6 +309,38 @@ class Inflater {
   z_stream z_{};
 };
 
+// matio sizes its allocations from a compressed variable's header (dimensions,
+// name) before it looks at the data, so a corrupt header asks for gigabytes
+// (fuzzing found 3-4 GB callocs). MATLAB names have at most 63 characters and
+// ground-truth matrices 2 dimensions: anything far beyond is corrupt.
+void check_compressed_headers(const std::string& path, const Container& c) {
+  if (c.swapped) return;  // the inflater reads native byte order only
+  constexpr std::uint32_t kMaxDimsBytes = 1024, kMaxNameBytes = 4096;
+  for (const V5Element& e : c.elements) {
+    if (e.type != kMiCompressed) continue;
+    std::string bytes(e.bytes, '\0');
+    std::ifstream in(path, std::ios::binary);
+    in.seekg(static_cast<std::streamoff>(e.offset + 8));
+    in.read(bytes.data(), static_cast<std::streamsize>(bytes.size()));
+    if (!in) throw IoError(concat("error while reading '", path, "'"));
+    Inflater z(path, std::move(bytes));
+    if (z.tag()[0] != kMiMatrix) continue;
+    const auto flags = z.tag();
+    if (!flags[3]) z.skip((std::size_t{flags[1]} + 7) / 8 * 8);
+    const auto dims = z.tag();
+    if (!dims[3] && dims[1] > kMaxDimsBytes) {
+      throw FormatError(concat("'", path, "' is corrupt: the compressed variable at byte ",
+                               e.offset, " claims ", dims[1], " bytes of dimensions"));
+    }
+    if (!dims[3]) z.skip((std::size_t{dims[1]} + 7) / 8 * 8);
+    const auto name = z.tag();
+    if (!name[3] && name[1] > kMaxNameBytes) {
+      throw FormatError(concat("'", path, "' is corrupt: the compressed variable at byte ",
+                               e.offset, " claims a name of ", name[1], " bytes"));
+    }
+  }
+}
+
 // Calls f(T{}) with the C++ type of a MAT numeric data type; false for others.
 template <typename F>
 bool with_value_type(std::uint32_t type, F&& f) {
@@ -686,6 +718,7 @@ GroundTruth read_mat(const std::string& path, std::int64_t frames, const std::st
   }
   const mat_ft version = Mat_GetVersion(mat.get());
   const Container container = check_container(path, version);
+  if (version == MAT_FT_MAT5) check_compressed_headers(path, container);
   std::string name = variable;
   if (name.empty()) {
     name = choose_variable(mat.get(), path);

@@ -1,6 +1,8 @@
 #include "lsgd/descriptor.h"
 
 #include <algorithm>
+#include <cmath>
+#include <cstring>
 #include <limits>
 
 #include "internal/check.h"
@@ -23,6 +25,64 @@ void recount_saturated(const GrayImage& image, const Segmentation& segmentation,
 
 }  // namespace
 
+const char* to_string(HistogramStorage storage) {
+  switch (storage) {
+    case HistogramStorage::kExact:
+      return "exact";
+    case HistogramStorage::kCompact:
+      return "compact";
+  }
+  return "unknown";
+}
+
+HistogramStorage parse_histogram_storage(const char* name) {
+  for (auto s : {HistogramStorage::kExact, HistogramStorage::kCompact}) {
+    if (std::strcmp(name, to_string(s)) == 0) return s;
+  }
+  internal::throw_invalid("descriptor storage '", name, "' is unknown: expected exact or compact");
+}
+
+void DescriptorOptions::check() const {
+  if (storage != HistogramStorage::kExact && storage != HistogramStorage::kCompact) {
+    internal::throw_invalid("descriptor.storage = ", static_cast<int>(storage), " is unknown");
+  }
+}
+
+DescriptorView Descriptor::view() const {
+  DescriptorView v;
+  v.cells = grid.cells();
+  if (storage == HistogramStorage::kCompact) {
+    v.compact = compact.data();
+    v.cell_pixels = cell_pixels;
+  } else {
+    v.hist = hist.data();
+    v.pixels = pixels.data();
+  }
+  return v;
+}
+
+std::size_t Descriptor::bytes_per_frame(HistogramStorage storage, int cells) {
+  const auto n = static_cast<std::size_t>(cells);
+  return storage == HistogramStorage::kCompact ? n * kCompactBins * sizeof(CompactBin)
+                                               : n * (kBins * sizeof(Bin) + sizeof(Count));
+}
+
+void Descriptor::check_consistent(const char* what) const {
+  const int cells = grid.cells();
+  const auto n = static_cast<std::size_t>(cells);
+  const bool ok =
+      cells > 0 && (storage == HistogramStorage::kCompact
+                        ? compact.size() == n * kCompactBins && hist.empty() && pixels.empty() &&
+                              cell_pixels > 0 && std::isfinite(cell_pixels)
+                        : hist.size() == n * kBins && pixels.size() == n && compact.empty());
+  if (!ok) {
+    internal::throw_invalid(what, ": ", to_string(storage), " descriptor of a ", grid.rows, "x",
+                            grid.cols, " grid has ", hist.size(), " exact bins, ", pixels.size(),
+                            " pixel counts and ", compact.size(), " compact bins (cell_pixels ",
+                            cell_pixels, ")");
+  }
+}
+
 void describe(const GrayImage& image, const Segmentation& segmentation, Descriptor& out) {
   if (image.width != segmentation.width || image.height != segmentation.height ||
       segmentation.labels.size() != image.pixels.size()) {
@@ -32,6 +92,9 @@ void describe(const GrayImage& image, const Segmentation& segmentation, Descript
   }
   const int cells = segmentation.grid.cells();
   out.grid = segmentation.grid;
+  out.storage = HistogramStorage::kExact;
+  out.compact.clear();
+  out.cell_pixels = 0;
   out.hist.assign(static_cast<std::size_t>(cells) * kBins, 0);
   out.pixels.assign(static_cast<std::size_t>(cells), 0);
   // Labels come in runs along a row: count each run into its cell's histogram.
@@ -44,8 +107,8 @@ void describe(const GrayImage& image, const Segmentation& segmentation, Descript
       const std::int32_t label = labels[x];
       const auto k = static_cast<std::uint32_t>(label);  // -1 wraps: one compare
       if (k >= static_cast<std::uint32_t>(cells)) {
-        internal::throw_invalid("describe: pixel ", row + x, " has label ", label,
-                                " outside the ", cells, " cells of its segmentation");
+        internal::throw_invalid("describe: pixel ", row + x, " has label ", label, " outside the ",
+                                cells, " cells of its segmentation");
       }
       Bin* h = &out.hist[static_cast<std::size_t>(k) * kBins];
       const int start = x;
@@ -64,6 +127,33 @@ Descriptor describe(const GrayImage& image, const Segmentation& segmentation) {
   Descriptor out;
   describe(image, segmentation, out);
   return out;
+}
+
+void compact(const Descriptor& exact, Descriptor& out) {
+  if (exact.storage != HistogramStorage::kExact) {
+    internal::throw_invalid("compact: the descriptor is already compact");
+  }
+  exact.check_consistent("compact");
+  const int cells = exact.grid.cells();
+  std::uint64_t total = 0;
+  for (const Count n : exact.pixels) total += n;
+  out.grid = exact.grid;
+  out.storage = HistogramStorage::kCompact;
+  out.hist.clear();
+  out.pixels.clear();
+  out.cell_pixels = static_cast<double>(total) / cells;
+  out.compact.resize(static_cast<std::size_t>(cells) * kCompactBins);
+  for (int k = 0; k < cells; ++k) {
+    const Bin* h = &exact.hist[static_cast<std::size_t>(k) * kBins];
+    CompactBin* q = &out.compact[static_cast<std::size_t>(k) * kCompactBins];
+    const std::uint64_t n = exact.pixels[k];
+    for (int b = 0; b < kCompactBins; ++b) {
+      const std::uint64_t pair = std::uint64_t{h[2 * b]} + h[2 * b + 1];
+      // round(pair * mass / n), half up, in integers; 0 for an empty cell.
+      const std::uint64_t v = n == 0 ? 0 : (2 * pair * kCompactMass + n) / (2 * n);
+      q[b] = static_cast<CompactBin>(std::min<std::uint64_t>(v, 255));
+    }
+  }
 }
 
 }  // namespace lsgd

@@ -28,6 +28,7 @@ void DecisionOptions::check() const {
 
 void DetectorOptions::check() const {
   segmentation.check();
+  descriptor.check();
   similarity.check();
   search.check();
   verification.check();
@@ -73,7 +74,12 @@ Result Detector::process_gray(double convert_ms, std::int64_t start_ns) {
   result.timings.segment_ms = ms_since(t);
 
   t = now_ns();
-  describe(gray_, segmentation_, descriptor_);
+  describe(gray_, segmentation_, exact_);
+  if (options_.descriptor.storage == HistogramStorage::kCompact) {
+    compact(exact_, descriptor_);
+  } else {
+    std::swap(exact_, descriptor_);  // descriptor_ is the frame's descriptor as stored
+  }
   result.timings.describe_ms = ms_since(t);
 
   t = now_ns();
@@ -151,13 +157,22 @@ void Detector::restore_frame(int width, int height, const Descriptor& descriptor
                             " but the detector holds ", width_, "x", height_, " frames");
   }
   const GridSize expected = grid_size(width, height, options_.segmentation.superpixel_size);
-  const auto cells = static_cast<std::size_t>(expected.cells());
-  if (descriptor.grid != expected || descriptor.hist.size() != cells * kBins ||
-      descriptor.pixels.size() != cells) {
+  if (descriptor.grid != expected) {
     internal::throw_invalid("restore_frame: frame ", frame, " has a ", descriptor.grid.rows, "x",
-                            descriptor.grid.cols, " grid with ", descriptor.hist.size(), " bins and ",
-                            descriptor.pixels.size(), " cells, but ", width, "x", height,
+                            descriptor.grid.cols, " grid, but ", width, "x", height,
                             " frames have a ", expected.rows, "x", expected.cols, " grid");
+  }
+  if (descriptor.storage != options_.descriptor.storage) {
+    internal::throw_invalid("restore_frame: frame ", frame, " has a ",
+                            to_string(descriptor.storage), " descriptor but descriptor.storage is ",
+                            to_string(options_.descriptor.storage));
+  }
+  descriptor.check_consistent("restore_frame");
+  if (descriptor.storage == HistogramStorage::kCompact &&
+      std::fabs(descriptor.cell_pixels * expected.cells() - static_cast<double>(width) * height) > 0.5) {
+    internal::throw_invalid("restore_frame: frame ", frame, " has ", descriptor.cell_pixels,
+                            " pixels per cell, but ", width, "x", height, " frames have ",
+                            static_cast<double>(width) * height / expected.cells());
   }
   if (!options_.verification.geometric && (!points.empty() || !orb.empty())) {
     internal::throw_invalid("restore_frame: frame ", frame,

@@ -15,18 +15,33 @@ void grow(std::vector<T>& v, std::size_t more) {
   v.reserve(std::max(v.size() + more, 2 * v.capacity()));
 }
 
+std::size_t bins_per_cell(HistogramStorage storage) {
+  return storage == HistogramStorage::kCompact ? kCompactBins : kBins;
+}
+
 }  // namespace
 
-FrameStore::FrameStore(const FrameStore& other)
-    : grid_(other.grid_), size_(other.size_), chunk_frames_(other.chunk_frames_),
-      pixels_(other.pixels_) {
-  const std::size_t chunk_bins =
-      static_cast<std::size_t>(chunk_frames_) * static_cast<std::size_t>(grid_.cells()) * kBins;
-  chunks_.reserve(other.chunks_.size());
-  for (const auto& chunk : other.chunks_) {
-    chunks_.emplace_back(new Bin[chunk_bins]);
-    std::copy(chunk.get(), chunk.get() + chunk_bins, chunks_.back().get());
+template <typename T>
+void FrameStore::copy_chunks(const std::vector<std::unique_ptr<T[]>>& from, std::size_t elements,
+                             std::vector<std::unique_ptr<T[]>>& to) {
+  to.reserve(from.size());
+  for (const auto& chunk : from) {
+    to.emplace_back(new T[elements]);
+    std::copy(chunk.get(), chunk.get() + elements, to.back().get());
   }
+}
+
+FrameStore::FrameStore(const FrameStore& other)
+    : grid_(other.grid_),
+      storage_(other.storage_),
+      cell_pixels_(other.cell_pixels_),
+      size_(other.size_),
+      chunk_frames_(other.chunk_frames_),
+      pixels_(other.pixels_) {
+  const std::size_t chunk_bins = static_cast<std::size_t>(chunk_frames_) *
+                                 static_cast<std::size_t>(grid_.cells()) * bins_per_cell(storage_);
+  copy_chunks(other.chunks_, chunk_bins, chunks_);
+  copy_chunks(other.compact_chunks_, chunk_bins, compact_chunks_);
 }
 
 FrameStore& FrameStore::operator=(const FrameStore& other) {
@@ -34,37 +49,56 @@ FrameStore& FrameStore::operator=(const FrameStore& other) {
   return *this;
 }
 
-std::int64_t FrameStore::add(const Descriptor& descriptor) {
-  const int cells = descriptor.grid.cells();
-  if (cells <= 0 || descriptor.hist.size() != static_cast<std::size_t>(cells) * kBins ||
-      descriptor.pixels.size() != static_cast<std::size_t>(cells)) {
-    internal::throw_invalid("FrameStore::add: descriptor of a ", descriptor.grid.rows, "x",
-                            descriptor.grid.cols, " grid has inconsistent storage");
+template <typename T>
+void FrameStore::add_slot(const std::vector<T>& data, std::vector<std::unique_ptr<T[]>>& chunks,
+                          const std::vector<Count>& pixels) {
+  const std::size_t frame_bins = data.size();
+  const std::int64_t chunk_frames =
+      size_ > 0 ? chunk_frames_
+                : std::max<std::int64_t>(
+                      1, static_cast<std::int64_t>(kChunkBytes / (frame_bins * sizeof(T))));
+  // Allocate everything that can fail before changing any member.
+  std::unique_ptr<T[]> chunk;
+  const bool new_chunk = size_ % chunk_frames == 0;
+  if (new_chunk) {
+    chunk.reset(new T[static_cast<std::size_t>(chunk_frames) * frame_bins]);
+    grow(chunks, 1);
   }
+  grow(pixels_, pixels.size());
+  // No allocation from here on.
+  if (new_chunk) chunks.push_back(std::move(chunk));
+  chunk_frames_ = chunk_frames;
+  T* slot = chunks.back().get() + static_cast<std::size_t>(size_ % chunk_frames) * frame_bins;
+  std::copy(data.begin(), data.end(), slot);
+  pixels_.insert(pixels_.end(), pixels.begin(), pixels.end());
+}
+
+std::int64_t FrameStore::add(const Descriptor& descriptor) {
+  descriptor.check_consistent("FrameStore::add");
   if (size_ > 0 && descriptor.grid != grid_) {
     internal::throw_invalid("frame grid ", descriptor.grid.rows, "x", descriptor.grid.cols,
                             " differs from the stored frames' ", grid_.rows, "x", grid_.cols,
                             ": every frame must have the same image size");
   }
-  const std::size_t frame_bins = static_cast<std::size_t>(cells) * kBins;
-  const std::int64_t chunk_frames =
-      size_ > 0 ? chunk_frames_
-                : std::max<std::int64_t>(1, static_cast<std::int64_t>(kChunkBytes / (frame_bins * sizeof(Bin))));
-  // Allocate everything that can fail before changing any member.
-  std::unique_ptr<Bin[]> chunk;
-  const bool new_chunk = size_ % chunk_frames == 0;
-  if (new_chunk) {
-    chunk.reset(new Bin[static_cast<std::size_t>(chunk_frames) * frame_bins]);
-    grow(chunks_, 1);
+  if (size_ > 0 && descriptor.storage != storage_) {
+    internal::throw_invalid("FrameStore::add: a ", to_string(descriptor.storage),
+                            " descriptor cannot join a store of ", to_string(storage_),
+                            " descriptors");
   }
-  grow(pixels_, descriptor.pixels.size());
-  // No allocation from here on.
-  if (new_chunk) chunks_.push_back(std::move(chunk));
+  if (size_ > 0 && descriptor.storage == HistogramStorage::kCompact &&
+      descriptor.cell_pixels != cell_pixels_) {
+    internal::throw_invalid("FrameStore::add: compact descriptor with ", descriptor.cell_pixels,
+                            " pixels per cell differs from the stored frames' ", cell_pixels_,
+                            ": every frame must have the same image size");
+  }
+  if (descriptor.storage == HistogramStorage::kCompact) {
+    add_slot(descriptor.compact, compact_chunks_, descriptor.pixels);
+  } else {
+    add_slot(descriptor.hist, chunks_, descriptor.pixels);
+  }
   grid_ = descriptor.grid;
-  chunk_frames_ = chunk_frames;
-  Bin* slot = chunks_.back().get() + static_cast<std::size_t>(size_ % chunk_frames) * frame_bins;
-  std::copy(descriptor.hist.begin(), descriptor.hist.end(), slot);
-  pixels_.insert(pixels_.end(), descriptor.pixels.begin(), descriptor.pixels.end());
+  storage_ = descriptor.storage;
+  cell_pixels_ = descriptor.cell_pixels;
   return size_++;
 }
 
@@ -73,21 +107,34 @@ DescriptorView FrameStore::view(std::int64_t frame) const {
     internal::throw_invalid("frame ", frame, " is not stored (", size_, " frames)");
   }
   const std::size_t cells = static_cast<std::size_t>(grid_.cells());
-  const Bin* chunk = chunks_[static_cast<std::size_t>(frame / chunk_frames_)].get();
-  const std::size_t slot = static_cast<std::size_t>(frame % chunk_frames_);
-  return {chunk + slot * cells * kBins, pixels_.data() + static_cast<std::size_t>(frame) * cells,
-          grid_.cells()};
+  const auto chunk = static_cast<std::size_t>(frame / chunk_frames_);
+  const auto slot = static_cast<std::size_t>(frame % chunk_frames_);
+  DescriptorView v;
+  v.cells = grid_.cells();
+  if (storage_ == HistogramStorage::kCompact) {
+    v.compact = compact_chunks_[chunk].get() + slot * cells * kCompactBins;
+    v.cell_pixels = cell_pixels_;
+  } else {
+    v.hist = chunks_[chunk].get() + slot * cells * kBins;
+    v.pixels = pixels_.data() + static_cast<std::size_t>(frame) * cells;
+  }
+  return v;
 }
 
 std::size_t FrameStore::bytes_per_frame() const {
-  return static_cast<std::size_t>(grid_.cells()) * (kBins * sizeof(Bin) + sizeof(Count));
+  return Descriptor::bytes_per_frame(storage_, grid_.cells());
 }
 
 void FrameStore::reserve(std::int64_t frames) {
   if (frames <= 0 || grid_.cells() == 0) return;
   const std::size_t cells = static_cast<std::size_t>(grid_.cells());
-  chunks_.reserve(static_cast<std::size_t>((frames + chunk_frames_ - 1) / chunk_frames_));
-  pixels_.reserve(static_cast<std::size_t>(frames) * cells);
+  const auto chunks = static_cast<std::size_t>((frames + chunk_frames_ - 1) / chunk_frames_);
+  if (storage_ == HistogramStorage::kCompact) {
+    compact_chunks_.reserve(chunks);
+  } else {
+    chunks_.reserve(chunks);
+    pixels_.reserve(static_cast<std::size_t>(frames) * cells);
+  }
 }
 
 }  // namespace lsgd

@@ -33,20 +33,56 @@ void for_each_cell_l1(const DescriptorView& a, const DescriptorView& b, F&& f) {
   }
 }
 
+// Calls f(SAD of cell k) for every cell of two compact descriptors.
+template <typename F>
+void for_each_cell_sad(const DescriptorView& a, const DescriptorView& b, F&& f) {
+  constexpr int kBlock = 128;
+  std::uint32_t sad[kBlock];
+  for (int k0 = 0; k0 < a.cells; k0 += kBlock) {
+    const int n = std::min(kBlock, a.cells - k0);
+    const std::size_t off = static_cast<std::size_t>(k0) * kCompactBins;
+    internal::cell_sad(a.compact + off, b.compact + off, n, sad);
+    for (int i = 0; i < n; ++i) f(sad[i]);
+  }
+}
+
+// Compact storage: each cell's SAD is an L1 distance in units of
+// 1 / kCompactMass of a cell, turned into pixels with the mean cell size for
+// the reference metric (so its scores and thresholds match the exact ones'),
+// and used as is for the mass-normalised metrics, for which l1 and
+// normalized_l1 coincide (every cell has mass kCompactMass).
+double compact_similarity(const DescriptorView& a, const DescriptorView& b,
+                          SimilarityMetric metric) {
+  const int cells = a.cells;
+  if (metric == SimilarityMetric::kReference) {
+    const double scale = 0.5 * (a.cell_pixels + b.cell_pixels) / kCompactMass;
+    double sum = 0;
+    for_each_cell_sad(a, b, [&](std::uint32_t sad) { sum += std::sqrt(sad * scale) / kBins; });
+    return 1.0 / (1.0 + sum / cells);
+  }
+  std::uint64_t sad = 0;
+  for_each_cell_sad(a, b, [&](std::uint32_t cell) { sad += cell; });
+  const double score = 1.0 - static_cast<double>(sad) / (2.0 * kCompactMass * cells);
+  return std::max(0.0, score);  // rounding can add a little mass
+}
+
 }  // namespace
 
 const char* to_string(SimilarityMetric metric) {
   switch (metric) {
-    case SimilarityMetric::kReference: return "reference";
-    case SimilarityMetric::kL1: return "l1";
-    case SimilarityMetric::kNormalizedL1: return "normalized_l1";
+    case SimilarityMetric::kReference:
+      return "reference";
+    case SimilarityMetric::kL1:
+      return "l1";
+    case SimilarityMetric::kNormalizedL1:
+      return "normalized_l1";
   }
   return "unknown";
 }
 
 SimilarityMetric parse_similarity_metric(const char* name) {
-  for (auto m : {SimilarityMetric::kReference, SimilarityMetric::kL1,
-                 SimilarityMetric::kNormalizedL1}) {
+  for (auto m :
+       {SimilarityMetric::kReference, SimilarityMetric::kL1, SimilarityMetric::kNormalizedL1}) {
     if (std::strcmp(name, to_string(m)) == 0) return m;
   }
   internal::throw_invalid("similarity metric '", name,
@@ -65,13 +101,18 @@ double similarity(const DescriptorView& a, const DescriptorView& b, SimilarityMe
     internal::throw_invalid("similarity: descriptors have ", a.cells, " and ", b.cells,
                             " cells; frames must have the same size and superpixel_size");
   }
+  if (a.storage() != b.storage()) {
+    internal::throw_invalid("similarity: one descriptor is ", to_string(a.storage()),
+                            " and the other ", to_string(b.storage()),
+                            "; both must have the same descriptor.storage");
+  }
+  if (a.storage() == HistogramStorage::kCompact) return compact_similarity(a, b, metric);
   const int cells = a.cells;
   switch (metric) {
     case SimilarityMetric::kReference: {
       double sum = 0;
-      for_each_cell_l1(a, b, [&](int, std::uint32_t l1) {
-        sum += std::sqrt(static_cast<double>(l1)) / kBins;
-      });
+      for_each_cell_l1(
+          a, b, [&](int, std::uint32_t l1) { sum += std::sqrt(static_cast<double>(l1)) / kBins; });
       return 1.0 / (1.0 + sum / cells);
     }
     case SimilarityMetric::kL1: {

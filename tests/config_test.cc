@@ -156,7 +156,7 @@ TEST(ParseConfig, PartialConfigKeepsTheBase) {
 
 TEST(ParseConfig, UnknownKeysAreFormatErrors) {
   expect_error<FormatError>("segmentaton:\n  iterations: 3\n",
-                            {kSource, "unknown key 'segmentaton'", "segmentation, similarity"});
+                            {kSource, "unknown key 'segmentaton'", "segmentation, descriptor, similarity"});
   expect_error<FormatError>("search:\n  foo: 1\n",
                             {kSource, "unknown key 'search.foo'", "mode, min_gap, top_n, nodes"});
   expect_error<FormatError>("search:\n  nodes: {gamma: 1}\n",
@@ -201,6 +201,16 @@ TEST(ParseConfig, InvalidEnumsAreFormatErrors) {
                             {kSource, "'similarity.metric'", "cosine", "normalized_l1"});
   expect_error<FormatError>("search:\n  mode: fast\n", {kSource, "'search.mode'", "fast"});
   expect_error<FormatError>("search:\n  mode: [nodes]\n", {"'search.mode'"});
+  expect_error<FormatError>("descriptor:\n  storage: tiny\n",
+                            {kSource, "'descriptor.storage'", "tiny", "compact"});
+}
+
+TEST(ParseConfig, DescriptorStorage) {
+  EXPECT_EQ(parse_config("", "t").descriptor.storage, HistogramStorage::kExact);
+  const DetectorOptions o = parse_config("descriptor:\n  storage: compact\n", "t");
+  EXPECT_EQ(o.descriptor.storage, HistogramStorage::kCompact);
+  EXPECT_EQ(parse_config(to_yaml(o), "t").descriptor.storage, HistogramStorage::kCompact);
+  expect_error<FormatError>("descriptor:\n  bins: 64\n", {kSource, "unknown key 'descriptor.bins'", "storage"});
 }
 
 TEST(ParseConfig, OutOfRangeValuesAreInvalidArguments) {

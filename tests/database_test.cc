@@ -62,8 +62,10 @@ std::string temp_path(const std::string& name) {
   return path;
 }
 
-DetectorOptions options(SearchMode mode, const std::string& stages) {
+DetectorOptions options(SearchMode mode, const std::string& stages,
+                        HistogramStorage storage = HistogramStorage::kExact) {
   DetectorOptions o;
+  o.descriptor.storage = storage;
   o.search.mode = mode;
   o.search.min_gap = 20;
   parse_verification_stages(stages, o.verification);
@@ -101,6 +103,13 @@ void expect_same_state(const Detector& a, const Detector& b) {
   for (std::int64_t f = 0; f < a.size(); ++f) {
     const DescriptorView x = a.store().view(f), y = b.store().view(f);
     ASSERT_EQ(x.cells, y.cells);
+    ASSERT_EQ(x.storage(), y.storage());
+    if (x.storage() == HistogramStorage::kCompact) {
+      ASSERT_TRUE(std::equal(x.compact, x.compact + x.cells * kCompactBins, y.compact))
+          << "frame " << f;
+      ASSERT_EQ(x.cell_pixels, y.cell_pixels);
+      continue;
+    }
     ASSERT_TRUE(std::equal(x.hist, x.hist + x.cells * kBins, y.hist)) << "frame " << f;
     ASSERT_TRUE(std::equal(x.pixels, x.pixels + x.cells, y.pixels)) << "frame " << f;
   }
@@ -138,25 +147,26 @@ struct ResumeCase {
   std::int64_t frames;  // M
   std::int64_t split;   // N
   bool append_all;      // save with append_all() instead of per-frame append()
+  HistogramStorage storage = HistogramStorage::kExact;
 };
 
 void PrintTo(const ResumeCase& c, std::ostream* out) {
   *out << to_string(c.mode) << " " << c.stages << ", frames " << c.frames << ", split at "
-       << c.split << (c.append_all ? ", append_all" : "");
+       << c.split << (c.append_all ? ", append_all" : "") << ", " << to_string(c.storage);
 }
 
 class Resume : public ::testing::TestWithParam<ResumeCase> {};
 
 TEST_P(Resume, EqualsUninterruptedRun) {
   const ResumeCase c = GetParam();
-  const DetectorOptions o = options(c.mode, c.stages);
+  const DetectorOptions o = options(c.mode, c.stages, c.storage);
   Detector reference(o);
   const std::vector<Result> expected = run(reference, 0, c.frames);
 
   std::string stages = c.stages;
   std::replace(stages.begin(), stages.end(), ',', '_');
   const std::string path = temp_path(std::string("resume_") + to_string(c.mode) + "_" + stages +
-                                     (c.append_all ? "_all" : ""));
+                                     (c.append_all ? "_all" : "") + "_" + to_string(c.storage));
   {
     Database db = Database::create(path, o);
     Detector first(o);
@@ -193,10 +203,15 @@ INSTANTIATE_TEST_SUITE_P(
                       ResumeCase{SearchMode::kExhaustive, "none", 260, 100, false},
                       ResumeCase{SearchMode::kDynamicNodes, "temporal", 260, 140, true},
                       ResumeCase{SearchMode::kExhaustive, "temporal,geometric", 190, 150, false},
-                      ResumeCase{SearchMode::kDynamicNodes, "temporal,geometric", 190, 163, false}),
+                      ResumeCase{SearchMode::kDynamicNodes, "temporal,geometric", 190, 163, false},
+                      ResumeCase{SearchMode::kExhaustive, "temporal", 260, 110, false,
+                                 HistogramStorage::kCompact},
+                      ResumeCase{SearchMode::kDynamicNodes, "temporal", 260, 140, true,
+                                 HistogramStorage::kCompact}),
     [](const ::testing::TestParamInfo<ResumeCase>& param) {
       std::string name = std::string(to_string(param.param.mode)) + "_" + param.param.stages +
-                         (param.param.append_all ? "_append_all" : "");
+                         (param.param.append_all ? "_append_all" : "") +
+                         (param.param.storage == HistogramStorage::kCompact ? "_compact" : "");
       std::replace(name.begin(), name.end(), ',', '_');
       return name;
     });
@@ -271,6 +286,11 @@ TEST(Database, OptionsMustMatchExceptThreshold) {
   parse_verification_stages("temporal,geometric", other.verification);
   EXPECT_NE(
       message_of<InvalidArgument>([&] { db.check_compatible(other); }).find("verification.stages"),
+      std::string::npos);
+  other = o;
+  other.descriptor.storage = HistogramStorage::kCompact;
+  EXPECT_NE(
+      message_of<InvalidArgument>([&] { db.check_compatible(other); }).find("descriptor.storage"),
       std::string::npos);
   other = o;
   other.similarity.metric = SimilarityMetric::kL1;

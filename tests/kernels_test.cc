@@ -3,6 +3,7 @@
 #include "internal/kernels.h"
 
 #include <algorithm>
+#include <cstdlib>
 #include <limits>
 #include <vector>
 
@@ -123,6 +124,34 @@ TEST(Kernels, CellL1MatchesScalarOnEveryTargetIncludingExtremes) {
     cell_l1(a.data(), b.data(), cells, got.data());
     EXPECT_EQ(got, ref);
     cell_l1(b.data(), a.data(), cells, got.data());  // symmetric
+    EXPECT_EQ(got, ref);
+  });
+}
+
+TEST(Kernels, CellSadMatchesScalarOnEveryTargetIncludingExtremes) {
+  const int cells = 9;
+  std::vector<CompactBin> a(static_cast<std::size_t>(cells) * kCompactBins), b(a.size());
+  std::uint64_t s = 5;
+  for (std::size_t i = 0; i < a.size(); ++i) {
+    a[i] = static_cast<CompactBin>(splitmix64(s));
+    b[i] = static_cast<CompactBin>(splitmix64(s) % 40);
+  }
+  std::fill(a.begin(), a.begin() + kCompactBins, CompactBin{255});  // cell 0: the largest distance
+  std::fill(b.begin(), b.begin() + kCompactBins, CompactBin{0});
+  std::fill(a.begin() + kCompactBins, a.begin() + 2 * kCompactBins, CompactBin{7});  // cell 1: 0
+  std::fill(b.begin() + kCompactBins, b.begin() + 2 * kCompactBins, CompactBin{7});
+  std::vector<std::uint32_t> ref(cells);
+  cell_sad_scalar(a.data(), b.data(), cells, ref.data());
+  EXPECT_EQ(ref[0], 255u * kCompactBins);
+  EXPECT_EQ(ref[1], 0u);
+  std::uint32_t by_hand = 0;  // cell 2, independently
+  for (int i = 2 * kCompactBins; i < 3 * kCompactBins; ++i) by_hand += std::abs(a[i] - b[i]);
+  EXPECT_EQ(ref[2], by_hand);
+  for_each_target([&] {
+    std::vector<std::uint32_t> got(cells, 1);
+    cell_sad(a.data(), b.data(), cells, got.data());
+    EXPECT_EQ(got, ref);
+    cell_sad(b.data(), a.data(), cells, got.data());  // symmetric
     EXPECT_EQ(got, ref);
   });
 }

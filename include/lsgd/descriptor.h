@@ -6,6 +6,7 @@
 // memory traffic of the 32-bit counts of the reference implementation.
 #pragma once
 
+#include <cstddef>
 #include <cstdint>
 #include <vector>
 
@@ -14,28 +15,79 @@
 
 namespace lsgd {
 
-constexpr int kBins = 256;  // one bin per 8-bit intensity
+constexpr int kBins = 256;    // one bin per 8-bit intensity
 using Bin = std::uint16_t;    // one histogram bin (saturating at 65535)
 using Count = std::uint32_t;  // pixels in a cell
 
-// Non-owning view of one frame's descriptor (inside a Descriptor or a FrameStore).
+// How stored histograms are held (option descriptor.storage).
+enum class HistogramStorage {
+  // The paper's histogram: kBins 16-bit counts per cell plus the cell's pixel
+  // count (41,280 bytes per 1241x376 frame at S_p = 40). Exact.
+  kExact,
+  // Beyond the paper: kCompactBins bins of two intensities each, as 8-bit
+  // values normalised to a cell mass of kCompactMass:
+  //   q = min(255, round((h[2b] + h[2b + 1]) * kCompactMass / pixels)).
+  // A quarter of the bytes (10,240 per 1241x376 frame) and of the memory
+  // traffic of a search; scores approximate the exact ones (docs/performance.md
+  // has the measured accuracy). A bin saturates when it holds more than a
+  // quarter of its cell's pixels.
+  kCompact,
+};
+constexpr int kCompactBins = kBins / 2;
+constexpr int kCompactMass = 1024;
+using CompactBin = std::uint8_t;
+
+const char* to_string(HistogramStorage storage);
+// Parses "exact" or "compact"; throws InvalidArgument otherwise.
+HistogramStorage parse_histogram_storage(const char* name);
+
+struct DescriptorOptions {
+  HistogramStorage storage = HistogramStorage::kExact;
+  void check() const;
+};
+
+// Non-owning view of one frame's descriptor (inside a Descriptor or a
+// FrameStore), in either storage: exact when `hist` is set, compact when
+// `compact` is set.
 struct DescriptorView {
-  const Bin* hist = nullptr;       // cells * kBins counts, cell-major
-  const Count* pixels = nullptr;  // cells pixel counts (sum of each cell's histogram before saturation)
+  const Bin* hist = nullptr;  // exact: cells * kBins counts, cell-major
+  const Count* pixels =
+      nullptr;  // exact: cells pixel counts (sum of each cell's histogram before saturation)
   int cells = 0;
+  const CompactBin* compact = nullptr;  // compact: cells * kCompactBins, cell-major
+  // compact: mean pixels per cell (image pixels / cells), which turns compact
+  // L1 distances back into pixel counts.
+  double cell_pixels = 0;
+
+  HistogramStorage storage() const {
+    return compact != nullptr ? HistogramStorage::kCompact : HistogramStorage::kExact;
+  }
 };
 
 struct Descriptor {
   GridSize grid;
-  std::vector<Bin> hist;      // cells * kBins
-  std::vector<Count> pixels;  // cells
+  HistogramStorage storage = HistogramStorage::kExact;
+  std::vector<Bin> hist;            // exact: cells * kBins; empty when compact
+  std::vector<Count> pixels;        // exact: cells; empty when compact
+  std::vector<CompactBin> compact;  // compact: cells * kCompactBins; empty when exact
+  double cell_pixels = 0;           // compact: mean pixels per cell
 
-  DescriptorView view() const { return {hist.data(), pixels.data(), grid.cells()}; }
+  DescriptorView view() const;
+  // Bytes of histogram data this storage needs for `cells` cells.
+  static std::size_t bytes_per_frame(HistogramStorage storage, int cells);
+  // Throws InvalidArgument when the vectors' sizes do not match the grid and
+  // storage (`what` names the descriptor in the message).
+  void check_consistent(const char* what) const;
 };
 
 // Builds the descriptor of `image` from its segmentation (same size; throws
 // InvalidArgument otherwise). Reuses out's storage.
 void describe(const GrayImage& image, const Segmentation& segmentation, Descriptor& out);
 Descriptor describe(const GrayImage& image, const Segmentation& segmentation);
+
+// Encodes an exact descriptor in compact storage (see HistogramStorage). An
+// empty cell encodes as all zeros. Throws InvalidArgument when `exact` is not
+// a consistent exact descriptor. Reuses out's storage.
+void compact(const Descriptor& exact, Descriptor& out);
 
 }  // namespace lsgd

@@ -34,6 +34,7 @@ struct DecisionOptions {
 
 struct DetectorOptions {
   SegmentationOptions segmentation;
+  DescriptorOptions descriptor;
   SimilarityOptions similarity;
   SearchOptions search;
   VerificationOptions verification;
@@ -127,7 +128,8 @@ class Detector {
   // Scratch reused across frames (no allocation per frame once warm).
   GrayImage gray_;
   Segmentation segmentation_;
-  Descriptor descriptor_;
+  Descriptor exact_;       // the frame's histograms as computed
+  Descriptor descriptor_;  // ... and as stored (descriptor.storage)
   std::vector<Candidate> scratch_;
 };
 

@@ -22,7 +22,8 @@ class FrameStore {
   FrameStore(FrameStore&&) noexcept = default;
   FrameStore& operator=(FrameStore&&) noexcept = default;
 
-  // The grid is fixed by the first frame added; later frames must match it
+  // The grid, the storage (exact or compact) and, for compact storage, the
+  // cell size are fixed by the first frame added; later frames must match
   // (throws InvalidArgument otherwise, leaving the store unchanged). Strong
   // guarantee: if allocation fails the store is unchanged too.
   std::int64_t add(const Descriptor& descriptor);
@@ -30,6 +31,7 @@ class FrameStore {
   std::int64_t size() const { return size_; }
   bool empty() const { return size_ == 0; }
   const GridSize& grid() const { return grid_; }
+  HistogramStorage storage() const { return storage_; }
   DescriptorView view(std::int64_t frame) const;
 
   // Bytes of descriptor data held per frame.
@@ -41,11 +43,24 @@ class FrameStore {
  private:
   static constexpr std::size_t kChunkBytes = std::size_t{4} << 20;
 
+  template <typename T>
+  static void copy_chunks(const std::vector<std::unique_ptr<T[]>>& from, std::size_t elements,
+                          std::vector<std::unique_ptr<T[]>>& to);
+  template <typename T>
+  void add_slot(const std::vector<T>& data, std::vector<std::unique_ptr<T[]>>& chunks,
+                const std::vector<Count>& pixels);
+
   GridSize grid_;
+  HistogramStorage storage_ = HistogramStorage::kExact;
+  double cell_pixels_ = 0;  // compact storage: mean pixels per cell
   std::int64_t size_ = 0;
   std::int64_t chunk_frames_ = 0;
-  std::vector<std::unique_ptr<Bin[]>> chunks_;  // chunk_frames_ * cells * kBins bins each
-  std::vector<Count> pixels_;                   // cells per frame, all frames
+  // Exact storage: chunk_frames_ * cells * kBins bins per chunk, and cells
+  // pixel counts per frame.
+  std::vector<std::unique_ptr<Bin[]>> chunks_;
+  std::vector<Count> pixels_;
+  // Compact storage: chunk_frames_ * cells * kCompactBins bins per chunk.
+  std::vector<std::unique_ptr<CompactBin[]>> compact_chunks_;
 };
 
 }  // namespace lsgd

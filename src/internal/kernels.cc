@@ -116,6 +116,30 @@ void CellL1Simd(const Bin* a, const Bin* b, int cells, std::uint32_t* out) {
   }
 }
 
+void CellSadSimd(const CompactBin* a, const CompactBin* b, int cells, std::uint32_t* out) {
+  const hn::ScalableTag<std::uint8_t> d8;
+  const hn::Repartition<std::uint64_t, decltype(d8)> d64;
+  const std::size_t lanes = hn::Lanes(d8);
+  for (int k = 0; k < cells; ++k) {
+    const CompactBin* pa = a + static_cast<std::size_t>(k) * kCompactBins;
+    const CompactBin* pb = b + static_cast<std::size_t>(k) * kCompactBins;
+    auto acc = hn::Zero(d64);
+    std::size_t i = 0;
+    for (; i + lanes <= static_cast<std::size_t>(kCompactBins); i += lanes) {
+      const auto va = hn::LoadU(d8, pa + i);
+      const auto vb = hn::LoadU(d8, pb + i);
+      // |a - b| of unsigned bytes: one of the two saturated differences is 0.
+      const auto diff = hn::Or(hn::SaturatedSub(va, vb), hn::SaturatedSub(vb, va));
+      acc = hn::Add(acc, hn::SumsOf8(diff));  // psadbw on x86
+    }
+    auto sum = static_cast<std::uint32_t>(hn::GetLane(hn::SumOfLanes(d64, acc)));
+    for (; i < static_cast<std::size_t>(kCompactBins); ++i) {  // vectors wider than a cell
+      sum += pa[i] > pb[i] ? pa[i] - pb[i] : pb[i] - pa[i];
+    }
+    out[k] = sum;
+  }
+}
+
 std::int64_t TargetOf() { return HWY_TARGET; }
 
 }  // namespace HWY_NAMESPACE
@@ -127,6 +151,7 @@ namespace lsgd::internal {
 
 HWY_EXPORT(AssignRowSimd);
 HWY_EXPORT(CellL1Simd);
+HWY_EXPORT(CellSadSimd);
 HWY_EXPORT(RowSumsSimd);
 HWY_EXPORT(TargetOf);
 
@@ -173,6 +198,20 @@ void cell_l1_scalar(const Bin* a, const Bin* b, int cells, std::uint32_t* out) {
     const Bin* pb = b + static_cast<std::size_t>(k) * kBins;
     std::uint32_t sum = 0;
     for (int i = 0; i < kBins; ++i) sum += pa[i] > pb[i] ? pa[i] - pb[i] : pb[i] - pa[i];
+    out[k] = sum;
+  }
+}
+
+void cell_sad(const CompactBin* a, const CompactBin* b, int cells, std::uint32_t* out) {
+  HWY_DYNAMIC_DISPATCH(CellSadSimd)(a, b, cells, out);
+}
+
+void cell_sad_scalar(const CompactBin* a, const CompactBin* b, int cells, std::uint32_t* out) {
+  for (int k = 0; k < cells; ++k) {
+    const CompactBin* pa = a + static_cast<std::size_t>(k) * kCompactBins;
+    const CompactBin* pb = b + static_cast<std::size_t>(k) * kCompactBins;
+    std::uint32_t sum = 0;
+    for (int i = 0; i < kCompactBins; ++i) sum += pa[i] > pb[i] ? pa[i] - pb[i] : pb[i] - pa[i];
     out[k] = sum;
   }
 }

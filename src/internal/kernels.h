@@ -58,6 +58,12 @@ int row_sums_scalar(const std::int32_t* labels, const std::uint8_t* pixels, int 
 void cell_l1(const Bin* a, const Bin* b, int cells, std::uint32_t* out);
 void cell_l1_scalar(const Bin* a, const Bin* b, int cells, std::uint32_t* out);
 
+// Per-cell L1 distances of two cell-major compact histograms of `cells` x
+// kCompactBins 8-bit bins: out[k] = sum_b |a[k][b] - b[k][b]| (sum of
+// absolute differences, at most kCompactBins * 255).
+void cell_sad(const CompactBin* a, const CompactBin* b, int cells, std::uint32_t* out);
+void cell_sad_scalar(const CompactBin* a, const CompactBin* b, int cells, std::uint32_t* out);
+
 // For tests and benchmarks: the SIMD targets compiled in and supported by
 // this CPU (Highway target bits, best first), their names, and a way to
 // restrict dispatch to one of them (0 restores the default choice).

@@ -218,6 +218,15 @@ void read_similarity(const YAML::Node& node, const std::string& source, Similari
              }}});
 }
 
+void read_descriptor(const YAML::Node& node, const std::string& source, DescriptorOptions& o) {
+  read_map(node, source, "descriptor",
+           {{"storage", [&](const YAML::Node& v, const std::string& k) {
+               o.storage = read_enum(v, source, k, parse_histogram_storage,
+                                     std::vector<HistogramStorage>{HistogramStorage::kExact,
+                                                                   HistogramStorage::kCompact});
+             }}});
+}
+
 void read_nodes(const YAML::Node& node, const std::string& source, DynamicNodeOptions& o) {
   read_map(
       node, source, "search.nodes",
@@ -310,6 +319,8 @@ void read_root(const YAML::Node& root, const std::string& source, DetectorOption
       root, source, "",
       {{"segmentation", [&](const YAML::Node& v,
                             const std::string&) { read_segmentation(v, source, o.segmentation); }},
+       {"descriptor",
+        [&](const YAML::Node& v, const std::string&) { read_descriptor(v, source, o.descriptor); }},
        {"similarity",
         [&](const YAML::Node& v, const std::string&) { read_similarity(v, source, o.similarity); }},
        {"search",
@@ -425,6 +436,9 @@ std::string to_yaml(const DetectorOptions& options) {
       << "  iterations: " << seg.iterations << "\n"
       << "  intensity_scale: " << format_double(seg.intensity_scale) << "\n"
       << "  distance_scale: " << format_double(seg.distance_scale) << "\n"
+      << "descriptor:\n"
+      << "  storage: " << to_string(options.descriptor.storage)
+      << "  # exact (16-bit, 256 bins) | compact (8-bit, 128 bins)\n"
       << "similarity:\n"
       << "  metric: " << to_string(options.similarity.metric)
       << "  # reference | l1 | normalized_l1\n"

@@ -581,10 +581,22 @@ void Database::restore(Detector& detector) const {
       static_cast<std::size_t>(std::max(o.verification.temporal_options.agree, 1));
   const auto cells = static_cast<std::size_t>(m.grid.cells());
 
+  // Compact storage keeps cells * kCompactBins bytes per frame and no pixel
+  // counts (an empty pixels blob); exact storage 16-bit bins and counts.
+  const bool compact = o.descriptor.storage == HistogramStorage::kCompact;
+  const std::size_t hist_bytes =
+      compact ? cells * kCompactBins * sizeof(CompactBin) : cells * kBins * sizeof(Bin);
+  const std::size_t pixel_bytes = compact ? 0 : cells * sizeof(Count);
   Descriptor descriptor;
   descriptor.grid = m.grid;
-  descriptor.hist.resize(cells * kBins);
-  descriptor.pixels.resize(cells);
+  descriptor.storage = o.descriptor.storage;
+  if (compact) {
+    descriptor.compact.resize(cells * kCompactBins);
+    descriptor.cell_pixels = static_cast<double>(m.width) * m.height / static_cast<double>(cells);
+  } else {
+    descriptor.hist.resize(cells * kBins);
+    descriptor.pixels.resize(cells);
+  }
   std::vector<float> points;
   std::vector<std::uint8_t> orb;
   std::vector<std::vector<std::int64_t>> nodes;
@@ -611,12 +623,15 @@ void Database::restore(Detector& detector) const {
     row.hist_size = sqlite3_column_bytes(s, 3);
     row.pixels = sqlite3_column_blob(s, 4);
     row.pixels_size = sqlite3_column_bytes(s, 4);
-    if (row.hist_size != static_cast<std::int64_t>(cells * kBins * sizeof(Bin))) {
-      bad("histogram blob has ", row.hist_size, " bytes, expected ", cells * kBins * sizeof(Bin),
-          " (", m.grid.rows, "x", m.grid.cols, " cells of ", kBins, " 16-bit bins)");
+    if (row.hist_size != static_cast<std::int64_t>(hist_bytes)) {
+      bad("histogram blob has ", row.hist_size, " bytes, expected ", hist_bytes, " (",
+          m.grid.rows, "x", m.grid.cols, " cells of ",
+          compact ? "128 8-bit bins, descriptor.storage compact"
+                  : "256 16-bit bins, descriptor.storage exact",
+          ")");
     }
-    if (row.pixels_size != static_cast<std::int64_t>(cells * sizeof(Count))) {
-      bad("pixels blob has ", row.pixels_size, " bytes, expected ", cells * sizeof(Count));
+    if (row.pixels_size != static_cast<std::int64_t>(pixel_bytes)) {
+      bad("pixels blob has ", row.pixels_size, " bytes, expected ", pixel_bytes);
     }
     if (nodes_mode) {
       if (type(5) != SQLITE_INTEGER) bad("node is not an integer (search mode nodes)");
@@ -651,8 +666,12 @@ void Database::restore(Detector& detector) const {
           "): the file was modified or damaged");
     }
 
-    decode_le(static_cast<const std::uint8_t*>(row.hist), cells * kBins, descriptor.hist.data());
-    decode_le(static_cast<const std::uint8_t*>(row.pixels), cells, descriptor.pixels.data());
+    if (compact) {
+      std::memcpy(descriptor.compact.data(), row.hist, hist_bytes);
+    } else {
+      decode_le(static_cast<const std::uint8_t*>(row.hist), cells * kBins, descriptor.hist.data());
+      decode_le(static_cast<const std::uint8_t*>(row.pixels), cells, descriptor.pixels.data());
+    }
     points.clear();
     orb.clear();
     if (geometric) {
@@ -708,8 +727,12 @@ void Database::Impl::insert_frame(const Detector& detector, std::int64_t frame,
   const auto cells = static_cast<std::size_t>(view.cells);
   hist_bytes.clear();
   pixel_bytes.clear();
-  encode_le(view.hist, cells * kBins, hist_bytes);
-  encode_le(view.pixels, cells, pixel_bytes);
+  if (view.storage() == HistogramStorage::kCompact) {
+    hist_bytes.assign(view.compact, view.compact + cells * kCompactBins);
+  } else {
+    encode_le(view.hist, cells * kBins, hist_bytes);
+    encode_le(view.pixels, cells, pixel_bytes);
+  }
   const bool geometric = detector.options().verification.geometric;
   feature_bytes.clear();
   if (geometric) {
@@ -741,7 +764,12 @@ void Database::Impl::insert_frame(const Detector& detector, std::int64_t frame,
   sqlite3_bind_int64(s, 2, session);
   sqlite3_bind_text(s, 3, name.c_str(), static_cast<int>(name.size()), SQLITE_STATIC);
   sqlite3_bind_blob(s, 4, hist_bytes.data(), static_cast<int>(hist_bytes.size()), SQLITE_STATIC);
-  sqlite3_bind_blob(s, 5, pixel_bytes.data(), static_cast<int>(pixel_bytes.size()), SQLITE_STATIC);
+  if (pixel_bytes.empty()) {  // compact storage: an empty blob, not NULL
+    sqlite3_bind_zeroblob(s, 5, 0);
+  } else {
+    sqlite3_bind_blob(s, 5, pixel_bytes.data(), static_cast<int>(pixel_bytes.size()),
+                      SQLITE_STATIC);
+  }
   if (node != kNull) sqlite3_bind_int64(s, 6, node);
   if (place != kNull) sqlite3_bind_int64(s, 7, place);
   if (geometric) {

@@ -15,8 +15,9 @@
 // Large stores are off by default (memory and setup time). Add them with
 //   build/bench/lsgd_stages_bench --lsgd_large --benchmark_filter=SearchExhaustive
 // which registers BM_SearchExhaustive/cells20_320x240 at 20000 and 100000
-// frames (20-cell descriptors of 20,560 bytes: 411 MB and 2.06 GB) and
-// cells80_1241x376 at 20000 frames (82,240 bytes each: 1.64 GB); it also adds
+// frames (20-cell descriptors of 10,320 bytes: 206 MB and 1.03 GB; compact:
+// 2,560 bytes) and cells80_1241x376 at 20000 frames (41,280 bytes each:
+// 826 MB; compact 10,240 bytes); it also adds
 // BM_DynamicNodes/cells80_1241x376 at 1000 and 5000 frames (node setup takes
 // about a minute, see below). Select any subset with --benchmark_filter=REGEX.
 #include <benchmark/benchmark.h>
@@ -27,13 +28,12 @@
 #include <cstring>
 #include <map>
 #include <memory>
+#include <opencv2/core.hpp>
+#include <opencv2/imgproc.hpp>
 #include <random>
 #include <string>
 #include <utility>
 #include <vector>
-
-#include <opencv2/core.hpp>
-#include <opencv2/imgproc.hpp>
 
 #include "lsgd/descriptor.h"
 #include "lsgd/frame_store.h"
@@ -58,14 +58,18 @@ cv::Mat make_bgr(int width, int height, std::uint32_t seed, int shift = 0) {
   const int scene_w = width + 256;  // scene wider than the view, for shifts
   cv::Mat scene(height, scene_w, CV_32FC1);
   // Low-frequency sinusoids.
-  struct Wave { double fx, fy, phase, amp; };
+  struct Wave {
+    double fx, fy, phase, amp;
+  };
   std::vector<Wave> waves(6);
   for (Wave& w : waves) {
     w = {(0.5 + 4.0 * u(rng)) * 2 * M_PI / scene_w, (0.5 + 3.0 * u(rng)) * 2 * M_PI / height,
          2 * M_PI * u(rng), 10 + 20 * u(rng)};
   }
   // Soft blobs.
-  struct Blob { double x, y, r, amp; };
+  struct Blob {
+    double x, y, r, amp;
+  };
   std::vector<Blob> blobs(12);
   for (Blob& b : blobs) {
     b = {scene_w * u(rng), height * u(rng), 15 + 60 * u(rng), -50 + 100 * u(rng)};
@@ -85,8 +89,10 @@ cv::Mat make_bgr(int width, int height, std::uint32_t seed, int shift = 0) {
   // Hard-edged facades with window grids.
   const int facades = 10 + static_cast<int>(u(rng) * 8);
   for (int f = 0; f < facades; ++f) {
-    const int w = 30 + static_cast<int>(u(rng) * 120), h = 40 + static_cast<int>(u(rng) * (height / 2));
-    const int x0 = static_cast<int>(u(rng) * (scene_w - w)), y0 = static_cast<int>(u(rng) * (height - h));
+    const int w = 30 + static_cast<int>(u(rng) * 120),
+              h = 40 + static_cast<int>(u(rng) * (height / 2));
+    const int x0 = static_cast<int>(u(rng) * (scene_w - w)),
+              y0 = static_cast<int>(u(rng) * (height - h));
     const float base = static_cast<float>(40 + 180 * u(rng));
     const cv::Rect r(x0, y0, w, h);
     scene(r).setTo(base);
@@ -175,34 +181,50 @@ void route_frame(const std::vector<lsgd::Descriptor>& base, std::int64_t j, std:
   }
 }
 
-// A store holding the first `frames` route frames of one size (built once,
-// grown on demand and shared by every benchmark of that size).
-const lsgd::FrameStore& route_store(Size size, std::int64_t frames) {
+// A store holding the first `frames` route frames of one size and storage
+// (built once, grown on demand and shared by every benchmark of that size and
+// storage; compact frames are the exact ones encoded).
+const lsgd::FrameStore& route_store(
+    Size size, std::int64_t frames,
+    lsgd::HistogramStorage storage = lsgd::HistogramStorage::kExact) {
   struct Entry {
     lsgd::FrameStore store;
     std::mt19937 rng{7};
   };
-  static std::map<int, std::unique_ptr<Entry>> cache;
-  auto& entry = cache[size.width * 100000 + size.height];
+  static std::map<std::pair<int, lsgd::HistogramStorage>, std::unique_ptr<Entry>> cache;
+  auto& entry = cache[{size.width * 100000 + size.height, storage}];
   if (!entry) entry = std::make_unique<Entry>();
   if (entry->store.size() < frames) {
     const auto& base = places(size);
-    entry->store.reserve(frames);
-    lsgd::Descriptor d;
+    lsgd::Descriptor d, c;
     for (std::int64_t j = entry->store.size(); j < frames; ++j) {
       route_frame(base, j, entry->rng, d);
-      entry->store.add(d);
+      if (storage == lsgd::HistogramStorage::kCompact) {
+        lsgd::compact(d, c);
+        // Interpolated route frames do not all hold exactly the image's pixels;
+        // a store has one cell size.
+        if (!entry->store.empty()) c.cell_pixels = entry->store.view(0).cell_pixels;
+        entry->store.add(c);
+      } else {
+        entry->store.add(d);
+      }
+      if (j == 0) entry->store.reserve(frames);
     }
   }
   return entry->store;
 }
 
 // A query that revisits the route: frame `j` of the route under another seed.
-lsgd::Descriptor route_query(Size size, std::int64_t j) {
+lsgd::Descriptor route_query(Size size, std::int64_t j,
+                             lsgd::HistogramStorage storage = lsgd::HistogramStorage::kExact) {
   std::mt19937 rng(99);
   lsgd::Descriptor d;
   route_frame(places(size), j, rng, d);
-  return d;
+  if (storage == lsgd::HistogramStorage::kExact) return d;
+  lsgd::Descriptor c;
+  lsgd::compact(d, c);
+  c.cell_pixels = route_store(size, 1, storage).view(0).cell_pixels;  // as in route_store
+  return c;
 }
 
 std::string size_label(Size size) {
@@ -254,27 +276,35 @@ void BM_Describe(benchmark::State& state, Size size) {
 
 // ---------------------------------------------------------------- similarity
 
-void BM_Similarity(benchmark::State& state, lsgd::SimilarityMetric metric) {
+void BM_Similarity(benchmark::State& state, lsgd::SimilarityMetric metric,
+                   lsgd::HistogramStorage storage) {
   const auto& base = places(kKitti);  // two real 80-cell descriptors
-  const lsgd::DescriptorView a = base[0].view(), b = base[1].view();
+  lsgd::Descriptor ca, cb;
+  if (storage == lsgd::HistogramStorage::kCompact) {
+    lsgd::compact(base[0], ca);
+    lsgd::compact(base[1], cb);
+  }
+  const bool compact = storage == lsgd::HistogramStorage::kCompact;
+  const lsgd::DescriptorView a = compact ? ca.view() : base[0].view();
+  const lsgd::DescriptorView b = compact ? cb.view() : base[1].view();
   double score = 0;
   for (auto _ : state) {
     benchmark::DoNotOptimize(a.hist);
     score = lsgd::similarity(a, b, metric);
     benchmark::DoNotOptimize(score);
   }
-  const std::int64_t bytes =
-      2 * static_cast<std::int64_t>(a.cells) * (lsgd::kBins + 1) * sizeof(lsgd::Count);
   state.SetItemsProcessed(state.iterations());
-  state.SetBytesProcessed(state.iterations() * bytes);
+  state.SetBytesProcessed(
+      state.iterations() * 2 *
+      static_cast<std::int64_t>(lsgd::Descriptor::bytes_per_frame(storage, a.cells)));
 }
 
 // ---------------------------------------------------------------- search
 
-void BM_SearchExhaustive(benchmark::State& state, Size size) {
+void BM_SearchExhaustive(benchmark::State& state, Size size, lsgd::HistogramStorage storage) {
   const std::int64_t frames = state.range(0);
-  const lsgd::FrameStore& store = route_store(size, frames);
-  const lsgd::Descriptor query = route_query(size, frames / 2);
+  const lsgd::FrameStore& store = route_store(size, frames, storage);
+  const lsgd::Descriptor query = route_query(size, frames / 2, storage);
   lsgd::SearchOptions options;  // defaults: min_gap 50, top_n 10
   // query_id = frames + min_gap: exactly the first `frames` frames are scanned.
   const std::int64_t query_id = frames + options.min_gap;
@@ -303,37 +333,44 @@ struct NodesSetup {
 };
 
 const NodesSetup& nodes_setup(Size size, std::int64_t frames, const lsgd::SearchOptions& options,
-                              lsgd::SimilarityMetric metric) {
+                              lsgd::SimilarityMetric metric, lsgd::HistogramStorage storage) {
   struct Builder {
     NodesSetup state;
     std::map<std::int64_t, NodesSetup> snapshots;
   };
-  static std::map<int, Builder> builders;
-  Builder& b = builders[size.width * 100000 + size.height];
+  static std::map<std::pair<int, lsgd::HistogramStorage>, Builder> builders;
+  Builder& b = builders[{size.width * 100000 + size.height, storage}];
   auto it = b.snapshots.find(frames);
   if (it != b.snapshots.end()) return it->second;
-  const lsgd::FrameStore& full = route_store(size, frames);
+  const lsgd::FrameStore& full = route_store(size, frames, storage);
   std::vector<lsgd::Candidate> scratch, out;
   lsgd::Descriptor d;
   d.grid = full.grid();
+  d.storage = storage;
   for (std::int64_t j = b.state.store.size(); j < frames; ++j) {
     const lsgd::DescriptorView v = full.view(j);
     b.state.nodes.assign(b.state.store, v, j, options, metric, scratch, out);
-    d.hist.assign(v.hist, v.hist + static_cast<std::size_t>(v.cells) * lsgd::kBins);
-    d.pixels.assign(v.pixels, v.pixels + v.cells);
+    if (storage == lsgd::HistogramStorage::kCompact) {
+      d.compact.assign(v.compact,
+                       v.compact + static_cast<std::size_t>(v.cells) * lsgd::kCompactBins);
+      d.cell_pixels = v.cell_pixels;
+    } else {
+      d.hist.assign(v.hist, v.hist + static_cast<std::size_t>(v.cells) * lsgd::kBins);
+      d.pixels.assign(v.pixels, v.pixels + v.cells);
+    }
     b.state.store.add(d);
   }
   return b.snapshots.emplace(frames, b.state).first->second;
 }
 
-void BM_DynamicNodes(benchmark::State& state, Size size) {
+void BM_DynamicNodes(benchmark::State& state, Size size, lsgd::HistogramStorage storage) {
   const std::int64_t frames = state.range(0);
   lsgd::SearchOptions options;  // defaults: min_gap 50, top_n 10, reference thresholds
   options.mode = lsgd::SearchMode::kDynamicNodes;
   const auto metric = lsgd::SimilarityMetric::kReference;
-  const NodesSetup& setup = nodes_setup(size, frames, options, metric);  // untimed
+  const NodesSetup& setup = nodes_setup(size, frames, options, metric, storage);  // untimed
   // The query continues the route: its previous frame is the last stored one.
-  const lsgd::Descriptor query = route_query(size, frames);
+  const lsgd::Descriptor query = route_query(size, frames, storage);
   std::vector<lsgd::Candidate> scratch, out;
   lsgd::DynamicNodes::Outcome outcome;
   for (auto _ : state) {
@@ -419,45 +456,57 @@ void register_all(bool large) {
     benchmark::RegisterBenchmark(("BM_Describe/" + label).c_str(), BM_Describe, s)
         ->Unit(benchmark::kMicrosecond);
   }
+  using lsgd::HistogramStorage;
   for (auto metric : {lsgd::SimilarityMetric::kReference, lsgd::SimilarityMetric::kL1,
                       lsgd::SimilarityMetric::kNormalizedL1}) {
     benchmark::RegisterBenchmark(
         ("BM_Similarity/cells80/" + std::string(lsgd::to_string(metric))).c_str(), BM_Similarity,
-        metric)
+        metric, HistogramStorage::kExact)
         ->Unit(benchmark::kMicrosecond);
   }
-  auto* exhaustive = benchmark::RegisterBenchmark(
-      ("BM_SearchExhaustive/" + size_label(kKitti)).c_str(), BM_SearchExhaustive, kKitti);
-  exhaustive->ArgName("frames")->Arg(1000)->Arg(5000)->Unit(benchmark::kMillisecond);
-  if (large) {
-    exhaustive->Arg(20000);
-    benchmark::RegisterBenchmark(("BM_SearchExhaustive/" + size_label(kSmall)).c_str(),
-                                 BM_SearchExhaustive, kSmall)
-        ->ArgName("frames")
-        ->Arg(20000)
-        ->Arg(100000)
-        ->Unit(benchmark::kMillisecond);
+  benchmark::RegisterBenchmark("BM_Similarity/cells80/reference/compact", BM_Similarity,
+                               lsgd::SimilarityMetric::kReference, HistogramStorage::kCompact)
+      ->Unit(benchmark::kMicrosecond);
+  // Exact and compact storage side by side (name suffix /compact).
+  for (HistogramStorage storage : {HistogramStorage::kExact, HistogramStorage::kCompact}) {
+    const std::string suffix = storage == HistogramStorage::kCompact ? "/compact" : "";
+    auto* exhaustive =
+        benchmark::RegisterBenchmark(("BM_SearchExhaustive/" + size_label(kKitti) + suffix).c_str(),
+                                     BM_SearchExhaustive, kKitti, storage);
+    exhaustive->ArgName("frames")->Arg(1000)->Arg(5000)->Unit(benchmark::kMillisecond);
+    if (large) {
+      exhaustive->Arg(20000);
+      benchmark::RegisterBenchmark(("BM_SearchExhaustive/" + size_label(kSmall) + suffix).c_str(),
+                                   BM_SearchExhaustive, kSmall, storage)
+          ->ArgName("frames")
+          ->Arg(20000)
+          ->Arg(100000)
+          ->Unit(benchmark::kMillisecond);
+    }
   }
   // 20-cell (320x240) descriptors: building the node structure is quadratic in
   // the number of frames (with the reference thresholds every node passes the
   // first-frame test at these cell sizes), ~4x cheaper than with 80 cells.
-  benchmark::RegisterBenchmark(("BM_DynamicNodes/" + size_label(kSmall)).c_str(), BM_DynamicNodes,
-                               kSmall)
-      ->ArgName("frames")
-      ->Arg(1000)
-      ->Arg(5000)
-      ->Unit(benchmark::kMicrosecond);
-  if (large) {
-    benchmark::RegisterBenchmark(("BM_DynamicNodes/" + size_label(kKitti)).c_str(),
-                                 BM_DynamicNodes, kKitti)
+  for (HistogramStorage storage : {HistogramStorage::kExact, HistogramStorage::kCompact}) {
+    const std::string suffix = storage == HistogramStorage::kCompact ? "/compact" : "";
+    benchmark::RegisterBenchmark(("BM_DynamicNodes/" + size_label(kSmall) + suffix).c_str(),
+                                 BM_DynamicNodes, kSmall, storage)
         ->ArgName("frames")
         ->Arg(1000)
         ->Arg(5000)
         ->Unit(benchmark::kMicrosecond);
+    if (large) {
+      benchmark::RegisterBenchmark(("BM_DynamicNodes/" + size_label(kKitti) + suffix).c_str(),
+                                   BM_DynamicNodes, kKitti, storage)
+          ->ArgName("frames")
+          ->Arg(1000)
+          ->Arg(5000)
+          ->Unit(benchmark::kMicrosecond);
+    }
   }
-  benchmark::RegisterBenchmark(("BM_TemporalRescore/" + size_label(kKitti) + "/frames:1000/cands:10")
-                                   .c_str(),
-                               BM_TemporalRescore)
+  benchmark::RegisterBenchmark(
+      ("BM_TemporalRescore/" + size_label(kKitti) + "/frames:1000/cands:10").c_str(),
+      BM_TemporalRescore)
       ->Unit(benchmark::kMicrosecond);
   benchmark::RegisterBenchmark("BM_GeometricAdd/320x240", BM_GeometricAdd)
       ->Unit(benchmark::kMillisecond);

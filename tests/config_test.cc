@@ -205,6 +205,20 @@ TEST(ParseConfig, InvalidEnumsAreFormatErrors) {
                             {kSource, "'descriptor.storage'", "tiny", "compact"});
 }
 
+TEST(LoadConfig, ShippedConfigsLoad) {
+  const std::string dir = std::string(LSGD_SOURCE_DIR) + "/configs/";
+  const DetectorOptions paper = load_config(dir + "paper.yaml");
+  EXPECT_EQ(paper.segmentation.iterations, 10);
+  EXPECT_FALSE(paper.verification.temporal);
+  const DetectorOptions reference = load_config(dir + "reference-code.yaml");
+  EXPECT_EQ(reference.segmentation.superpixel_size, 50);
+  const DetectorOptions compact = load_config(dir + "compact.yaml");
+  EXPECT_EQ(compact.descriptor.storage, HistogramStorage::kCompact);
+  DetectorOptions expected;  // otherwise the defaults
+  expected.descriptor.storage = HistogramStorage::kCompact;
+  EXPECT_EQ(to_yaml(compact), to_yaml(expected));
+}
+
 TEST(ParseConfig, DescriptorStorage) {
   EXPECT_EQ(parse_config("", "t").descriptor.storage, HistogramStorage::kExact);
   const DetectorOptions o = parse_config("descriptor:\n  storage: compact\n", "t");

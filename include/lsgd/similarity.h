@@ -34,7 +34,14 @@ struct SimilarityOptions {
 
 // Per-cell L1 by a SIMD kernel chosen at run time (identical to the scalar
 // reference, see src/internal/kernels.h). Both descriptors must have the same number of
-// cells (throws InvalidArgument otherwise).
+// cells and the same storage (throws InvalidArgument otherwise).
+//
+// Compact descriptors (HistogramStorage::kCompact): the per-cell L1 is the sum
+// of absolute differences of the 8-bit bins, in units of 1/kCompactMass of a
+// cell. The reference metric scales it to pixels with the mean cell size
+// (L1 ~ SAD * cell_pixels / kCompactMass), so scores and thresholds stay
+// comparable to the exact ones; l1 and normalized_l1 both become
+// 1 - sum_k SAD_k / (2 * kCompactMass * cells), clamped to [0, 1].
 double similarity(const DescriptorView& a, const DescriptorView& b, SimilarityMetric metric);
 
 }  // namespace lsgd

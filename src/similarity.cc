@@ -19,31 +19,31 @@ double normalized_cell_l1(const Bin* a, Count na, const Bin* b, Count nb) {
   return sum;
 }
 
-// Calls f(k, L1 of cell k) for every cell, the L1s computed by the SIMD
-// kernel a block of cells at a time.
-template <typename F>
-void for_each_cell_l1(const DescriptorView& a, const DescriptorView& b, F&& f) {
+// Calls f(k, L1 of cell k) for every cell of two cell-major histograms of
+// `bins` bins per cell, the L1s computed by `kernel` (cell_l1 or cell_sad) a
+// block of cells at a time.
+template <typename T, typename Kernel, typename F>
+void for_each_cell(const T* a, const T* b, int cells, int bins, Kernel kernel, F&& f) {
   constexpr int kBlock = 128;
   std::uint32_t l1[kBlock];
-  for (int k0 = 0; k0 < a.cells; k0 += kBlock) {
-    const int n = std::min(kBlock, a.cells - k0);
-    const std::size_t off = static_cast<std::size_t>(k0) * kBins;
-    internal::cell_l1(a.hist + off, b.hist + off, n, l1);
+  for (int k0 = 0; k0 < cells; k0 += kBlock) {
+    const int n = std::min(kBlock, cells - k0);
+    const std::size_t off = static_cast<std::size_t>(k0) * bins;
+    kernel(a + off, b + off, n, l1);
     for (int i = 0; i < n; ++i) f(k0 + i, l1[i]);
   }
 }
 
-// Calls f(SAD of cell k) for every cell of two compact descriptors.
+template <typename F>
+void for_each_cell_l1(const DescriptorView& a, const DescriptorView& b, F&& f) {
+  for_each_cell(a.hist, b.hist, a.cells, kBins, internal::cell_l1, f);
+}
+
+// SADs of the compact bins (HistogramStorage::kCompact).
 template <typename F>
 void for_each_cell_sad(const DescriptorView& a, const DescriptorView& b, F&& f) {
-  constexpr int kBlock = 128;
-  std::uint32_t sad[kBlock];
-  for (int k0 = 0; k0 < a.cells; k0 += kBlock) {
-    const int n = std::min(kBlock, a.cells - k0);
-    const std::size_t off = static_cast<std::size_t>(k0) * kCompactBins;
-    internal::cell_sad(a.compact + off, b.compact + off, n, sad);
-    for (int i = 0; i < n; ++i) f(sad[i]);
-  }
+  for_each_cell(a.compact, b.compact, a.cells, kCompactBins, internal::cell_sad,
+                [&](int, std::uint32_t sad) { f(sad); });
 }
 
 // Compact storage: each cell's SAD is an L1 distance in units of

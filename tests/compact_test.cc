@@ -29,19 +29,7 @@ const SimilarityMetric kMetrics[] = {SimilarityMetric::kReference, SimilarityMet
                                      SimilarityMetric::kNormalizedL1};
 
 // Exact descriptor of one row of cells, each given as (bin, count) pairs.
-Descriptor make(const std::vector<std::vector<std::pair<int, Count>>>& cells) {
-  Descriptor d;
-  d.grid = {1, static_cast<int>(cells.size())};
-  d.hist.assign(cells.size() * kBins, 0);
-  d.pixels.assign(cells.size(), 0);
-  for (std::size_t k = 0; k < cells.size(); ++k) {
-    for (const auto& [bin, count] : cells[k]) {
-      d.hist[k * kBins + bin] = static_cast<Bin>(d.hist[k * kBins + bin] + count);
-      d.pixels[k] += count;
-    }
-  }
-  return d;
-}
+constexpr auto make = test::make_descriptor;
 
 Descriptor compacted(const Descriptor& exact) {
   Descriptor out;

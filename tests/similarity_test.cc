@@ -26,20 +26,8 @@ using test::splitmix64;
 const SimilarityMetric kMetrics[] = {SimilarityMetric::kReference, SimilarityMetric::kL1,
                                      SimilarityMetric::kNormalizedL1};
 
-// Descriptor with `cells` cells, each holding the given (bin, count) pairs.
-Descriptor make(const std::vector<std::vector<std::pair<int, Count>>>& cells) {
-  Descriptor d;
-  d.grid = {1, static_cast<int>(cells.size())};
-  d.hist.assign(cells.size() * kBins, 0);
-  d.pixels.assign(cells.size(), 0);
-  for (std::size_t k = 0; k < cells.size(); ++k) {
-    for (const auto& [bin, count] : cells[k]) {
-      d.hist[k * kBins + bin] = static_cast<Bin>(d.hist[k * kBins + bin] + count);
-      d.pixels[k] += count;
-    }
-  }
-  return d;
-}
+// Exact descriptor of one row of cells, each given as (bin, count) pairs.
+constexpr auto make = test::make_descriptor;
 
 // Random descriptor: `cells` cells, each with a random pixel count in
 // [min_pixels, max_pixels] spread over random bins.

@@ -12,6 +12,7 @@
 
 #include <gtest/gtest.h>
 
+#include "lsgd/descriptor.h"
 #include "lsgd/image.h"
 
 namespace lsgd::test {
@@ -34,6 +35,22 @@ inline GrayImage random_image(int width, int height, std::uint64_t seed) {
   std::uint64_t s = seed;
   for (auto& p : g.pixels) p = static_cast<std::uint8_t>(splitmix64(s) & 0xFF);
   return g;
+}
+
+// Exact descriptor of one row of cells, each cell given as (bin, count) pairs
+// (a bin may repeat: counts add up).
+inline Descriptor make_descriptor(const std::vector<std::vector<std::pair<int, Count>>>& cells) {
+  Descriptor d;
+  d.grid = {1, static_cast<int>(cells.size())};
+  d.hist.assign(cells.size() * kBins, 0);
+  d.pixels.assign(cells.size(), 0);
+  for (std::size_t k = 0; k < cells.size(); ++k) {
+    for (const auto& [bin, count] : cells[k]) {
+      d.hist[k * kBins + bin] = static_cast<Bin>(d.hist[k * kBins + bin] + count);
+      d.pixels[k] += count;
+    }
+  }
+  return d;
 }
 
 // Gray image whose pixels all equal `value`.

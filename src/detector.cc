@@ -3,7 +3,6 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
-
 #include <opencv2/core.hpp>
 
 #include "internal/check.h"
@@ -143,8 +142,7 @@ void Detector::verify(Result& result) {
     if (accepted) result.best = candidate;
   }
   if (v.temporal) {
-    temporal_.push(result.frame,
-                   result.candidates.empty() ? -1 : result.candidates.front().frame);
+    temporal_.push(result.frame, result.candidates.empty() ? -1 : result.candidates.front().frame);
   }
 }
 
@@ -169,7 +167,8 @@ void Detector::restore_frame(int width, int height, const Descriptor& descriptor
   }
   descriptor.check_consistent("restore_frame");
   if (descriptor.storage == HistogramStorage::kCompact &&
-      std::fabs(descriptor.cell_pixels * expected.cells() - static_cast<double>(width) * height) > 0.5) {
+      std::fabs(descriptor.cell_pixels * expected.cells() - static_cast<double>(width) * height) >
+          0.5) {
     internal::throw_invalid("restore_frame: frame ", frame, " has ", descriptor.cell_pixels,
                             " pixels per cell, but ", width, "x", height, " frames have ",
                             static_cast<double>(width) * height / expected.cells());

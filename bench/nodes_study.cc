@@ -13,6 +13,7 @@
 // beta * base could be rejected without scoring its members. It prints the
 // similarities spent per query and the share a bound would have saved.
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
@@ -23,6 +24,7 @@
 
 #include "lsgd/descriptor.h"
 #include "lsgd/eval/synthetic.h"
+#include "lsgd/frame_store.h"
 #include "lsgd/image.h"
 #include "lsgd/search.h"
 #include "lsgd/segmentation.h"
@@ -139,6 +141,47 @@ int main(int argc, char** argv) {
     std::printf("bound from %d coarse bins: %.1f %% of member similarities skippable\n",
                 lsgd::kBins / kGroups[g],
                 member_sims ? 100.0 * static_cast<double>(saved[g]) / member_sims : 0.0);
+  }
+
+  // DynamicNodes itself, with and without its exact pruning (options.nodes.bounds),
+  // in both storages: similarities spent per query and wall time of assign().
+  for (const lsgd::HistogramStorage storage :
+       {lsgd::HistogramStorage::kExact, lsgd::HistogramStorage::kCompact}) {
+    std::vector<lsgd::Descriptor> stored(route.size());
+    for (std::size_t i = 0; i < route.size(); ++i) {
+      if (storage == lsgd::HistogramStorage::kCompact) {
+        lsgd::compact(route[i], stored[i]);
+      } else {
+        stored[i] = route[i];
+      }
+    }
+    for (const bool bounds : {false, true}) {
+      lsgd::SearchOptions o = search;
+      o.mode = lsgd::SearchMode::kDynamicNodes;
+      o.nodes.bounds = bounds;
+      lsgd::FrameStore store;
+      lsgd::DynamicNodes dn;
+      std::vector<lsgd::Candidate> scratch, out;
+      std::int64_t spent = 0, skipped = 0;
+      std::vector<double> ms;
+      for (std::int64_t q = 0; q < frames; ++q) {
+        const lsgd::DescriptorView query = stored[at(q)].view();
+        const auto t0 = std::chrono::steady_clock::now();
+        const auto outcome =
+            dn.assign(store, query, q, o, lsgd::SimilarityMetric::kReference, scratch, out);
+        ms.push_back(std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0)
+                         .count());
+        spent += outcome.similarities;
+        skipped += outcome.skipped;
+        store.add(stored[at(q)]);
+      }
+      std::sort(ms.begin(), ms.end());
+      std::printf("DynamicNodes %s, bounds %s: %lld nodes, %.1f similarities per query (%.1f skipped), "
+                  "assign median %.3f ms\n",
+                  lsgd::to_string(storage), bounds ? "on " : "off",
+                  static_cast<long long>(dn.size()), static_cast<double>(spent) / n,
+                  static_cast<double>(skipped) / n, ms[ms.size() / 2]);
+    }
   }
   return 0;
 }

@@ -51,60 +51,19 @@ void for_each_cell_sad(const DescriptorView& a, const DescriptorView& b, F&& f) 
 // the reference metric (so its scores and thresholds match the exact ones'),
 // and used as is for the mass-normalised metrics, for which l1 and
 // normalized_l1 coincide (every cell has mass kCompactMass).
-double compact_distance(const DescriptorView& a, const DescriptorView& b,
-                        SimilarityMetric metric) {
+double compact_similarity(const DescriptorView& a, const DescriptorView& b,
+                          SimilarityMetric metric) {
+  const int cells = a.cells;
   if (metric == SimilarityMetric::kReference) {
     const double scale = 0.5 * (a.cell_pixels + b.cell_pixels) / kCompactMass;
     double sum = 0;
     for_each_cell_sad(a, b, [&](std::uint32_t sad) { sum += std::sqrt(sad * scale) / kBins; });
-    return sum;
+    return 1.0 / (1.0 + sum / cells);
   }
   std::uint64_t sad = 0;
   for_each_cell_sad(a, b, [&](std::uint32_t cell) { sad += cell; });
-  return static_cast<double>(sad);
-}
-
-double exact_distance(const DescriptorView& a, const DescriptorView& b, SimilarityMetric metric) {
-  switch (metric) {
-    case SimilarityMetric::kReference: {
-      double sum = 0;
-      for_each_cell_l1(
-          a, b, [&](int, std::uint32_t l1) { sum += std::sqrt(static_cast<double>(l1)) / kBins; });
-      return sum;
-    }
-    case SimilarityMetric::kL1: {
-      std::uint64_t l1 = 0;
-      for_each_cell_l1(a, b, [&](int, std::uint32_t cell) { l1 += cell; });
-      return static_cast<double>(l1);
-    }
-    case SimilarityMetric::kNormalizedL1: {
-      double sum = 0;
-      for (int k = 0; k < a.cells; ++k) {
-        const std::size_t off = static_cast<std::size_t>(k) * kBins;
-        sum += normalized_cell_l1(a.hist + off, a.pixels[k], b.hist + off, b.pixels[k]);
-      }
-      return sum;
-    }
-  }
-  internal::throw_invalid("similarity: unknown metric ", static_cast<int>(metric));
-}
-
-void check_comparable(const DescriptorView& a, const DescriptorView& b) {
-  if (a.cells != b.cells || a.cells <= 0) {
-    internal::throw_invalid("similarity: descriptors have ", a.cells, " and ", b.cells,
-                            " cells; frames must have the same size and superpixel_size");
-  }
-  if (a.storage() != b.storage()) {
-    internal::throw_invalid("similarity: one descriptor is ", to_string(a.storage()),
-                            " and the other ", to_string(b.storage()),
-                            "; both must have the same descriptor.storage");
-  }
-}
-
-std::uint64_t total_pixels(const DescriptorView& d) {
-  std::uint64_t sum = 0;
-  for (int k = 0; k < d.cells; ++k) sum += d.pixels[k];
-  return sum;
+  const double score = 1.0 - static_cast<double>(sad) / (2.0 * kCompactMass * cells);
+  return std::max(0.0, score);  // rounding can add a little mass
 }
 
 }  // namespace
@@ -137,29 +96,43 @@ void SimilarityOptions::check() const {
   }
 }
 
-double distance(const DescriptorView& a, const DescriptorView& b, SimilarityMetric metric) {
-  check_comparable(a, b);
-  if (a.storage() == HistogramStorage::kCompact) return compact_distance(a, b, metric);
-  return exact_distance(a, b, metric);
-}
-
-double score_from_distance(double d, const DescriptorView& a, const DescriptorView& b,
-                           SimilarityMetric metric) {
-  const int cells = a.cells;
-  if (metric == SimilarityMetric::kReference) return 1.0 / (1.0 + d / cells);
-  if (a.storage() == HistogramStorage::kCompact) {
-    const double score = 1.0 - d / (2.0 * kCompactMass * cells);
-    return std::max(0.0, score);  // rounding can add a little mass
-  }
-  if (metric == SimilarityMetric::kL1) {
-    const std::uint64_t mass = total_pixels(a) + total_pixels(b);
-    return mass == 0 ? 1.0 : 1.0 - d / static_cast<double>(mass);
-  }
-  return 1.0 - d / (2.0 * cells);
-}
-
 double similarity(const DescriptorView& a, const DescriptorView& b, SimilarityMetric metric) {
-  return score_from_distance(distance(a, b, metric), a, b, metric);
+  if (a.cells != b.cells || a.cells <= 0) {
+    internal::throw_invalid("similarity: descriptors have ", a.cells, " and ", b.cells,
+                            " cells; frames must have the same size and superpixel_size");
+  }
+  if (a.storage() != b.storage()) {
+    internal::throw_invalid("similarity: one descriptor is ", to_string(a.storage()),
+                            " and the other ", to_string(b.storage()),
+                            "; both must have the same descriptor.storage");
+  }
+  if (a.storage() == HistogramStorage::kCompact) return compact_similarity(a, b, metric);
+  const int cells = a.cells;
+  switch (metric) {
+    case SimilarityMetric::kReference: {
+      double sum = 0;
+      for_each_cell_l1(
+          a, b, [&](int, std::uint32_t l1) { sum += std::sqrt(static_cast<double>(l1)) / kBins; });
+      return 1.0 / (1.0 + sum / cells);
+    }
+    case SimilarityMetric::kL1: {
+      std::uint64_t l1 = 0, mass = 0;
+      for_each_cell_l1(a, b, [&](int k, std::uint32_t cell) {
+        l1 += cell;
+        mass += static_cast<std::uint64_t>(a.pixels[k]) + b.pixels[k];
+      });
+      return mass == 0 ? 1.0 : 1.0 - static_cast<double>(l1) / static_cast<double>(mass);
+    }
+    case SimilarityMetric::kNormalizedL1: {
+      double sum = 0;
+      for (int k = 0; k < cells; ++k) {
+        const std::size_t off = static_cast<std::size_t>(k) * kBins;
+        sum += normalized_cell_l1(a.hist + off, a.pixels[k], b.hist + off, b.pixels[k]);
+      }
+      return 1.0 - sum / (2.0 * cells);
+    }
+  }
+  internal::throw_invalid("similarity: unknown metric ", static_cast<int>(metric));
 }
 
 }  // namespace lsgd

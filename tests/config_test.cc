@@ -29,7 +29,6 @@ void expect_equal(const DetectorOptions& a, const DetectorOptions& b) {
   EXPECT_EQ(a.search.nodes.threshold_0, b.search.nodes.threshold_0);
   EXPECT_EQ(a.search.nodes.alpha, b.search.nodes.alpha);
   EXPECT_EQ(a.search.nodes.beta, b.search.nodes.beta);
-  EXPECT_EQ(a.search.nodes.bounds, b.search.nodes.bounds);
   EXPECT_EQ(a.verification.temporal, b.verification.temporal);
   EXPECT_EQ(a.verification.geometric, b.verification.geometric);
   EXPECT_EQ(a.verification.max_candidates, b.verification.max_candidates);
@@ -61,7 +60,6 @@ DetectorOptions custom_options() {
   o.search.nodes.threshold_0 = 0.123456789012345678;
   o.search.nodes.alpha = 2.0 / 7.0;
   o.search.nodes.beta = 1.1;
-  o.search.nodes.bounds = false;
   o.verification.temporal = true;
   o.verification.geometric = false;
   o.verification.max_candidates = 5;
@@ -193,10 +191,6 @@ TEST(ParseConfig, WrongTypesAreFormatErrors) {
                             {"'segmentation.distance_scale'", "1.0.0"});
   expect_error<FormatError>("search:\n  min_gap: 1e3\n", {"'search.min_gap'"});
   expect_error<FormatError>("search:\n  nodes: 3\n", {"'search.nodes' must be a map"});
-  expect_error<FormatError>("search:\n  nodes: {bounds: yes}\n",
-                            {"'search.nodes.bounds' must be true or false", "'yes'"});
-  expect_error<FormatError>("search:\n  nodes: {bounds: 1}\n", {"'search.nodes.bounds'"});
-  expect_error<FormatError>("search:\n  nodes: {bounds: \"true\"}\n", {"'search.nodes.bounds'"});
   expect_error<FormatError>("similarity: l1\n", {"'similarity' must be a map"});
   expect_error<FormatError>("- 1\n- 2\n", {kSource, "map"});
   expect_error<FormatError>("just text\n", {kSource, "map"});

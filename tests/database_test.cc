@@ -307,21 +307,6 @@ TEST(Database, OptionsMustMatchExceptThreshold) {
   Detector fine(other);
   EXPECT_NO_THROW(db.restore(fine));
 
-  // In nodes mode the node thresholds must match; the exact pruning
-  // (search.nodes.bounds) may change, as it never changes a result.
-  {
-    const DetectorOptions n = options(SearchMode::kDynamicNodes, "none");
-    Database nodes_db = Database::create(temp_path("compatible-nodes"), n);
-    DetectorOptions flipped = n;
-    flipped.search.nodes.bounds = !n.search.nodes.bounds;
-    EXPECT_NO_THROW(nodes_db.check_compatible(flipped));
-    flipped.search.nodes.beta = 1.1;
-    EXPECT_NE(message_of<InvalidArgument>([&] {
-                nodes_db.check_compatible(flipped);
-              }).find("search.nodes.beta"),
-              std::string::npos);
-  }
-
   // A detector that already holds frames cannot be restored into.
   Detector used(o);
   used.process(frame(0));

@@ -347,9 +347,8 @@ TEST(DynamicNodes, ZeroThresholdsPutEveryFrameInNodeZero) {
     expect_same(steps[q].candidates,
                 brute_force(prefix, frames[q].view(), static_cast<std::int64_t>(q), 0, 1000,
                             SimilarityMetric::kReference));
-    // prev + first + the other members, spent or skipped by the bounds.
-    EXPECT_EQ(steps[q].outcome.similarities + steps[q].outcome.skipped,
-              static_cast<std::int64_t>(1 + q));
+    // prev + first + the other members.
+    EXPECT_EQ(steps[q].outcome.similarities, static_cast<std::int64_t>(1 + q));
   }
   std::vector<std::int64_t> all(frames.size());
   for (std::size_t i = 0; i < all.size(); ++i) all[i] = static_cast<std::int64_t>(i);
@@ -387,9 +386,8 @@ TEST(DynamicNodes, NodeInsideWindowIsNeverExamined) {
     }
     std::sort(got.begin(), got.end());
     EXPECT_EQ(got, want);
-    // prev + all members of node 0 ({0, 4, ..., q-1}), spent or skipped by
-    // the bounds (the members inside the window need no score).
-    EXPECT_EQ(steps[q].outcome.similarities + steps[q].outcome.skipped, 1 + 1 + (q - 4));
+    // prev + all members of node 0 ({0, 4, ..., q-1}).
+    EXPECT_EQ(steps[q].outcome.similarities, 1 + 1 + (q - 4));
   }
   EXPECT_EQ(nodes.size(), 4);
   EXPECT_EQ(nodes.members(0), (std::vector<std::int64_t>{0, 4, 5, 6, 7, 8, 9, 10, 11}));
@@ -414,7 +412,7 @@ TEST(DynamicNodes, TopNLimitsCandidates) {
 // t = 50, 60, 70, 72, 55, 42, 90, 44, 46, 88 on a line (line_descriptor, L1
 // metric), threshold_0 = 1, alpha = 0.9, beta = 0.95, top_n = 10 and the given
 // temporal window `min_gap`.
-std::vector<Step> run_hand_computed(DynamicNodes& nodes, std::int64_t min_gap, bool bounds) {
+std::vector<Step> run_hand_computed(DynamicNodes& nodes, std::int64_t min_gap) {
   const int ts[] = {50, 60, 70, 72, 55, 42, 90, 44, 46, 88};
   std::vector<Descriptor> frames;
   for (int t : ts) frames.push_back(line_descriptor(t));
@@ -425,14 +423,12 @@ std::vector<Step> run_hand_computed(DynamicNodes& nodes, std::int64_t min_gap, b
   o.nodes.threshold_0 = 1.0;
   o.nodes.alpha = 0.9;
   o.nodes.beta = 0.95;
-  o.nodes.bounds = bounds;
   return run_nodes(nodes, frames, o, SimilarityMetric::kL1);
 }
 
 // Checks every step of a hand-computed run against the expected node, node
-// creation, similarity count of Algorithm 1 (spent plus skipped by the
-// bounds) and candidates (frame and score, rank by rank); stops at the first
-// step whose candidate count is wrong.
+// creation, similarity count and candidates (frame and score, rank by rank);
+// stops at the first step whose candidate count is wrong.
 template <std::size_t N>
 void expect_steps(const std::vector<Step>& steps, const std::int64_t (&want_node)[N],
                   const bool (&want_created)[N], const std::int64_t (&want_sims)[N],
@@ -441,8 +437,7 @@ void expect_steps(const std::vector<Step>& steps, const std::int64_t (&want_node
     SCOPED_TRACE(testing::Message() << "frame " << q);
     EXPECT_EQ(steps[q].outcome.node, want_node[q]);
     EXPECT_EQ(steps[q].outcome.created, want_created[q]);
-    EXPECT_EQ(steps[q].outcome.similarities + steps[q].outcome.skipped, want_sims[q]);
-    EXPECT_LE(steps[q].outcome.similarities, want_sims[q]);
+    EXPECT_EQ(steps[q].outcome.similarities, want_sims[q]);
     ASSERT_EQ(steps[q].candidates.size(), want_candidates[q].size());
     for (std::size_t i = 0; i < want_candidates[q].size(); ++i) {
       EXPECT_EQ(steps[q].candidates[i].frame, want_candidates[q][i].frame) << "rank " << i;
@@ -466,16 +461,9 @@ void expect_steps(const std::vector<Step>& steps, const std::int64_t (&want_node
 //   q8 t=46: base .98; N0 first .96 > .882 but mean (.96+.86+.91+.96+.56+.98)/6 = .8717
 //            <= .931; N1 first .76 <= .882: creates N2.
 //   q9 t=88: base .58; N0 first .62 > .522, mean .6817 > .551: joins N0.
-// Parameter: options.nodes.bounds. Both must give Algorithm 1's result; the
-// faithful run (false) spends exactly the hand-counted similarities.
-class DynamicNodesHandComputed : public testing::TestWithParam<bool> {};
-
-TEST_P(DynamicNodesHandComputed, Algorithm1) {
+TEST(DynamicNodes, HandComputedAlgorithm1) {
   DynamicNodes nodes;
-  const auto steps = run_hand_computed(nodes, 0, GetParam());
-  if (!GetParam()) {
-    for (const Step& step : steps) EXPECT_EQ(step.outcome.skipped, 0);
-  }
+  const auto steps = run_hand_computed(nodes, 0);
 
   const std::int64_t want_node[] = {0, 0, 1, 1, 0, 0, 0, 0, 2, 0};
   const bool want_created[] = {true, false, true, false, false, false, false, false, true, false};
@@ -508,12 +496,9 @@ TEST_P(DynamicNodesHandComputed, Algorithm1) {
 //   q7 t=44: joins N0; candidates j < 5: 0 (.94), 4 (.89).
 //   q8 t=46: N0 mean .874 <= .931; N1 .86, N2 .76, N3 .74 all <= .882: creates N4.
 //   q9 t=88: joins N0; candidates j < 7: 6 (.98), 4 (.67), 0 (.62), 5 (.54); 7 is too recent.
-TEST_P(DynamicNodesHandComputed, Algorithm1WithWindow) {
+TEST(DynamicNodes, HandComputedAlgorithm1WithWindow) {
   DynamicNodes nodes;
-  const auto steps = run_hand_computed(nodes, 2, GetParam());
-  if (!GetParam()) {
-    for (const Step& step : steps) EXPECT_EQ(step.outcome.skipped, 0);
-  }
+  const auto steps = run_hand_computed(nodes, 2);
 
   const std::int64_t want_node[] = {0, 1, 2, 3, 0, 0, 0, 0, 4, 0};
   const bool want_created[] = {true, true, true, true, false, false, false, false, true, false};
@@ -527,11 +512,6 @@ TEST_P(DynamicNodesHandComputed, Algorithm1WithWindow) {
   EXPECT_EQ(nodes.members(0), (std::vector<std::int64_t>{0, 4, 5, 6, 7, 9}));
   EXPECT_EQ(nodes.members(4), (std::vector<std::int64_t>{8}));
 }
-
-INSTANTIATE_TEST_SUITE_P(Bounds, DynamicNodesHandComputed, testing::Bool(),
-                         [](const testing::TestParamInfo<bool>& param) {
-                           return param.param ? "bounds" : "faithful";
-                         });
 
 // Independent re-implementation of Algorithm 1 (as documented in search.h and
 // algorithm.md section 4), compared on random walks.
@@ -621,151 +601,6 @@ TEST(DynamicNodes, MatchesIndependentImplementationOnRandomWalks) {
   }
   // Most configurations both create several nodes and re-join them.
   EXPECT_GE(nontrivial, configs * 2 / 3);
-}
-
-// ---- exact pruning (options.nodes.bounds)
-
-// A frame of a walk over places t in [0, 400): 8 cells of `pixels` pixels
-// whose intensities depend smoothly on t, plus per-frame noise, so that
-// revisited places look alike but never identical.
-Descriptor walk_descriptor(int t, std::uint64_t& s, int pixels = 300) {
-  Descriptor d;
-  d.grid = {2, 4};
-  d.hist.assign(static_cast<std::size_t>(d.grid.cells()) * kBins, 0);
-  d.pixels.assign(d.grid.cells(), static_cast<Count>(pixels));
-  for (int k = 0; k < d.grid.cells(); ++k) {
-    const int centre = (t * (k + 1) / 3 + 29 * k) % 200;
-    for (int i = 0; i < pixels; ++i) {
-      const bool noise = splitmix64(s) % 5 == 0;
-      const int bin = noise ? static_cast<int>(splitmix64(s) % kBins)
-                            : centre + static_cast<int>(splitmix64(s) % 40);
-      ++d.hist[static_cast<std::size_t>(k) * kBins + bin];
-    }
-  }
-  return d;
-}
-
-std::vector<Descriptor> walk_frames(std::uint64_t seed, int count, HistogramStorage storage) {
-  std::uint64_t s = seed;
-  std::vector<Descriptor> frames;
-  int t = 200;
-  for (int i = 0; i < count; ++i) {
-    t += static_cast<int>(splitmix64(s) % 9) - 4;
-    if (splitmix64(s) % 97 == 0) t = static_cast<int>(splitmix64(s) % 400);  // a jump
-    t = std::max(0, std::min(399, t));
-    Descriptor d = walk_descriptor(t, s);
-    if (storage == HistogramStorage::kCompact) {
-      Descriptor c;
-      compact(d, c);
-      d = std::move(c);
-    }
-    frames.push_back(std::move(d));
-  }
-  return frames;
-}
-
-// Same nodes, node choices and candidates (frames and bit-equal scores), and
-// the bounded run's similarities plus skips are the faithful run's count.
-void expect_same_run(const std::vector<Step>& bounded, const std::vector<Step>& faithful,
-                     std::int64_t& spent, std::int64_t& total) {
-  ASSERT_EQ(bounded.size(), faithful.size());
-  for (std::size_t q = 0; q < bounded.size(); ++q) {
-    SCOPED_TRACE(testing::Message() << "frame " << q);
-    ASSERT_EQ(bounded[q].outcome.node, faithful[q].outcome.node);
-    ASSERT_EQ(bounded[q].outcome.created, faithful[q].outcome.created);
-    ASSERT_NO_FATAL_FAILURE(expect_same(bounded[q].candidates, faithful[q].candidates));
-    ASSERT_EQ(faithful[q].outcome.skipped, 0);
-    ASSERT_EQ(bounded[q].outcome.similarities + bounded[q].outcome.skipped,
-              faithful[q].outcome.similarities);
-    spent += bounded[q].outcome.similarities;
-    total += faithful[q].outcome.similarities;
-  }
-}
-
-TEST(DynamicNodesBounds, SameResultAsScoringEveryMember) {
-  std::int64_t spent = 0, total = 0;
-  int runs = 0, nontrivial = 0;
-  for (HistogramStorage storage : {HistogramStorage::kExact, HistogramStorage::kCompact}) {
-    for (std::uint64_t seed : {11u, 12u}) {
-      const auto frames = walk_frames(seed, 260, storage);
-      const DynamicNodeOptions node_options[] = {
-          {0.9, 0.8, 1.0, true}, {1.0, 0.9, 0.95, true}, {0.95, 0.7, 0.9, true}};
-      for (const DynamicNodeOptions& nopt : node_options) {
-        for (SimilarityMetric metric : {SimilarityMetric::kReference, SimilarityMetric::kL1,
-                                        SimilarityMetric::kNormalizedL1}) {
-          for (int top_n : {1, 10}) {
-            SCOPED_TRACE(testing::Message()
-                         << to_string(storage) << " seed " << seed << " " << to_string(metric)
-                         << " alpha " << nopt.alpha << " beta " << nopt.beta << " top " << top_n);
-            SearchOptions o;
-            o.mode = SearchMode::kDynamicNodes;
-            o.min_gap = 20;
-            o.top_n = top_n;
-            o.nodes = nopt;
-            DynamicNodes bounded_nodes, faithful_nodes;
-            const auto bounded = run_nodes(bounded_nodes, frames, o, metric);
-            o.nodes.bounds = false;
-            const auto faithful = run_nodes(faithful_nodes, frames, o, metric);
-            std::int64_t run_spent = 0, run_total = 0;
-            ASSERT_NO_FATAL_FAILURE(expect_same_run(bounded, faithful, run_spent, run_total));
-            for (std::int64_t k = 0; k < faithful_nodes.size(); ++k) {
-              ASSERT_EQ(bounded_nodes.members(k), faithful_nodes.members(k));
-            }
-            spent += run_spent;
-            total += run_total;
-            ++runs;
-            nontrivial += faithful_nodes.size() > 3 && faithful_nodes.size() < 200;
-          }
-        }
-      }
-    }
-  }
-  EXPECT_GE(nontrivial, runs * 2 / 3);  // several nodes, re-joined
-  // The bounds must actually skip work (else this test could not fail).
-  EXPECT_LT(spent, total * 9 / 10) << spent << " of " << total;
-}
-
-// The bounds assume the stored frame is the query; a caller that stores
-// something else, changes the metric, switches the bounds off and on or
-// restores the nodes must still get Algorithm 1's result.
-TEST(DynamicNodesBounds, SurvivesAStoredFrameThatIsNotTheQueryAndOtherBreaks) {
-  const auto frames = walk_frames(21, 200, HistogramStorage::kExact);
-  const auto others = walk_frames(22, 200, HistogramStorage::kExact);
-  SearchOptions o;
-  o.mode = SearchMode::kDynamicNodes;
-  o.min_gap = 10;
-  o.top_n = 5;
-  o.nodes = {1.0, 0.9, 0.95, true};
-  // Returns the steps of one run; bounds on or off throughout.
-  auto run = [&](bool bounds) {
-    DynamicNodes nodes;
-    FrameStore store;
-    std::vector<Candidate> scratch;
-    std::vector<Step> steps;
-    for (std::size_t q = 0; q < frames.size(); ++q) {
-      SearchOptions oq = o;
-      oq.nodes.bounds = bounds && q % 50 != 7;  // off now and then
-      const SimilarityMetric metric =
-          q >= 120 && q < 140 ? SimilarityMetric::kL1 : SimilarityMetric::kReference;
-      if (q == 100) {  // a resume: the same nodes, no bounds
-        std::vector<std::vector<std::int64_t>> copy;
-        for (std::int64_t k = 0; k < nodes.size(); ++k) copy.push_back(nodes.members(k));
-        nodes.restore(copy);
-      }
-      Step step;
-      step.outcome = nodes.assign(store, frames[q].view(), static_cast<std::int64_t>(q), oq,
-                                  metric, scratch, step.candidates);
-      // Every 13th frame the caller stores a different descriptor.
-      store.add(q % 13 == 5 ? others[q] : frames[q]);
-      steps.push_back(step);
-    }
-    return steps;
-  };
-  const auto bounded = run(true);
-  const auto faithful = run(false);
-  std::int64_t spent = 0, total = 0;
-  ASSERT_NO_FATAL_FAILURE(expect_same_run(bounded, faithful, spent, total));
-  EXPECT_LT(spent, total);
 }
 
 }  // namespace

@@ -44,20 +44,4 @@ struct SimilarityOptions {
 // 1 - sum_k SAD_k / (2 * kCompactMass * cells), clamped to [0, 1].
 double similarity(const DescriptorView& a, const DescriptorView& b, SimilarityMetric metric);
 
-// The distance behind every score: similarity(a, b, m) is exactly (bit for
-// bit) score_from_distance(distance(a, b, m), a, b, m), and the score
-// decreases as the distance grows. The distance is a (pseudo-)metric, so it
-// obeys the triangle inequality up to floating-point rounding, for any
-// descriptors of one storage and cell count (compact storage with the
-// reference metric: of one cell_pixels too):
-//   reference      sum_k sqrt(L1_k) / 256        score 1 / (1 + d / cells)
-//   l1             sum_k L1_k (pixels)           score 1 - d / (n_a + n_b)
-//   normalized_l1  sum_k L1(h_k/n_k, h'_k/n'_k)  score 1 - d / (2 cells)
-// (compact l1 and normalized_l1: sum_k SAD_k, score 1 - d / (2 kCompactMass
-// cells) clamped at 0). DynamicNodes uses it to skip similarities that cannot
-// change its result. Throws like similarity().
-double distance(const DescriptorView& a, const DescriptorView& b, SimilarityMetric metric);
-double score_from_distance(double d, const DescriptorView& a, const DescriptorView& b,
-                           SimilarityMetric metric);
-
 }  // namespace lsgd

@@ -117,16 +117,6 @@ double read_double(const YAML::Node& node, const std::string& source, const std:
   return value;
 }
 
-// true or false only (not YAML 1.1's yes/no/on/off, which read as strings
-// elsewhere and would be ambiguous).
-bool read_bool(const YAML::Node& node, const std::string& source, const std::string& key) {
-  if (is_plain_scalar(node)) {
-    if (node.Scalar() == "true") return true;
-    if (node.Scalar() == "false") return false;
-  }
-  wrong_type(source, key, node, "true or false");
-}
-
 std::string read_string(const YAML::Node& node, const std::string& source, const std::string& key) {
   if (!node.IsScalar()) wrong_type(source, key, node, "a string");
   return node.Scalar();
@@ -245,9 +235,7 @@ void read_nodes(const YAML::Node& node, const std::string& source, DynamicNodeOp
        {"alpha",
         [&](const YAML::Node& v, const std::string& k) { o.alpha = read_double(v, source, k); }},
        {"beta",
-        [&](const YAML::Node& v, const std::string& k) { o.beta = read_double(v, source, k); }},
-       {"bounds",
-        [&](const YAML::Node& v, const std::string& k) { o.bounds = read_bool(v, source, k); }}});
+        [&](const YAML::Node& v, const std::string& k) { o.beta = read_double(v, source, k); }}});
 }
 
 void read_search(const YAML::Node& node, const std::string& source, SearchOptions& o) {
@@ -460,9 +448,7 @@ std::string to_yaml(const DetectorOptions& options) {
       << "  top_n: " << search.top_n << "\n"
       << "  nodes: {threshold_0: " << format_double(search.nodes.threshold_0)
       << ", alpha: " << format_double(search.nodes.alpha)
-      << ", beta: " << format_double(search.nodes.beta)
-      << ", bounds: " << (search.nodes.bounds ? "true" : "false")
-      << "}  # bounds: skip similarities that cannot change the result\n"
+      << ", beta: " << format_double(search.nodes.beta) << "}\n"
       << "verification:\n"
       << "  stages: " << verification_stages(v) << "  # none | temporal | geometric | "
       << "temporal,geometric\n"

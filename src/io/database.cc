@@ -550,7 +550,6 @@ void Database::check_compatible(const DetectorOptions& options) const {
   const std::string stages = verification_stages(stored.verification);
   for (const auto& [key, value] : mine) {
     if (key == "decision.threshold") continue;
-    if (key == "search.nodes.bounds") continue;  // same results either way
     if (stored.search.mode != SearchMode::kDynamicNodes && starts_with(key, "search.nodes."))
       continue;
     if (!stored.verification.temporal && starts_with(key, "verification.temporal.")) continue;
@@ -561,7 +560,7 @@ void Database::check_compatible(const DetectorOptions& options) const {
     if (given != value) {
       internal::throw_invalid("database ", impl_->path, ": option ", key, " = ", given,
                               " differs from the stored ", value,
-                              " (only decision.threshold and search.nodes.bounds may change when resuming)");
+                              " (only decision.threshold may change when resuming)");
     }
   }
 }

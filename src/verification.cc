@@ -10,6 +10,12 @@ namespace lsgd {
 
 void TemporalOptions::check() const {
   internal::check_range("verification.temporal.frames", frames, 1, 100, "frames");
+  internal::check_range("verification.temporal.long_frames", long_frames, 0, 1000, "frames");
+  if (long_frames != 0 && long_frames <= frames) {
+    internal::throw_invalid(
+        "verification.temporal.long_frames = ", long_frames,
+        " must be 0 (off) or more than verification.temporal.frames = ", frames);
+  }
   internal::check_range("verification.temporal.tolerance", tolerance, 0, 100, "frames");
   internal::check_range("verification.temporal.agree", agree, 0, 100, "queries");
 }
@@ -37,7 +43,8 @@ void parse_verification_stages(const std::string& text, VerificationOptions& opt
       }
     }
     if (!temporal && !geometric) {
-      internal::throw_invalid("verification '", text, "' names no stage: use none, temporal, "
+      internal::throw_invalid("verification '", text,
+                              "' names no stage: use none, temporal, "
                               "geometric or temporal,geometric");
     }
   }
@@ -59,12 +66,19 @@ TemporalVerifier::TemporalVerifier(const TemporalOptions& options) : options_(op
 double TemporalVerifier::sequence_score(const FrameStore& store, const DescriptorView& descriptor,
                                         std::int64_t query, std::int64_t j,
                                         SimilarityMetric metric) const {
-  const std::int64_t steps = std::min<std::int64_t>(options_.frames, j + 1);
+  // Both lengths sum the same diagonal: one pass, the short sum taken on the way.
+  const std::int64_t short_steps = std::min<std::int64_t>(options_.frames, j + 1);
+  const std::int64_t long_steps = std::min<std::int64_t>(options_.long_frames, j + 1);
+  const std::int64_t steps = std::max(short_steps, long_steps);
   double sum = similarity(descriptor, store.view(j), metric);
+  double short_sum = sum;
   for (std::int64_t t = 1; t < steps; ++t) {
     sum += similarity(store.view(query - t), store.view(j - t), metric);
+    if (t + 1 == short_steps) short_sum = sum;
   }
-  return sum / static_cast<double>(steps);
+  const double short_score = short_sum / static_cast<double>(short_steps);
+  if (options_.long_frames == 0) return short_score;
+  return 0.5 * (short_score + sum / static_cast<double>(long_steps));
 }
 
 void TemporalVerifier::rescore(const FrameStore& store, const DescriptorView& descriptor,
@@ -137,9 +151,8 @@ void TemporalVerifier::push(std::int64_t query, std::int64_t place) {
 void TemporalVerifier::restore(std::int64_t last_query, std::vector<std::int64_t> places) {
   const std::size_t capacity = static_cast<std::size_t>(std::max(options_.agree, 1));
   if (places.size() > capacity) {
-    internal::throw_invalid("TemporalVerifier::restore: ", places.size(),
-                            " places but at most ", capacity, " are kept (agree = ",
-                            options_.agree, ")");
+    internal::throw_invalid("TemporalVerifier::restore: ", places.size(), " places but at most ",
+                            capacity, " are kept (agree = ", options_.agree, ")");
   }
   if (last_query < -1 || last_query + 1 < static_cast<std::int64_t>(places.size())) {
     internal::throw_invalid("TemporalVerifier::restore: last query ", last_query, " cannot have ",

@@ -35,6 +35,8 @@ void expect_equal(const DetectorOptions& a, const DetectorOptions& b) {
   EXPECT_EQ(a.verification.temporal_options.frames, b.verification.temporal_options.frames);
   EXPECT_EQ(a.verification.temporal_options.tolerance, b.verification.temporal_options.tolerance);
   EXPECT_EQ(a.verification.temporal_options.agree, b.verification.temporal_options.agree);
+  EXPECT_EQ(a.verification.temporal_options.long_frames,
+            b.verification.temporal_options.long_frames);
   const GeometricOptions& ga = a.verification.geometric_options;
   const GeometricOptions& gb = b.verification.geometric_options;
   EXPECT_EQ(ga.max_features, gb.max_features);
@@ -63,7 +65,7 @@ DetectorOptions custom_options() {
   o.verification.temporal = true;
   o.verification.geometric = false;
   o.verification.max_candidates = 5;
-  o.verification.temporal_options = {11, 4, 2};
+  o.verification.temporal_options = {11, 4, 2, 30};
   o.verification.geometric_options.max_features = 321;
   o.verification.geometric_options.min_side = 100;
   o.verification.geometric_options.ratio = 0.77;
@@ -139,7 +141,7 @@ TEST(ParseConfig, ToYamlRoundTrips) {
   for (const char* key :
        {"segmentation:", "superpixel_size: 40", "iterations: 3", "intensity_scale: 20",
         "distance_scale: 1.0", "metric: reference", "mode: exhaustive", "min_gap: 50", "top_n: 10",
-        "threshold_0: 0.9", "alpha: 0.8", "beta: 1.0", "decision:", "threshold: 0.846", "stages: temporal"}) {
+        "threshold_0: 0.9", "alpha: 0.8", "beta: 1.0", "decision:", "threshold: 0.841", "stages: temporal"}) {
     EXPECT_NE(text.find(key), std::string::npos) << key << " missing in:\n" << text;
   }
 }

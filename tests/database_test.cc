@@ -9,12 +9,14 @@
 #include <gtest/gtest.h>
 #include <sqlite3.h>
 #include <unistd.h>
+#include <zlib.h>
 
 #include <algorithm>
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <functional>
 #include <iterator>
 #include <map>
 #include <nlohmann/json.hpp>
@@ -492,6 +494,77 @@ void expect_flip_detected(const char* column, std::int64_t row, int offset,
   const std::string m = load(path);
   EXPECT_NE(m.find(path), std::string::npos) << column << ": " << m;
   EXPECT_NE(m.find(expected), std::string::npos) << column << ": " << m;
+}
+
+// Rewrites the stored options with `edit` and re-signs the meta table (the
+// checksum is the CRC-32 of "key=value\n" over the keys in order), as a file
+// written by an older version that lacked some keys would look.
+void rewrite_options(const std::string& path, const std::function<void(std::string&)>& edit) {
+  sqlite3* db = nullptr;
+  ASSERT_EQ(sqlite3_open(path.c_str(), &db), SQLITE_OK);
+  std::map<std::string, std::string> meta;
+  sqlite3_stmt* st = nullptr;
+  ASSERT_EQ(sqlite3_prepare_v2(db, "SELECT key, value FROM meta", -1, &st, nullptr), SQLITE_OK);
+  while (sqlite3_step(st) == SQLITE_ROW) {
+    meta[reinterpret_cast<const char*>(sqlite3_column_text(st, 0))] =
+        reinterpret_cast<const char*>(sqlite3_column_text(st, 1));
+  }
+  sqlite3_finalize(st);
+  edit(meta["options"]);
+  std::string text;
+  for (const auto& [key, value] : meta) {
+    if (key != "checksum") text += key + "=" + value + "\n";
+  }
+  const auto crc = crc32(crc32(0, Z_NULL, 0), reinterpret_cast<const Bytef*>(text.data()),
+                         static_cast<uInt>(text.size()));
+  ASSERT_EQ(
+      sqlite3_prepare_v2(db, "UPDATE meta SET value = ?1 WHERE key = 'options'", -1, &st, nullptr),
+      SQLITE_OK);
+  sqlite3_bind_text(st, 1, meta["options"].c_str(), -1, SQLITE_TRANSIENT);
+  ASSERT_EQ(sqlite3_step(st), SQLITE_DONE);
+  sqlite3_finalize(st);
+  ASSERT_EQ(
+      sqlite3_prepare_v2(db, "UPDATE meta SET value = ?1 WHERE key = 'checksum'", -1, &st, nullptr),
+      SQLITE_OK);
+  sqlite3_bind_int64(st, 1, static_cast<sqlite3_int64>(crc));
+  ASSERT_EQ(sqlite3_step(st), SQLITE_DONE);
+  sqlite3_finalize(st);
+  sqlite3_close(db);
+}
+
+void erase(std::string& text, const std::string& what) {
+  const auto at = text.find(what);
+  ASSERT_NE(at, std::string::npos) << what << " not in:\n" << text;
+  text.erase(at, what.size());
+}
+
+// Keys added after a file was written take the value of the version that
+// wrote it: no `descriptor` section means exact storage, no
+// verification.temporal.long_frames means the single 16-frame sequence.
+TEST(Database, OptionsOfAnOlderVersionKeepTheirBehaviour) {
+  const std::string path = temp_path("older");
+  fs::copy_file(small_database(), path);
+  rewrite_options(path, [](std::string& yaml) {
+    erase(yaml, "long_frames: 48, ");
+    const auto from = yaml.find("descriptor:\n");
+    ASSERT_NE(from, std::string::npos);
+    yaml.erase(from, yaml.find("similarity:") - from);
+  });
+  const std::string damage = load(path);
+  ASSERT_EQ(damage, "");
+  const Database db = Database::open(path, Database::Mode::kReadOnly);
+  EXPECT_EQ(db.options().verification.temporal_options.long_frames, 0);
+  EXPECT_EQ(db.options().descriptor.storage, HistogramStorage::kExact);
+  // Today's defaults differ from such a file: resuming says which option.
+  DetectorOptions today = db.options();
+  today.verification.temporal_options.long_frames = 48;
+  EXPECT_NE(message_of<InvalidArgument>([&] {
+              db.check_compatible(today);
+            }).find("verification.temporal.long_frames = 48 differs from the stored 0"),
+            std::string::npos);
+  Detector resumed(db.options());
+  EXPECT_NO_THROW(db.restore(resumed));
+  EXPECT_EQ(resumed.size(), 12);
 }
 
 TEST(DatabaseDamage, EditedRowsAndMeta) {

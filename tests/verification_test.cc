@@ -35,9 +35,9 @@ TEST(VerificationStages, ParseAndPrint) {
   EXPECT_TRUE(o.temporal && o.geometric);
   EXPECT_THROW(parse_verification_stages("temporal,sift", o), InvalidArgument);
   EXPECT_THROW(parse_verification_stages("", o), InvalidArgument);
-  EXPECT_NE(test::message_of<InvalidArgument>([&] { parse_verification_stages("gps", o); })
-                .find("gps"),
-            std::string::npos);
+  EXPECT_NE(
+      test::message_of<InvalidArgument>([&] { parse_verification_stages("gps", o); }).find("gps"),
+      std::string::npos);
 }
 
 TEST(VerificationOptions, RangesNameTheField) {
@@ -55,6 +55,24 @@ TEST(VerificationOptions, RangesNameTheField) {
   o = {};
   o.temporal_options.agree = 101;
   EXPECT_THROW(o.check(), InvalidArgument);
+  o = {};
+  o.temporal_options.long_frames = -1;
+  EXPECT_NE(test::message_of<InvalidArgument>([&] { o.check(); }).find("temporal.long_frames"),
+            std::string::npos);
+  o = {};
+  o.temporal_options.long_frames = 1001;
+  EXPECT_THROW(o.check(), InvalidArgument);
+  o = {};
+  o.temporal_options.long_frames = o.temporal_options.frames;  // must be longer
+  EXPECT_NE(
+      test::message_of<InvalidArgument>([&] {
+        o.check();
+      }).find("long_frames = 16 must be 0 (off) or more than verification.temporal.frames = 16"),
+      std::string::npos);
+  o.temporal_options.long_frames = 0;  // off
+  EXPECT_NO_THROW(o.check());
+  o.temporal_options.long_frames = 17;
+  EXPECT_NO_THROW(o.check());
   DetectorOptions d;
   d.verification.max_candidates = 0;
   EXPECT_THROW(Detector{d}, InvalidArgument);
@@ -100,6 +118,46 @@ TEST_F(TemporalFixture, RescoreKeepsTheTemporalWindowAndTopN) {
   for (const Candidate& c : out) EXPECT_LT(c.frame, 15 - 8);
 }
 
+// The sequence score with a second length is the mean of the two single
+// sequence scores, and near the start of the store both lengths shorten.
+TEST(TemporalSequence, LongFramesAveragesTheTwoLengths) {
+  // 1-cell frames with t of 100 pixels in bin 1 and the rest in bin 0: the
+  // diagonal similarities all differ.
+  auto frame = [](int t) {
+    Descriptor d;
+    d.grid = {1, 1};
+    d.hist.assign(kBins, 0);
+    d.hist[0] = static_cast<Bin>(100 - t);
+    d.hist[1] = static_cast<Bin>(t);
+    d.pixels = {100};
+    return d;
+  };
+  FrameStore store;
+  for (int i = 0; i < 40; ++i) store.add(frame((i * 37) % 101));
+  const Descriptor query = frame(55);
+  auto score = [&](int frames, int long_frames, std::int64_t j) {
+    TemporalOptions o;
+    o.frames = frames;
+    o.long_frames = long_frames;
+    o.tolerance = 0;
+    const TemporalVerifier v(o);
+    std::vector<Candidate> out;
+    v.rescore(store, query.view(), 40, {{j, 0.5}}, 0, SimilarityMetric::kReference, 1, out);
+    EXPECT_EQ(out.size(), 1u);
+    return out.empty() ? -1.0 : out.front().score;
+  };
+  for (const std::int64_t j : {30, 20, 5}) {  // 5: the 12-frame sequence is cut to 6
+    SCOPED_TRACE(j);
+    const double short_score = score(4, 0, j), long_score = score(12, 0, j);
+    EXPECT_NE(short_score, long_score);
+    EXPECT_DOUBLE_EQ(score(4, 12, j), 0.5 * (short_score + long_score));
+  }
+  // j = 2: both lengths are cut to the 3 frames that exist.
+  EXPECT_DOUBLE_EQ(score(4, 12, 2), score(4, 0, 2));
+  EXPECT_DOUBLE_EQ(score(12, 0, 2), score(4, 0, 2));
+  EXPECT_DOUBLE_EQ(score(1, 0, 0), score(1, 12, 0));  // only frame 0 exists: one similarity
+}
+
 TEST(TemporalAgree, ConsecutivePlacesAreAcceptedOthersRejected) {
   TemporalOptions options;
   options.agree = 2;
@@ -108,8 +166,8 @@ TEST(TemporalAgree, ConsecutivePlacesAreAcceptedOthersRejected) {
   EXPECT_FALSE(v.agree(0, {5, 1.0}).accepted);  // no history yet
   v.push(0, 3);
   v.push(1, 4);
-  EXPECT_TRUE(v.agree(2, {5, 1.0}).accepted);   // 4 = 5-1, 3 = 5-2
-  EXPECT_TRUE(v.agree(2, {6, 1.0}).accepted);   // within slack 1
+  EXPECT_TRUE(v.agree(2, {5, 1.0}).accepted);  // 4 = 5-1, 3 = 5-2
+  EXPECT_TRUE(v.agree(2, {6, 1.0}).accepted);  // within slack 1
   const auto rejected = v.agree(2, {20, 1.0});
   EXPECT_FALSE(rejected.accepted);
   EXPECT_NE(rejected.reason.find("placed at 4"), std::string::npos) << rejected.reason;

@@ -267,6 +267,8 @@ void read_temporal(const YAML::Node& node, const std::string& source, TemporalOp
   read_map(node, source, "verification.temporal",
            {{"frames",
              [&](const YAML::Node& v, const std::string& k) { o.frames = read_int(v, source, k); }},
+            {"long_frames",
+             [&](const YAML::Node& v, const std::string& k) { o.long_frames = read_int(v, source, k); }},
             {"tolerance",
              [&](const YAML::Node& v, const std::string& k) { o.tolerance = read_int(v, source, k); }},
             {"agree",
@@ -454,6 +456,7 @@ std::string to_yaml(const DetectorOptions& options) {
       << "temporal,geometric\n"
       << "  max_candidates: " << v.max_candidates << "\n"
       << "  temporal: {frames: " << v.temporal_options.frames
+      << ", long_frames: " << v.temporal_options.long_frames
       << ", tolerance: " << v.temporal_options.tolerance
       << ", agree: " << v.temporal_options.agree << "}\n"
       << "  geometric: {max_features: " << geo.max_features << ", min_side: " << geo.min_side

@@ -371,7 +371,12 @@ void Database::Impl::load_header() {
                  checksum, "): the file was modified or damaged");
   }
   try {
-    options = parse_config(meta["options"], "database " + path + " meta options");
+    // A key missing from a stored file did not exist when it was written: it
+    // takes the value that reproduces that version's behaviour, not today's
+    // default (verification.temporal.long_frames came with default 48).
+    DetectorOptions before;
+    before.verification.temporal_options.long_frames = 0;
+    options = parse_config(meta["options"], "database " + path + " meta options", before);
   } catch (const InvalidArgument& e) {
     throw FormatError(e.what());
   }

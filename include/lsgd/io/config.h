@@ -17,11 +17,11 @@
 //   verification:
 //     stages: temporal         # none | temporal | geometric | temporal,geometric
 //     max_candidates: 3
-//     temporal: {frames: 16, tolerance: 2, agree: 1}
+//     temporal: {frames: 16, long_frames: 48, tolerance: 2, agree: 1}
 //     geometric: {max_features: 500, min_side: 240, ratio: 0.8, ransac_threshold: 3.0,
 //                 min_inliers: 20, min_inlier_ratio: 0.25}
 //   decision:
-//     threshold: 0.846
+//     threshold: 0.841
 #pragma once
 
 #include <string>

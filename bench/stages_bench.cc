@@ -274,6 +274,21 @@ void BM_Describe(benchmark::State& state, Size size) {
   state.counters["cells"] = desc.grid.cells();
 }
 
+// The detector's path: histograms counted in the segmentation's last pass.
+void BM_SegmentAndDescribe(benchmark::State& state, Size size) {
+  const lsgd::GrayImage gray = lsgd::to_gray(make_bgr(size.width, size.height, 1));
+  lsgd::Segmenter segmenter;
+  lsgd::Segmentation seg;
+  lsgd::Descriptor desc;
+  for (auto _ : state) {
+    lsgd::segment_and_describe(segmenter, gray, seg, desc);
+    benchmark::DoNotOptimize(desc.hist.data());
+    benchmark::ClobberMemory();
+  }
+  state.SetItemsProcessed(state.iterations() * size.width * size.height);
+  state.counters["cells"] = desc.grid.cells();
+}
+
 // ---------------------------------------------------------------- similarity
 
 void BM_Similarity(benchmark::State& state, lsgd::SimilarityMetric metric,
@@ -455,6 +470,12 @@ void register_all(bool large) {
     const std::string label = std::to_string(s.width) + "x" + std::to_string(s.height);
     benchmark::RegisterBenchmark(("BM_Describe/" + label).c_str(), BM_Describe, s)
         ->Unit(benchmark::kMicrosecond);
+  }
+  for (Size s : {kKitti, kSmall}) {
+    const std::string label = std::to_string(s.width) + "x" + std::to_string(s.height);
+    benchmark::RegisterBenchmark(("BM_SegmentAndDescribe/" + label).c_str(), BM_SegmentAndDescribe,
+                                 s)
+        ->Unit(benchmark::kMillisecond);
   }
   using lsgd::HistogramStorage;
   for (auto metric : {lsgd::SimilarityMetric::kReference, lsgd::SimilarityMetric::kL1,

@@ -68,12 +68,13 @@ Result Detector::process_gray(double convert_ms, std::int64_t start_ns) {
   result.frame = store_.size();
   result.timings.convert_ms = convert_ms;
 
+  // The histograms are counted during the segmentation's last pass, so
+  // segment_ms includes them and describe_ms is the storage encoding.
   std::int64_t t = now_ns();
-  segmenter_.segment(gray_, segmentation_);
+  segment_and_describe(segmenter_, gray_, segmentation_, exact_);
   result.timings.segment_ms = ms_since(t);
 
   t = now_ns();
-  describe(gray_, segmentation_, exact_);
   if (options_.descriptor.storage == HistogramStorage::kCompact) {
     compact(exact_, descriptor_);
   } else {

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <limits>
 
 #include "internal/check.h"
@@ -27,9 +28,7 @@ GridSize grid_size(int width, int height, int superpixel_size) {
   return {static_cast<int>(height / step + 1), static_cast<int>(width / step + 1)};
 }
 
-Segmenter::Segmenter(const SegmentationOptions& options) : options_(options) {
-  options_.check();
-}
+Segmenter::Segmenter(const SegmentationOptions& options) : options_(options) { options_.check(); }
 
 Segmentation Segmenter::segment(const GrayImage& image) {
   Segmentation out;
@@ -37,8 +36,15 @@ Segmentation Segmenter::segment(const GrayImage& image) {
   return out;
 }
 
-void Segmenter::segment(const GrayImage& image, Segmentation& out) {
-  if (image.empty() || image.pixels.size() != static_cast<std::size_t>(image.width) * image.height) {
+void Segmenter::segment(const GrayImage& image, Segmentation& out) { run(image, out, nullptr); }
+
+void Segmenter::segment(const GrayImage& image, Segmentation& out, RowSink& sink) {
+  run(image, out, &sink);
+}
+
+void Segmenter::run(const GrayImage& image, Segmentation& out, RowSink* sink) {
+  if (image.empty() ||
+      image.pixels.size() != static_cast<std::size_t>(image.width) * image.height) {
     internal::throw_invalid("segment: image ", image.width, "x", image.height,
                             " is empty or inconsistent with its pixel buffer");
   }
@@ -46,9 +52,10 @@ void Segmenter::segment(const GrayImage& image, Segmentation& out) {
   out.height = image.height;
   out.grid = grid_size(image.width, image.height, options_.superpixel_size);
   out.labels.resize(static_cast<std::size_t>(image.width) * image.height);
-  distance_.resize(static_cast<std::size_t>(image.width));
   seed(image, out);
-  for (int it = 0; it < options_.iterations; ++it) iterate(image, out);
+  for (int it = 0; it < options_.iterations; ++it) {
+    iterate(image, out, it + 1 == options_.iterations ? sink : nullptr);
+  }
 }
 
 // Grid seeds at ((i + 0.5) W / cols, (j + 0.5) H / rows), truncated to whole
@@ -89,38 +96,36 @@ void Segmenter::seed(const GrayImage& image, Segmentation& out) const {
   }
 }
 
-// One k-means iteration, row by row so that the working set (one row of
-// distances and labels) stays in the L1 cache:
-// - assignment: each centre claims the pixels of its window (+- one cell size,
-//   as the reference's search range) whose fuse distance
-//   F_d^2 = d_i^2 / intensity_scale + d_e^2 / distance_scale is the smallest
-//   so far, centres in index order (ties keep the earlier centre); a SIMD
-//   kernel does one row for all centres whose window covers it;
-// - a pixel no window reached (centres move between iterations) joins the
-//   centre nearest in position (the reference would index -1);
-// - update: every centre moves to the mean position and intensity of its
-//   pixels; an empty cluster keeps its previous centre (no division by zero).
-//   Labels come in runs along a row (cells are ~2 S_p wide), so the sums are
-//   taken per run, x sums by the arithmetic series, exact in 64-bit integers.
-// The result equals assigning the whole image, then updating.
-void Segmenter::iterate(const GrayImage& image, Segmentation& out) {
-  const GridSize g = out.grid;
-  const int cells = g.cells();
-  const int half_w = image.width / g.cols;
-  const int half_h = image.height / g.rows;
-  const float inv_ds = static_cast<float>(1.0 / options_.distance_scale);
-
-  // Windows, and for every row the centres whose window covers it, in index
-  // order (a counting sort by row).
+// Each centre's window (+- one cell size around its rounded position, as the
+// reference's search range) and x-term table (the same in every row of its
+// window; tables aligned for the kernel's vectors of `lanes` floats), and for
+// every row the centres whose window covers it, in index order (a counting
+// sort by row). Returns where the tables start.
+const float* Segmenter::plan(const GrayImage& image, const Segmentation& out, int lanes,
+                             float inv_ds) {
+  const int cells = out.grid.cells();
+  const int half_w = image.width / out.grid.cols;
+  const int half_h = image.height / out.grid.rows;
   windows_.resize(static_cast<std::size_t>(cells));
   row_start_.assign(static_cast<std::size_t>(image.height) + 1, 0);
+  std::size_t xterms = 0;
   for (int k = 0; k < cells; ++k) {
     const int cx = static_cast<int>(std::lround(out.centres[k].x));
     const int cy = static_cast<int>(std::lround(out.centres[k].y));
     Window& w = windows_[k];
     w.x0 = std::max(0, cx - half_w), w.x1 = std::min(image.width - 1, cx + half_w);
     w.y0 = std::max(0, cy - half_h), w.y1 = std::min(image.height - 1, cy + half_h);
+    w.xterm = xterms;
+    xterms += static_cast<std::size_t>(internal::x_terms_size(w.x0, w.x1, lanes));
     for (int y = w.y0; y <= w.y1; ++y) ++row_start_[static_cast<std::size_t>(y) + 1];
+  }
+  constexpr std::size_t kAlign = 64;  // bytes: one cache line, the widest x86 vector
+  xterms_.resize(xterms + kAlign / sizeof(float));
+  const auto misalign = reinterpret_cast<std::uintptr_t>(xterms_.data()) % kAlign;
+  float* const tables = xterms_.data() + (kAlign - misalign) % kAlign / sizeof(float);
+  for (int k = 0; k < cells; ++k) {
+    const Window& w = windows_[k];
+    internal::x_terms(out.centres[k].x, w.x0, w.x1, inv_ds, lanes, tables + w.xterm);
   }
   for (int y = 0; y < image.height; ++y) row_start_[y + 1] += row_start_[y];
   row_items_.resize(static_cast<std::size_t>(row_start_[image.height]));
@@ -128,35 +133,67 @@ void Segmenter::iterate(const GrayImage& image, Segmentation& out) {
   for (int k = 0; k < cells; ++k) {
     for (int y = windows_[k].y0; y <= windows_[k].y1; ++y) row_items_[row_fill_[y]++] = k;
   }
+  return tables;
+}
+
+// One k-means iteration, row by row so that the working set (one row of
+// labels and pixels) stays in the L1 cache:
+// - assignment: each centre claims the pixels of its window (+- one cell size,
+//   as the reference's search range) whose fuse distance
+//   F_d^2 = d_i^2 / intensity_scale + d_e^2 / distance_scale is the smallest
+//   so far, centres in index order (ties keep the earlier centre); a SIMD
+//   kernel does one row for all centres whose window covers it, keeping the
+//   best distances in registers (internal::assign_row);
+// - a pixel no window reached (centres move between iterations) joins the
+//   centre nearest in position (the reference would index -1);
+// - update: every centre moves to the mean position and intensity of its
+//   pixels; an empty cluster keeps its previous centre (no division by zero).
+//   Labels come in runs along a row (cells are ~2 S_p wide), so the sums are
+//   taken per run, x sums by the arithmetic series, exact in 64-bit integers.
+// The result equals assigning the whole image, then updating. `sink`, when
+// set, gets each row once its labels are final.
+void Segmenter::iterate(const GrayImage& image, Segmentation& out, RowSink* sink) {
+  const int cells = out.grid.cells();
+  const float inv_ds = static_cast<float>(1.0 / options_.distance_scale);
+  const int lanes = internal::assign_lanes();
+  const float* const tables = plan(image, out, lanes, inv_ds);
 
   sums_.assign(static_cast<std::size_t>(cells) * 4, 0);
   internal::AssignRow r;
-  r.distance = distance_.data();
+  r.width = image.width;
+  r.lanes = lanes;
   r.inv_distance = inv_ds;
   r.inv_intensity = static_cast<float>(1.0 / options_.intensity_scale);
   for (int y = 0; y < image.height; ++y) {
     const std::size_t row = static_cast<std::size_t>(y) * image.width;
     const std::uint8_t* p = image.pixels.data() + row;
     std::int32_t* labels = out.labels.data() + row;
-    segments_.resize(static_cast<std::size_t>(row_start_[y + 1] - row_start_[y]));
-    for (std::int64_t i = row_start_[y]; i < row_start_[y + 1]; ++i) {
-      const std::int32_t k = row_items_[i];
+    const std::int32_t* const items = row_items_.data() + row_start_[y];
+    const int count = static_cast<int>(row_start_[y + 1] - row_start_[y]);
+    // Rows covered by the same centres (runs of ~10 rows) share the lists.
+    const bool same = y > 0 && count == static_cast<int>(segments_.size()) &&
+                      std::equal(items, items + count, row_items_.data() + row_start_[y - 1]);
+    segments_.resize(static_cast<std::size_t>(count));
+    for (int i = 0; i < count; ++i) {
+      const std::int32_t k = items[i];
       const Centre& c = out.centres[k];
       const float dy = static_cast<float>(y) - c.y;
-      internal::RowSegment& seg = segments_[static_cast<std::size_t>(i - row_start_[y])];
+      internal::RowSegment& seg = segments_[static_cast<std::size_t>(i)];
       seg.x0 = windows_[k].x0;
       seg.x1 = windows_[k].x1;
       seg.cx = c.x;
       seg.intensity = c.intensity;
       seg.row_term = (dy * dy) * inv_ds;
       seg.label = k;
+      seg.xterm = tables + windows_[k].xterm;
+      seg.xterm_first = internal::x_terms_first(seg.x0, lanes);
     }
-    std::fill(distance_.begin(), distance_.end(), std::numeric_limits<float>::infinity());
-    std::fill(labels, labels + image.width, -1);
+    if (!same) internal::assign_lists(segments_.data(), count, image.width, lanes, lists_);
     r.pixels = p;
     r.labels = labels;
     r.segments = segments_.data();
-    r.count = static_cast<int>(segments_.size());
+    r.count = count;
+    r.lists = lists_.data();
     internal::assign_row(r);
 
     int x = internal::row_sums(labels, p, image.width, y, sums_.data());
@@ -164,6 +201,7 @@ void Segmenter::iterate(const GrayImage& image, Segmentation& out) {
       labels[x] = nearest_centre(out, x, y);
       x = internal::row_sums(labels, p, image.width, y, sums_.data(), x);
     }
+    if (sink != nullptr) sink->row(y, p, labels, image.width);
   }
   for (int k = 0; k < cells; ++k) {
     Centre& centre = out.centres[k];

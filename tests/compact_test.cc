@@ -90,7 +90,9 @@ TEST(CompactDescriptor, EncodesByHand) {
   EXPECT_EQ(q[3], 2);      // bin 6: 3 pixels -> 1.5 -> 2
   EXPECT_EQ(q[100], 255);  // bin 200: 1914 pixels -> 957, saturated
   for (int b = 4; b < kCompactBins; ++b) {
-    if (b != 100) EXPECT_EQ(q[b], 0) << "bin " << b;
+    if (b != 100) {
+      EXPECT_EQ(q[b], 0) << "bin " << b;
+    }
   }
   for (int b = 0; b < kCompactBins; ++b) EXPECT_EQ(q[kCompactBins + b], 0);  // the empty cell
   EXPECT_EQ(q[2 * kCompactBins + 127], 255);  // 1024 of 1024 pixels, saturated

@@ -4,8 +4,14 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <cmath>
 #include <cstdint>
+#include <filesystem>
 #include <numeric>
+#include <opencv2/imgcodecs.hpp>
+#include <string>
+#include <tuple>
 #include <vector>
 
 #include "lsgd/error.h"
@@ -17,6 +23,7 @@ namespace lsgd {
 namespace {
 
 using test::random_image;
+using test::splitmix64;
 using test::uniform_image;
 
 Segmentation segment(const GrayImage& image, int superpixel_size) {
@@ -52,8 +59,8 @@ void expect_consistent(const GrayImage& image, const Segmentation& seg, const De
 }
 
 TEST(Descriptor, CellSumsEqualCellPixelCounts) {
-  for (const auto& wh : {std::pair{96, 64}, std::pair{97, 61}, std::pair{5, 5},
-                         std::pair{1, 1}, std::pair{1, 400}}) {
+  for (const auto& wh : {std::pair{96, 64}, std::pair{97, 61}, std::pair{5, 5}, std::pair{1, 1},
+                         std::pair{1, 400}}) {
     for (int sp : {2, 5, 16}) {
       SCOPED_TRACE(testing::Message() << wh.first << "x" << wh.second << " sp " << sp);
       const GrayImage img = random_image(wh.first, wh.second, wh.first * 1000 + sp);
@@ -113,7 +120,8 @@ TEST(Descriptor, LargeCellsCountExactlyAndSaturate) {
   img.width = 300;
   img.height = 300;  // 90000 pixels in one cell
   img.pixels.resize(90000);
-  for (std::size_t i = 0; i < img.pixels.size(); ++i) img.pixels[i] = static_cast<std::uint8_t>(i % 256);
+  for (std::size_t i = 0; i < img.pixels.size(); ++i)
+    img.pixels[i] = static_cast<std::uint8_t>(i % 256);
   Segmentation seg;
   seg.grid = {1, 1};
   seg.width = img.width;
@@ -122,7 +130,7 @@ TEST(Descriptor, LargeCellsCountExactlyAndSaturate) {
   seg.centres.resize(1);
   Descriptor d = describe(img, seg);
   EXPECT_EQ(d.pixels[0], 90000u);
-  EXPECT_EQ(d.hist[0], 352u);    // 90000 = 351 * 256 + 144: bins 0..143 hold 352
+  EXPECT_EQ(d.hist[0], 352u);  // 90000 = 351 * 256 + 144: bins 0..143 hold 352
   EXPECT_EQ(d.hist[255], 351u);
   std::fill(img.pixels.begin(), img.pixels.end(), 7);
   d = describe(img, seg);
@@ -158,6 +166,237 @@ TEST(Descriptor, MismatchedSegmentationThrows) {
   Segmentation broken = segment(a, 8);
   broken.labels.pop_back();
   EXPECT_THROW(describe(a, broken), InvalidArgument);
+}
+
+// ---- segment_and_describe: the fused path against segment() + describe()
+
+// Expects segment_and_describe() to give exactly what segment() then
+// describe() give: labels, centres (bit for bit) and histograms. `out` and
+// `seg` may hold a previous result (reuse).
+void expect_fused_equals_reference(const GrayImage& image, const SegmentationOptions& o,
+                                   Segmentation& seg, Descriptor& out) {
+  const Segmentation ref_seg = Segmenter(o).segment(image);
+  const Descriptor ref = describe(image, ref_seg);
+  Segmenter segmenter(o);
+  segment_and_describe(segmenter, image, seg, out);
+  EXPECT_EQ(seg.grid, ref_seg.grid);
+  EXPECT_EQ(seg.labels, ref_seg.labels);
+  ASSERT_EQ(seg.centres.size(), ref_seg.centres.size());
+  for (std::size_t k = 0; k < seg.centres.size(); ++k) {
+    EXPECT_EQ(seg.centres[k].x, ref_seg.centres[k].x) << k;
+    EXPECT_EQ(seg.centres[k].y, ref_seg.centres[k].y) << k;
+    EXPECT_EQ(seg.centres[k].intensity, ref_seg.centres[k].intensity) << k;
+    EXPECT_EQ(seg.centres[k].pixels, ref_seg.centres[k].pixels) << k;
+  }
+  EXPECT_EQ(out.grid, ref.grid);
+  EXPECT_EQ(out.storage, HistogramStorage::kExact);
+  EXPECT_EQ(out.hist, ref.hist);
+  EXPECT_EQ(out.pixels, ref.pixels);
+  EXPECT_TRUE(out.compact.empty());
+  EXPECT_EQ(out.cell_pixels, 0.0);
+  EXPECT_NO_THROW(out.check_consistent("fused"));
+}
+
+void expect_fused_equals_reference(const GrayImage& image, const SegmentationOptions& o) {
+  Segmentation seg;
+  Descriptor out;
+  expect_fused_equals_reference(image, o, seg, out);
+}
+
+SegmentationOptions fused_options(int superpixel_size, int iterations,
+                                  double intensity_scale = 20.0) {
+  SegmentationOptions o;
+  o.superpixel_size = superpixel_size;
+  o.iterations = iterations;
+  o.intensity_scale = intensity_scale;
+  return o;
+}
+
+// Gradient: intensity (a x + b y) mod 256, long runs of equal neighbours in x
+// when a is 0.
+GrayImage gradient_image(int width, int height, int a, int b) {
+  GrayImage g = uniform_image(width, height, 0);
+  for (int y = 0; y < height; ++y) {
+    for (int x = 0; x < width; ++x) {
+      g.pixels[static_cast<std::size_t>(y) * width + x] =
+          static_cast<std::uint8_t>((a * x + b * y) & 0xFF);
+    }
+  }
+  return g;
+}
+
+// A street-like frame: a sky gradient, facades of flat shades with darker
+// windows on both sides, a flat road, and sensor noise of +-3 (seeded).
+GrayImage street_image(int width, int height, std::uint64_t seed) {
+  GrayImage g = uniform_image(width, height, 0);
+  std::uint64_t s = seed;
+  std::vector<int> facade(static_cast<std::size_t>(width)), top(static_cast<std::size_t>(width));
+  for (int x = 0; x < width;) {  // buildings 40..200 pixels wide
+    const int w = 40 + static_cast<int>(splitmix64(s) % 160);
+    const int shade = 60 + static_cast<int>(splitmix64(s) % 150);
+    const int roof = height / 10 + static_cast<int>(splitmix64(s) % (height / 3 + 1));
+    for (int i = x; i < std::min(width, x + w); ++i) facade[i] = shade, top[i] = roof;
+    x += w;
+  }
+  for (int y = 0; y < height; ++y) {
+    for (int x = 0; x < width; ++x) {
+      int v;
+      if (y > height * 3 / 4) {
+        v = 90;  // road
+      } else if (y < top[x]) {
+        v = 200 + 40 * y / height;  // sky
+      } else {
+        const bool window = (x / 7) % 3 == 1 && (y / 9) % 3 == 1;
+        v = window ? facade[x] / 3 : facade[x];
+      }
+      v += static_cast<int>(splitmix64(s) % 7) - 3;
+      g.pixels[static_cast<std::size_t>(y) * width + x] =
+          static_cast<std::uint8_t>(std::clamp(v, 0, 255));
+    }
+  }
+  return g;
+}
+
+TEST(SegmentAndDescribe, EqualsSegmentThenDescribeOnRandomImagesOfManySizes) {
+  const int sizes[][2] = {{1, 1},  {2, 3},  {3, 1},  {1, 3},   {5, 5},   {7, 2},   {17, 13},
+                          {31, 9}, {1, 50}, {50, 1}, {96, 64}, {97, 61}, {33, 47}, {257, 129}};
+  std::uint64_t seed = 500;
+  for (int sp : {2, 3, 5, 8, 40}) {
+    for (int iterations : {1, 3}) {
+      for (const auto& wh : sizes) {
+        SCOPED_TRACE(testing::Message()
+                     << wh[0] << "x" << wh[1] << " sp " << sp << " it " << iterations);
+        expect_fused_equals_reference(random_image(wh[0], wh[1], ++seed),
+                                      fused_options(sp, iterations));
+      }
+    }
+  }
+}
+
+TEST(SegmentAndDescribe, EqualsSegmentThenDescribeOnStructuredImages) {
+  for (const auto& [w, h, sp] : {std::tuple{1241, 376, 40}, std::tuple{320, 240, 40},
+                                 std::tuple{640, 480, 25}, std::tuple{161, 97, 8}}) {
+    SCOPED_TRACE(testing::Message() << w << "x" << h << " sp " << sp);
+    expect_fused_equals_reference(street_image(w, h, w + h), fused_options(sp, 3));
+    expect_fused_equals_reference(street_image(w, h, 7), fused_options(sp, 10, 2.3));
+    expect_fused_equals_reference(gradient_image(w, h, 0, 1), fused_options(sp, 3));
+    expect_fused_equals_reference(gradient_image(w, h, 3, 2), fused_options(sp, 3));
+    expect_fused_equals_reference(uniform_image(w, h, 77), fused_options(sp, 3));
+  }
+  // Windows covering the whole image: one or a few cells.
+  expect_fused_equals_reference(street_image(60, 40, 3), fused_options(40, 3));
+  expect_fused_equals_reference(street_image(90, 20, 4), fused_options(40, 3));
+}
+
+// Images where some pixels lie outside every window in the last iteration
+// and join the nearest centre (the two-level cases of segmentation_test.cc,
+// checked here to still have such pixels): their counts must be in the
+// histograms too.
+TEST(SegmentAndDescribe, EqualsSegmentThenDescribeWithUnreachedPixels) {
+  struct Case {
+    int w, h, sp, iterations;
+    double intensity_scale;
+  };
+  const Case cases[] = {{31, 25, 4, 8, 20.0}, {34, 27, 5, 7, 20.0}, {32, 37, 5, 8, 0.001},
+                        {11, 37, 5, 9, 2.3},  {36, 8, 2, 8, 20.0},  {26, 15, 4, 8, 20.0}};
+  int unreached = 0;
+  for (const Case& c : cases) {
+    SCOPED_TRACE(testing::Message() << c.w << "x" << c.h << " sp " << c.sp);
+    GrayImage img = uniform_image(c.w, c.h, 0);
+    for (int y = 0; y < c.h; ++y) {
+      for (int x = 0; x < c.w; ++x) {
+        img.pixels[static_cast<std::size_t>(y) * c.w + x] =
+            static_cast<std::uint8_t>(((x * 7 / c.w + y * 5 / c.h) % 2) * 255);
+      }
+    }
+    const SegmentationOptions o = fused_options(c.sp, c.iterations, c.intensity_scale);
+    expect_fused_equals_reference(img, o);
+    // Count the pixels outside every window of the last iteration's centres
+    // (those of a run with one iteration fewer).
+    const Segmentation prev =
+        Segmenter(fused_options(c.sp, c.iterations - 1, c.intensity_scale)).segment(img);
+    const int half_w = c.w / prev.grid.cols, half_h = c.h / prev.grid.rows;
+    for (int y = 0; y < c.h; ++y) {
+      for (int x = 0; x < c.w; ++x) {
+        bool reached = false;
+        for (const Centre& ctr : prev.centres) {
+          reached |= std::abs(x - std::lround(ctr.x)) <= half_w &&
+                     std::abs(y - std::lround(ctr.y)) <= half_h;
+        }
+        unreached += !reached;
+      }
+    }
+  }
+  EXPECT_GT(unreached, 0) << "the cases no longer exercise unreached pixels";
+}
+
+// Real frames (corridor, nordland) when ../shared/datasets is present.
+TEST(SegmentAndDescribe, EqualsSegmentThenDescribeOnDatasetFrames) {
+  namespace fs = std::filesystem;
+  const fs::path root = fs::path(LSGD_SHARED_DIR) / "datasets";
+  int frames = 0;
+  for (const char* dir : {"corridor/images", "nordland-trimmed/summer"}) {
+    if (!fs::is_directory(root / dir)) continue;
+    std::vector<fs::path> files;
+    for (const auto& e : fs::directory_iterator(root / dir)) files.push_back(e.path());
+    std::sort(files.begin(), files.end());
+    for (std::size_t i = 0; i < files.size(); i += std::max<std::size_t>(1, files.size() / 4)) {
+      const cv::Mat m = cv::imread(files[i].string(), cv::IMREAD_GRAYSCALE);
+      if (m.empty()) continue;
+      SCOPED_TRACE(files[i].string());
+      expect_fused_equals_reference(to_gray(m), fused_options(40, 3));
+      ++frames;
+    }
+  }
+  if (frames == 0) GTEST_SKIP() << "no dataset frames under " << root << " (../shared is absent)";
+}
+
+// Cells of more than 65535 pixels: counted exactly while no bin passes 65535,
+// saturated beyond, as describe() does.
+TEST(SegmentAndDescribe, LargeCellsCountExactlyAndSaturate) {
+  GrayImage img = uniform_image(300, 300, 0);  // S_p 200: one cell of 90000 pixels
+  for (std::size_t i = 0; i < img.pixels.size(); ++i)
+    img.pixels[i] = static_cast<std::uint8_t>(i % 256);
+  Segmentation seg;
+  Descriptor d;
+  expect_fused_equals_reference(img, fused_options(200, 3), seg, d);
+  EXPECT_EQ(d.pixels[0], 90000u);
+  EXPECT_EQ(d.hist[0], 352u);
+  std::fill(img.pixels.begin(), img.pixels.end(), 7);
+  expect_fused_equals_reference(img, fused_options(200, 3), seg, d);
+  EXPECT_EQ(d.hist[7], 65535u);  // saturated, not 90000 mod 65536
+  EXPECT_EQ(d.hist[6], 0u);
+}
+
+TEST(SegmentAndDescribe, ReusesOutputsAndResets) {
+  Segmentation seg;
+  Descriptor out;
+  compact(describe(random_image(96, 64, 40), segment(random_image(96, 64, 40), 8)), out);
+  ASSERT_EQ(out.storage, HistogramStorage::kCompact);
+  // A compact descriptor, then a larger grid, then a smaller one, then the first again.
+  expect_fused_equals_reference(random_image(96, 64, 41), fused_options(8, 3), seg, out);
+  expect_fused_equals_reference(random_image(200, 150, 42), fused_options(8, 3), seg, out);
+  expect_fused_equals_reference(random_image(40, 30, 43), fused_options(8, 3), seg, out);
+  expect_fused_equals_reference(random_image(96, 64, 41), fused_options(8, 3), seg, out);
+  // One Segmenter for many frames, as the detector does.
+  Segmenter segmenter(fused_options(8, 3));
+  for (std::uint64_t i = 0; i < 4; ++i) {
+    const GrayImage img = street_image(160 + 10 * static_cast<int>(i), 90, i);
+    segment_and_describe(segmenter, img, seg, out);
+    const Segmentation ref_seg = Segmenter(fused_options(8, 3)).segment(img);
+    EXPECT_EQ(seg.labels, ref_seg.labels);
+    EXPECT_EQ(out.hist, describe(img, ref_seg).hist);
+  }
+}
+
+TEST(SegmentAndDescribe, InvalidImageThrows) {
+  Segmenter segmenter;
+  Segmentation seg;
+  Descriptor out;
+  EXPECT_THROW(segment_and_describe(segmenter, GrayImage{}, seg, out), InvalidArgument);
+  GrayImage bad = uniform_image(10, 10, 3);
+  bad.pixels.resize(50);
+  EXPECT_THROW(segment_and_describe(segmenter, bad, seg, out), InvalidArgument);
 }
 
 }  // namespace

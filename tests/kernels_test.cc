@@ -2,12 +2,12 @@
 // on every SIMD target this CPU supports: results must be identical.
 #include "internal/kernels.h"
 
+#include <gtest/gtest.h>
+
 #include <algorithm>
 #include <cstdlib>
 #include <limits>
 #include <vector>
-
-#include <gtest/gtest.h>
 
 #include "lsgd/segmentation.h"
 #include "test_util.h"
@@ -31,42 +31,185 @@ void for_each_target(F&& body) {
   force_simd_target(0);
 }
 
-TEST(Kernels, AssignRowMatchesScalarOnEveryTarget) {
-  const int width = 203;  // odd: vector tails everywhere
-  const GrayImage image = test::random_image(width, 1, 5);
-  std::uint64_t s = 99;
+// Random segments on a row of `width` pixels: spans of 0 .. max_span pixels
+// (one empty, one at either end of the row), labels in order; rows of 64 or
+// more pixels get a few pixels no segment covers.
+std::vector<RowSegment> random_segments(int width, int count, int max_span, std::uint64_t seed) {
+  std::uint64_t s = seed;
   std::vector<RowSegment> segments;
-  for (int k = 0; k < 40; ++k) {
+  for (int k = 0; k < count; ++k) {
     RowSegment seg;
     seg.x0 = static_cast<int>(splitmix64(s) % width);
-    seg.x1 = std::min(width - 1, seg.x0 + static_cast<int>(splitmix64(s) % 90));
+    seg.x1 = std::min(width - 1, seg.x0 + static_cast<int>(splitmix64(s) % max_span));
+    if (k == 2) seg.x1 = std::min(width - 1, seg.x1 - seg.x0), seg.x0 = 0;
+    if (k == 3) seg.x0 = std::max(0, width - 1 - (seg.x1 - seg.x0)), seg.x1 = width - 1;
     if (k == 7) seg.x1 = seg.x0 - 1;  // an empty span
-    seg.cx = static_cast<float>(splitmix64(s) % 20000) / 100.0f;
+    seg.cx = static_cast<float>(splitmix64(s) % (100 * width)) / 100.0f;
     seg.intensity = static_cast<float>(splitmix64(s) % 25600) / 100.0f;
     seg.row_term = static_cast<float>(splitmix64(s) % 5000) / 7.0f;
     seg.label = k;
     segments.push_back(seg);
   }
-  for_each_target([&] {
-    std::vector<float> dist_simd(width, std::numeric_limits<float>::infinity()), dist_ref = dist_simd;
-    std::vector<std::int32_t> lab_simd(width, -1), lab_ref = lab_simd;
+  if (width >= 64) {  // pixels no segment covers: [hole0, hole1]
+    const int hole0 = width * 2 / 3, hole1 = hole0 + 4;
+    for (RowSegment& seg : segments) {
+      if (seg.x1 < hole0 || seg.x0 > hole1) continue;
+      if (seg.x0 < hole0) {
+        seg.x1 = hole0 - 1;
+      } else {
+        seg.x0 = hole1 + 1;  // may leave an empty span
+      }
+    }
+  }
+  return segments;
+}
+
+// Tables and lists for the SIMD kernel on the dispatched target, as the
+// Segmenter builds them.
+struct KernelInputs {
+  std::vector<float> xterms;
+  std::vector<std::int32_t> lists;
+  KernelInputs(std::vector<RowSegment>& segments, AssignRow& r) {
+    const int lanes = assign_lanes();
+    std::size_t n = 0;
+    for (const RowSegment& seg : segments) n += x_terms_size(seg.x0, seg.x1, lanes);
+    xterms.assign(n, 0.0f);
+    n = 0;
+    for (RowSegment& seg : segments) {
+      seg.xterm = xterms.data() + n;
+      seg.xterm_first = x_terms_first(seg.x0, lanes);
+      x_terms(seg.cx, seg.x0, seg.x1, r.inv_distance, lanes, xterms.data() + n);
+      n += x_terms_size(seg.x0, seg.x1, lanes);
+    }
+    assign_lists(segments.data(), static_cast<int>(segments.size()), r.width, lanes, lists);
+    r.lists = lists.data();
+    r.lanes = lanes;
+  }
+};
+
+TEST(Kernels, XTermsHoldTheFuseDistanceXTermInsideTheWindow) {
+  for (const int lanes : {1, 4, 8, 16}) {
+    SCOPED_TRACE(lanes);
+    const int x0 = 8, x1 = 12;
+    const int first = x_terms_first(x0, lanes), size = x_terms_size(x0, x1, lanes);
+    EXPECT_EQ(first % lanes, 0);
+    EXPECT_EQ(size % lanes, 0);
+    EXPECT_LE(first, x0 - lanes);             // a vector may start a vector before x0 ...
+    EXPECT_GE(first + size, x1 + lanes + 1);  // ... and end a vector after x1
+    std::vector<float> out(size);
+    x_terms(10.25f, x0, x1, 0.5f, lanes, out.data());
+    const float inside[] = {2.53125f, 0.78125f, 0.03125f, 0.28125f, 1.53125f};
+    for (int i = 0; i < size; ++i) {
+      const int x = first + i;
+      if (x < x0 || x > x1) {
+        EXPECT_EQ(out[i], std::numeric_limits<float>::infinity()) << x;
+      } else {
+        EXPECT_EQ(out[i], inside[x - x0]) << x;
+      }
+    }
+  }
+}
+
+// The lists name, for each vector, exactly the segments overlapping it, in order.
+TEST(Kernels, AssignListsNameTheSegmentsOfEachVector) {
+  for (const int width : {203, 16, 17, 5}) {
+    const std::vector<RowSegment> segments = random_segments(width, 12, width / 2 + 2, width);
+    for (const int lanes : {1, 4, 8, 16}) {
+      SCOPED_TRACE(testing::Message() << "width " << width << " lanes " << lanes);
+      std::vector<std::int32_t> lists;
+      assign_lists(segments.data(), static_cast<int>(segments.size()), width, lanes, lists);
+      const int chunks = (width + lanes - 1) / lanes;
+      ASSERT_GE(lists.size(), static_cast<std::size_t>(chunks) + 1);
+      EXPECT_EQ(lists[0], 0);
+      EXPECT_EQ(lists.size(), static_cast<std::size_t>(chunks + 1 + lists[chunks]));
+      for (int c = 0; c < chunks; ++c) {
+        const int xs = std::max(0, std::min(c * lanes, width - lanes));
+        const int xe = std::min(width, xs + lanes) - 1;
+        std::vector<std::int32_t> expected;
+        for (int s = 0; s < static_cast<int>(segments.size()); ++s) {
+          if (segments[s].x0 <= segments[s].x1 && segments[s].x0 <= xe && segments[s].x1 >= xs) {
+            expected.push_back(s);
+          }
+        }
+        const std::vector<std::int32_t> got(lists.begin() + chunks + 1 + lists[c],
+                                            lists.begin() + chunks + 1 + lists[c + 1]);
+        EXPECT_EQ(got, expected) << "vector " << c;
+      }
+    }
+  }
+}
+
+TEST(Kernels, AssignRowMatchesScalarOnEveryTarget) {
+  // Odd widths (vector tails everywhere), rows narrower than one vector, and
+  // rows that are exact multiples of every vector width.
+  for (const int width : {203, 1, 3, 7, 15, 16, 17, 31, 64, 100}) {
+    SCOPED_TRACE(testing::Message() << "width " << width);
+    const GrayImage image = test::random_image(width, 1, 5 + width);
+    const int count = width == 203 ? 40 : 6;
+    std::vector<RowSegment> segments =
+        random_segments(width, count, std::max(2, width * 9 / 20), 99 + width);
     AssignRow r;
     r.pixels = image.pixels.data();
+    r.width = width;
     r.segments = segments.data();
     r.count = static_cast<int>(segments.size());
     r.inv_intensity = 1.0f / 20.0f;
     r.inv_distance = 1.0f / 1.3f;
-    r.distance = dist_simd.data();
-    r.labels = lab_simd.data();
-    assign_row(r);
-    r.distance = dist_ref.data();
-    r.labels = lab_ref.data();
+    std::vector<std::int32_t> ref(width, 1234);
+    r.labels = ref.data();
     assign_row_scalar(r);
-    EXPECT_EQ(lab_simd, lab_ref);
-    EXPECT_EQ(dist_simd, dist_ref);  // bit-identical floats
-    EXPECT_GT(std::count(lab_ref.begin(), lab_ref.end(), -1), 0);  // some pixels unreached
-    EXPECT_LT(std::count(lab_ref.begin(), lab_ref.end(), -1), width);
+    if (width >= 64) {  // unreached pixels, and reached ones
+      EXPECT_GE(std::count(ref.begin(), ref.end(), -1), 5);
+      EXPECT_EQ(ref[width * 2 / 3], -1);
+      EXPECT_LT(std::count(ref.begin(), ref.end(), -1), width / 2);
+    }
+    for_each_target([&] {
+      const KernelInputs inputs(segments, r);
+      std::vector<std::int32_t> got(width, 1234);
+      r.labels = got.data();
+      assign_row(r);
+      EXPECT_EQ(got, ref);
+      // Tables made for another vector width: the kernel goes pixel by pixel.
+      std::fill(got.begin(), got.end(), 1234);
+      r.lanes = 0;
+      assign_row(r);
+      EXPECT_EQ(got, ref);
+    });
+  }
+}
+
+// Ties: segments with identical parameters give identical distances, and the
+// earlier segment must keep the pixel on every target.
+TEST(Kernels, AssignRowTiesKeepTheEarlierSegment) {
+  const int width = 77;
+  const GrayImage image = test::random_image(width, 1, 21);
+  std::vector<RowSegment> segments(3);
+  for (int k = 0; k < 3; ++k) {
+    segments[k].x0 = k == 1 ? 0 : 10 + k;
+    segments[k].x1 = k == 2 ? width - 1 : 60;
+    segments[k].cx = 33.5f;
+    segments[k].intensity = 100.0f;
+    segments[k].row_term = 4.0f;
+    segments[k].label = 5 - k;
+  }
+  AssignRow r;
+  r.pixels = image.pixels.data();
+  r.width = width;
+  r.segments = segments.data();
+  r.count = 3;
+  std::vector<std::int32_t> expected(width);
+  for (int x = 0; x < width; ++x) expected[x] = x < 10 ? 4 : x <= 60 ? 5 : 3;
+  for_each_target([&] {
+    const KernelInputs inputs(segments, r);
+    std::vector<std::int32_t> got(width);
+    r.labels = got.data();
+    assign_row(r);
+    EXPECT_EQ(got, expected);
   });
+  std::vector<std::int32_t> ref(width);
+  r.labels = ref.data();
+  assign_row_scalar(r);
+  EXPECT_EQ(ref, expected);
 }
 
 TEST(Kernels, RowSumsMatchScalarOnEveryTarget) {
@@ -104,6 +247,41 @@ TEST(Kernels, RowSumsMatchScalarOnEveryTarget) {
     EXPECT_EQ(row_sums(holed.data(), image.pixels.data(), width, 17, a.data(), 100), width);
     EXPECT_EQ(a, ref);
   });
+}
+
+TEST(Kernels, LabelRunsMatchScalarOnEveryTarget) {
+  for (const int width : {211, 1, 2, 15, 16, 17, 64}) {
+    SCOPED_TRACE(testing::Message() << "width " << width);
+    std::vector<std::int32_t> labels(width);
+    std::uint64_t s = 6 + width;
+    int x = 0, label = 0;
+    while (x < width) {  // runs of 1 .. 40 pixels, labels revisited
+      const int run = 1 + static_cast<int>(splitmix64(s) % 40);
+      for (int i = 0; i < run && x < width; ++i) labels[x++] = label;
+      label = (label + 1 + static_cast<int>(splitmix64(s) % 4)) % 5;  // never the same twice
+    }
+    std::vector<LabelRun> ref(width);
+    const int n = label_runs_scalar(labels.data(), width, ref.data());
+    ref.resize(n);
+    // The runs rebuild the labels.
+    std::vector<std::int32_t> rebuilt(width, -1);
+    for (int i = 0; i < n; ++i) {
+      const int end = i + 1 < n ? ref[i + 1].start : width;
+      std::fill(rebuilt.begin() + ref[i].start, rebuilt.begin() + end, ref[i].label);
+      if (i > 0) {
+        EXPECT_NE(ref[i].label, ref[i - 1].label);
+      }
+    }
+    EXPECT_EQ(rebuilt, labels);
+    for_each_target([&] {
+      std::vector<LabelRun> got(width);
+      ASSERT_EQ(label_runs(labels.data(), width, got.data()), n);
+      for (int i = 0; i < n; ++i) {
+        EXPECT_EQ(got[i].start, ref[i].start) << i;
+        EXPECT_EQ(got[i].label, ref[i].label) << i;
+      }
+    });
+  }
 }
 
 TEST(Kernels, CellL1MatchesScalarOnEveryTargetIncludingExtremes) {

@@ -164,7 +164,9 @@ TEST(SegmentationOptions, EachFieldOutOfRangeNamesTheField) {
       {"intensity_scale", [](SegmentationOptions& o) { o.intensity_scale = -1.0; }},
       {"intensity_scale", [](SegmentationOptions& o) { o.intensity_scale = 2e6; }},
       {"intensity_scale",
-       [](SegmentationOptions& o) { o.intensity_scale = std::numeric_limits<double>::quiet_NaN(); }},
+       [](SegmentationOptions& o) {
+         o.intensity_scale = std::numeric_limits<double>::quiet_NaN();
+       }},
       {"intensity_scale",
        [](SegmentationOptions& o) { o.intensity_scale = std::numeric_limits<double>::infinity(); }},
       {"distance_scale", [](SegmentationOptions& o) { o.distance_scale = 0.0; }},
@@ -211,7 +213,7 @@ TEST(Segmenter, RejectsEmptyOrInconsistentImage) {
 // ---- segmentation invariants
 
 TEST(Segmenter, EveryPixelLabelledForManySizes) {
-  const int sizes[][2] = {{1, 1}, {2, 3}, {3, 1}, {1, 3}, {5, 5}, {4, 4}, {7, 2},
+  const int sizes[][2] = {{1, 1},   {2, 3},  {3, 1},   {1, 3},   {5, 5},  {4, 4}, {7, 2},
                           {17, 13}, {31, 9}, {96, 64}, {97, 61}, {1, 50}, {50, 1}};
   std::uint64_t seed = 100;
   for (int sp : {2, 3, 5, 40}) {
@@ -426,8 +428,8 @@ TEST(Segmenter, CentreCountsSumToPixelCount) {
 // levels tiled 2x2, so any two touching blocks differ by >= 80) plus mild
 // noise: the segmentation must recover exactly the blocks.
 TEST(Segmenter, FlatBlocksSegmentIntoTheBlocks) {
-  for (const auto& [w, h, sp] : std::vector<std::tuple<int, int, int>>{
-           {160, 120, 20}, {96, 64, 10}, {200, 90, 25}}) {
+  for (const auto& [w, h, sp] :
+       std::vector<std::tuple<int, int, int>>{{160, 120, 20}, {96, 64, 10}, {200, 90, 25}}) {
     SCOPED_TRACE(testing::Message() << w << "x" << h << " sp " << sp);
     const GridSize g = grid_size(w, h, sp);
     ASSERT_GT(g.cells(), 1);
@@ -524,6 +526,60 @@ TEST(Segmenter, SmallerImageAfterLargerReusesOutput) {
   expect_valid(small, out, 3);
   Segmenter fresh(options_with(3));
   expect_same(out, fresh.segment(small));
+}
+
+// Records every row a RowSink gets.
+class RecordingSink final : public RowSink {
+ public:
+  void row(int y, const std::uint8_t* pixels, const std::int32_t* labels, int width) override {
+    ys.push_back(y);
+    widths.push_back(width);
+    row_labels.insert(row_labels.end(), labels, labels + width);
+    row_pixels.insert(row_pixels.end(), pixels, pixels + width);
+  }
+  std::vector<int> ys, widths;
+  std::vector<std::int32_t> row_labels;
+  std::vector<std::uint8_t> row_pixels;
+};
+
+// The sink gets every row once, in order, with its final labels (including
+// a pixel no window reached: two-level 26x15, S_p 4, 8 iterations, from the
+// cases above), and the segmentation is the same as without a sink.
+TEST(Segmenter, RowSinkGetsEveryFinalRowOnceInOrder) {
+  struct Case {
+    GrayImage image;
+    int sp, iterations;
+  };
+  const Case cases[] = {{random_image(96, 64, 30), 7, 3}, {smooth_image(203, 77, 0.4), 13, 1},
+                        {two_level_image(31, 25), 4, 8},  {two_level_image(26, 15), 4, 8},
+                        {random_image(1, 1, 31), 40, 3},  {random_image(5, 3, 32), 2, 2},
+                        {random_image(1, 50, 33), 3, 3},  {uniform_image(17, 13, 9), 40, 3}};
+  for (const Case& c : cases) {
+    SCOPED_TRACE(testing::Message() << c.image.width << "x" << c.image.height << " sp " << c.sp);
+    const SegmentationOptions o = options_with(c.sp, c.iterations);
+    const Segmentation expected = Segmenter(o).segment(c.image);
+    Segmenter segmenter(o);
+    Segmentation out;
+    for (int pass = 0; pass < 2; ++pass) {  // the second reuses segmenter and output
+      RecordingSink sink;
+      segmenter.segment(c.image, out, sink);
+      expect_same(out, expected);
+      std::vector<int> rows(c.image.height);
+      for (int y = 0; y < c.image.height; ++y) rows[y] = y;
+      EXPECT_EQ(sink.ys, rows);
+      EXPECT_EQ(sink.widths, std::vector<int>(c.image.height, c.image.width));
+      EXPECT_EQ(sink.row_labels, expected.labels);
+      EXPECT_EQ(sink.row_pixels, c.image.pixels);
+    }
+  }
+}
+
+TEST(Segmenter, RowSinkIsNotCalledForAnInvalidImage) {
+  Segmenter segmenter;
+  Segmentation out;
+  RecordingSink sink;
+  EXPECT_THROW(segmenter.segment(GrayImage{}, out, sink), InvalidArgument);
+  EXPECT_TRUE(sink.ys.empty());
 }
 
 TEST(Segmenter, OptionsAccessor) {

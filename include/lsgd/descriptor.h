@@ -85,6 +85,15 @@ struct Descriptor {
 void describe(const GrayImage& image, const Segmentation& segmentation, Descriptor& out);
 Descriptor describe(const GrayImage& image, const Segmentation& segmentation);
 
+// segmenter.segment(image, segmentation) then describe(image, segmentation,
+// out), with bit-identical results, in one pass: the histograms are counted
+// row by row during the segmentation's last iteration, while each row is in
+// cache, instead of in a second pass over the label image (what the detector
+// runs; describe() stays the reference). Throws what segment() throws.
+// Reuses the storage of segmentation and out.
+void segment_and_describe(Segmenter& segmenter, const GrayImage& image, Segmentation& segmentation,
+                          Descriptor& out);
+
 // Encodes an exact descriptor in compact storage (see HistogramStorage). An
 // empty cell encodes as all zeros. Throws InvalidArgument when `exact` is not
 // a consistent exact descriptor. Reuses out's storage.

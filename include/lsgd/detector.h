@@ -45,8 +45,8 @@ struct DetectorOptions {
 // Wall-clock milliseconds spent per stage on one frame.
 struct Timings {
   double convert_ms = 0;   // conversion to 8-bit gray
-  double segment_ms = 0;   // superpixel-grid segmentation
-  double describe_ms = 0;  // histograms
+  double segment_ms = 0;   // superpixel-grid segmentation, histograms counted in its last pass
+  double describe_ms = 0;  // storage encoding (compact) of the histograms
   double search_ms = 0;    // candidate search (and node assignment)
   double verify_ms = 0;    // verification stages, including feature extraction
   double total_ms = 0;     // the whole process() call

@@ -15,6 +15,9 @@ struct RowSegment {
   int x0 = 0, x1 = -1;  // inclusive
   float cx = 0, intensity = 0, row_term = 0;
   std::int32_t label = 0;
+  // The centre's x-term table (internal::x_terms()): entry x - xterm_first for pixel x.
+  const float* xterm = nullptr;
+  int xterm_first = 0;
 };
 }  // namespace lsgd::internal
 
@@ -72,6 +75,19 @@ struct Segmentation {
   std::vector<Centre> centres;
 };
 
+// Receives the image rows in order, each once its labels are final (during
+// the last iteration, while the row is still in cache), so that per-pixel
+// work on the labels needs no second pass over the image; see
+// segment_and_describe() in lsgd/descriptor.h.
+class RowSink {
+ public:
+  // Row y: `width` pixels and their final labels, each in [0, cells).
+  virtual void row(int y, const std::uint8_t* pixels, const std::int32_t* labels, int width) = 0;
+
+ protected:
+  ~RowSink() = default;
+};
+
 // Runs the segmentation. Keeps scratch buffers between calls, so reuse one
 // Segmenter per stream of frames; not thread-safe (use one per thread).
 class Segmenter {
@@ -86,21 +102,28 @@ class Segmenter {
   // previous centre, and a pixel no window reached joins the nearest centre.
   void segment(const GrayImage& image, Segmentation& out);
   Segmentation segment(const GrayImage& image);
+  // The same, handing every row's final labels to `sink` as they are known
+  // (out.centres are final only when segment() returns).
+  void segment(const GrayImage& image, Segmentation& out, RowSink& sink);
 
  private:
+  void run(const GrayImage& image, Segmentation& out, RowSink* sink);
   void seed(const GrayImage& image, Segmentation& out) const;
-  void iterate(const GrayImage& image, Segmentation& out);
+  const float* plan(const GrayImage& image, const Segmentation& out, int lanes, float inv_ds);
+  void iterate(const GrayImage& image, Segmentation& out, RowSink* sink);
   std::int32_t nearest_centre(const Segmentation& out, int x, int y) const;
 
   struct Window {
     int x0, x1, y0, y1;
+    std::size_t xterm;  // where the centre's x terms start in xterms_
   };
   SegmentationOptions options_;
   // Scratch reused across frames.
-  std::vector<float> distance_;             // best fuse distance^2, one row
-  std::vector<std::int64_t> sums_;          // per centre: x, y, intensity sums, pixels
-  std::vector<Window> windows_;             // per centre, inclusive bounds
-  std::vector<std::int64_t> row_start_;     // centres covering row y: row_items_[row_start_[y] ..)
+  std::vector<float> xterms_;            // per centre: its x-term table (aligned inside)
+  std::vector<std::int32_t> lists_;      // the assignment kernel's per-vector segment lists
+  std::vector<std::int64_t> sums_;       // per centre: x, y, intensity sums, pixels
+  std::vector<Window> windows_;          // per centre, inclusive bounds
+  std::vector<std::int64_t> row_start_;  // centres covering row y: row_items_[row_start_[y] ..)
   std::vector<std::int64_t> row_fill_;
   std::vector<std::int32_t> row_items_;
   std::vector<internal::RowSegment> segments_;

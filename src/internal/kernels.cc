@@ -3,52 +3,70 @@
 // HWY_ONCE part dispatches to the best target at run time.
 #undef HWY_TARGET_INCLUDE
 #define HWY_TARGET_INCLUDE "internal/kernels.cc"
+#include "internal/kernels.h"
+
+#include <algorithm>
+#include <limits>
+
 #include "hwy/foreach_target.h"  // IWYU pragma: keep
 #include "hwy/highway.h"
-
-#include "internal/kernels.h"
 
 HWY_BEFORE_NAMESPACE();
 namespace lsgd::internal {
 namespace HWY_NAMESPACE {
 namespace hn = hwy::HWY_NAMESPACE;
 
+// Vector c covers pixels [xs, xs + lanes) (see assign_lists()); the best
+// distances and labels of its lanes stay in registers over its segments.
 void AssignRowSimd(const AssignRow& r) {
   const hn::ScalableTag<float> df;
   const hn::RebindToSigned<decltype(df)> di;
   const hn::Rebind<std::uint8_t, decltype(df)> d8;
   const int lanes = static_cast<int>(hn::Lanes(df));
-  const auto inv_i = hn::Set(df, r.inv_intensity);
-  const auto inv_d = hn::Set(df, r.inv_distance);
-  const auto iota = hn::Iota(df, 0.0f);
-  for (int s = 0; s < r.count; ++s) {
-    const RowSegment& seg = r.segments[s];
-    const auto intensity = hn::Set(df, seg.intensity);
-    const auto cx = hn::Set(df, seg.cx);
-    const auto row_term = hn::Set(df, seg.row_term);
-    const auto label = hn::Set(di, seg.label);
-    const auto step = [&](int x) {
-      const auto pix = hn::ConvertTo(df, hn::PromoteTo(di, hn::LoadU(d8, r.pixels + x)));
-      const auto dx = hn::Sub(hn::Add(iota, hn::Set(df, static_cast<float>(x))), cx);
-      const auto dI = hn::Sub(pix, intensity);
-      const auto d = hn::Add(hn::Add(hn::Mul(hn::Mul(dI, dI), inv_i), hn::Mul(hn::Mul(dx, dx), inv_d)),
-                             row_term);
-      const auto old = hn::LoadU(df, r.distance + x);
-      const auto closer = hn::Lt(d, old);
-      hn::StoreU(hn::IfThenElse(closer, d, old), df, r.distance + x);
-      const auto old_label = hn::LoadU(di, r.labels + x);
-      hn::StoreU(hn::IfThenElse(hn::RebindMask(di, closer), label, old_label), di, r.labels + x);
-    };
-    int x = seg.x0;
-    for (; x + lanes <= seg.x1 + 1; x += lanes) step(x);
-    if (x <= seg.x1 && seg.x1 + 1 - lanes >= seg.x0) {
-      // The tail as one vector ending at x1: its first lanes were done above
-      // and give exactly the same d again, which is not < the stored d.
-      step(seg.x1 + 1 - lanes);
-      continue;
+  const int width = r.width;
+  // Narrower than one vector, or tables and lists made for another vector
+  // width (dispatch changed since): pixel by pixel, the same operations.
+  if (width < lanes || r.lanes != lanes) {
+    for (int x = 0; x < width; ++x) {
+      float best = std::numeric_limits<float>::infinity();
+      std::int32_t label = -1;
+      for (int s = 0; s < r.count; ++s) {
+        const RowSegment& seg = r.segments[s];
+        if (x < seg.x0 || x > seg.x1) continue;
+        const float d = fuse_distance(r, seg, x);
+        if (d < best) best = d, label = seg.label;
+      }
+      r.labels[x] = label;
     }
-    for (; x <= seg.x1; ++x) assign_pixel(r, seg, x);  // short spans: the same operations
+    return;
   }
+  const int chunks = (width + lanes - 1) / lanes;
+  const std::int32_t* const start = r.lists;
+  const std::int32_t* const items = r.lists + chunks + 1;
+  const auto inv_i = hn::Set(df, r.inv_intensity);
+  const auto infinity = hn::Set(df, std::numeric_limits<float>::infinity());
+  const auto unreached = hn::Set(di, -1);
+  for (int c = 0; c < chunks; ++c) {
+    const int xs = std::min(c * lanes, width - lanes);
+    const auto pix = hn::ConvertTo(df, hn::PromoteTo(di, hn::LoadU(d8, r.pixels + xs)));
+    auto best = infinity;
+    auto label = unreached;
+    for (std::int32_t i = start[c]; i < start[c + 1]; ++i) {
+      const RowSegment& seg = r.segments[items[i]];
+      const auto dI = hn::Sub(pix, hn::Set(df, seg.intensity));
+      const auto xterm = hn::LoadU(df, seg.xterm + (xs - seg.xterm_first));
+      const auto d =
+          hn::Add(hn::Add(hn::Mul(hn::Mul(dI, dI), inv_i), xterm), hn::Set(df, seg.row_term));
+      const auto closer = hn::Lt(d, best);  // +infinity outside the window: never
+      best = hn::IfThenElse(closer, d, best);
+      label = hn::IfThenElse(hn::RebindMask(di, closer), hn::Set(di, seg.label), label);
+    }
+    hn::StoreU(label, di, r.labels + xs);
+  }
+}
+
+std::int32_t AssignLanes() {
+  return static_cast<std::int32_t>(hn::Lanes(hn::ScalableTag<float>()));
 }
 
 int RowSumsSimd(const std::int32_t* labels, const std::uint8_t* pixels, int width, int y,
@@ -88,6 +106,32 @@ int RowSumsSimd(const std::int32_t* labels, const std::uint8_t* pixels, int widt
     s[3] += n;
   }
   return width;
+}
+
+int LabelRunsSimd(const std::int32_t* labels, int width, LabelRun* runs) {
+  const hn::ScalableTag<std::int32_t> di;
+  const int lanes = static_cast<int>(hn::Lanes(di));
+  int n = 0;
+  int x = 0;
+  while (x < width) {
+    const std::int32_t k = labels[x];
+    runs[n++] = LabelRun{x, k};
+    const auto vk = hn::Set(di, k);
+    for (;;) {
+      if (x + lanes > width) {  // the row's last few pixels
+        while (x < width && labels[x] == k) ++x;
+        break;
+      }
+      const auto differ = hn::Ne(hn::LoadU(di, labels + x), vk);
+      if (hn::AllFalse(di, differ)) {
+        x += lanes;
+        continue;
+      }
+      x += static_cast<int>(hn::FindFirstTrue(di, differ));
+      break;
+    }
+  }
+  return n;
 }
 
 void CellL1Simd(const Bin* a, const Bin* b, int cells, std::uint32_t* out) {
@@ -150,7 +194,9 @@ HWY_AFTER_NAMESPACE();
 namespace lsgd::internal {
 
 HWY_EXPORT(AssignRowSimd);
+HWY_EXPORT(AssignLanes);
 HWY_EXPORT(CellL1Simd);
+HWY_EXPORT(LabelRunsSimd);
 HWY_EXPORT(CellSadSimd);
 HWY_EXPORT(RowSumsSimd);
 HWY_EXPORT(TargetOf);
@@ -158,9 +204,53 @@ HWY_EXPORT(TargetOf);
 void assign_row(const AssignRow& row) { HWY_DYNAMIC_DISPATCH(AssignRowSimd)(row); }
 
 void assign_row_scalar(const AssignRow& r) {
+  std::vector<float> distance(static_cast<std::size_t>(r.width),
+                              std::numeric_limits<float>::infinity());
+  std::fill(r.labels, r.labels + r.width, -1);
   for (int s = 0; s < r.count; ++s) {
     const RowSegment& seg = r.segments[s];
-    for (int x = seg.x0; x <= seg.x1; ++x) assign_pixel(r, seg, x);
+    for (int x = seg.x0; x <= seg.x1; ++x) {
+      const float d = fuse_distance(r, seg, x);
+      if (d < distance[x]) distance[x] = d, r.labels[x] = seg.label;
+    }
+  }
+}
+
+int assign_lanes() { return HWY_DYNAMIC_DISPATCH(AssignLanes)(); }
+
+void assign_lists(const RowSegment* segments, int count, int width, int lanes,
+                  std::vector<std::int32_t>& lists) {
+  const int chunks = (width + lanes - 1) / lanes;
+  // A segment's last vector; the row's last vector starts at width - lanes.
+  const auto last_of = [&](const RowSegment& seg) {
+    return seg.x1 >= width - lanes ? chunks - 1 : seg.x1 / lanes;
+  };
+  lists.assign(static_cast<std::size_t>(chunks) + 1, 0);  // a counting sort by vector
+  for (int s = 0; s < count; ++s) {
+    if (segments[s].x1 < segments[s].x0) continue;
+    for (int c = segments[s].x0 / lanes, c1 = last_of(segments[s]); c <= c1; ++c) ++lists[c + 1];
+  }
+  for (int c = 0; c < chunks; ++c) lists[c + 1] += lists[c];
+  lists.resize(lists.size() + static_cast<std::size_t>(lists[chunks]));
+  std::int32_t* const start = lists.data();
+  std::int32_t* const items = start + chunks + 1;
+  for (int s = 0; s < count; ++s) {  // start[c] moves to the end of list c, i.e. start[c + 1]
+    if (segments[s].x1 < segments[s].x0) continue;
+    for (int c = segments[s].x0 / lanes, c1 = last_of(segments[s]); c <= c1; ++c) {
+      items[start[c]++] = s;
+    }
+  }
+  for (int c = chunks; c > 0; --c) start[c] = start[c - 1];
+  start[0] = 0;
+}
+
+void x_terms(float cx, int x0, int x1, float inv_distance, int lanes, float* out) {
+  const int first = x_terms_first(x0, lanes);
+  const int size = x_terms_size(x0, x1, lanes);
+  std::fill(out, out + size, std::numeric_limits<float>::infinity());
+  for (int x = x0; x <= x1; ++x) {
+    const float dx = static_cast<float>(x) - cx;
+    out[x - first] = (dx * dx) * inv_distance;
   }
 }
 
@@ -186,6 +276,18 @@ int row_sums_scalar(const std::int32_t* labels, const std::uint8_t* pixels, int 
     s[3] += n;
   }
   return width;
+}
+
+int label_runs(const std::int32_t* labels, int width, LabelRun* runs) {
+  return HWY_DYNAMIC_DISPATCH(LabelRunsSimd)(labels, width, runs);
+}
+
+int label_runs_scalar(const std::int32_t* labels, int width, LabelRun* runs) {
+  int n = 0;
+  for (int x = 0; x < width; ++x) {
+    if (x == 0 || labels[x] != labels[x - 1]) runs[n++] = LabelRun{x, labels[x]};
+  }
+  return n;
 }
 
 void cell_l1(const Bin* a, const Bin* b, int cells, std::uint32_t* out) {

@@ -19,29 +19,58 @@ namespace lsgd::internal {
 // per centre whose window covers the row) and every x in [x0, x1],
 //   d = (di * di) * inv_intensity + (dx * dx) * inv_distance + row_term
 // with di = pixels[x] - intensity and dx = x - cx (floats, evaluated in that
-// order; row_term = (dy * dy) * inv_distance for the row), and where
-// d < distance[x] the pixel takes the segment's label (ties keep the earlier).
+// order; row_term = (dy * dy) * inv_distance for the row), and where d is
+// below the smallest d so far at x the pixel takes the segment's label (ties
+// keep the earlier segment). Every x in [0, width) gets a label: the segment
+// with the smallest d, or -1 when no segment covers x.
+//
+// The SIMD kernel goes vector by vector along the row and keeps the best d
+// and label of its lanes in registers while it evaluates, in order, the
+// segments listed for that vector (assign_lists()). It reads the x term
+// (dx * dx) * inv_distance from the segment's x_terms() table (the same for
+// every row of a centre's window, +infinity outside it, so lanes outside the
+// window never take its label). The scalar reference computes everything.
 // (RowSegment is defined in lsgd/segmentation.h.)
 struct AssignRow {
-  const std::uint8_t* pixels = nullptr;  // the row
-  float* distance = nullptr;             // per pixel of the row
-  std::int32_t* labels = nullptr;        // per pixel of the row
-  const RowSegment* segments = nullptr;
+  const std::uint8_t* pixels = nullptr;  // the row, width pixels
+  std::int32_t* labels = nullptr;        // out: width labels
+  int width = 0;
+  const RowSegment* segments = nullptr;  // 0 <= x0 <= x1 < width, with x-term tables
   int count = 0;
+  const std::int32_t* lists = nullptr;  // assign_lists() of these segments (SIMD only)
+  int lanes = 0;                        // the vector width tables and lists were made for
   float inv_intensity = 1, inv_distance = 1;
 };
 void assign_row(const AssignRow& row);
 void assign_row_scalar(const AssignRow& row);
 
-// The scalar step of both: pixel x against one segment.
-inline void assign_pixel(const AssignRow& r, const RowSegment& seg, int x) {
+// Floats per vector of the assignment kernel on the target dispatch picks now.
+int assign_lanes();
+
+// For every vector of `lanes` pixels of a row of `width` pixels, the
+// segments covering it, in segment order: lists = [start of each vector's
+// list (vectors + 1)][segment indices]. Vector c covers [xs, xs + lanes) with
+// xs = min(c * lanes, width - lanes); the last one overlaps its neighbour
+// when lanes does not divide width. Depends only on the segments' x0 and x1.
+void assign_lists(const RowSegment* segments, int count, int width, int lanes,
+                  std::vector<std::int32_t>& lists);
+
+// The x-term table of a window [x0, x1] around cx for vectors of `lanes`
+// floats: it covers x in [first, first + size) with
+// first = (x0 / lanes - 1) * lanes and size = x_terms_size(x0, x1, lanes)
+// (a multiple of lanes), and holds (x - cx)^2 * inv_distance for x in
+// [x0, x1], +infinity elsewhere.
+inline int x_terms_first(int x0, int lanes) { return (x0 / lanes - 1) * lanes; }
+inline int x_terms_size(int x0, int x1, int lanes) {
+  return (x1 / lanes + 2) * lanes - x_terms_first(x0, lanes);
+}
+void x_terms(float cx, int x0, int x1, float inv_distance, int lanes, float* out);
+
+// The fuse distance of pixel x against one segment, in the order above.
+inline float fuse_distance(const AssignRow& r, const RowSegment& seg, int x) {
   const float dx = static_cast<float>(x) - seg.cx;
   const float dI = static_cast<float>(r.pixels[x]) - seg.intensity;
-  const float d = ((dI * dI) * r.inv_intensity + (dx * dx) * r.inv_distance) + seg.row_term;
-  if (d < r.distance[x]) {
-    r.distance[x] = d;
-    r.labels[x] = seg.label;
-  }
+  return ((dI * dI) * r.inv_intensity + (dx * dx) * r.inv_distance) + seg.row_term;
 }
 
 // The k-means update sums of one image row from pixel `start` on: for every
@@ -52,6 +81,16 @@ int row_sums(const std::int32_t* labels, const std::uint8_t* pixels, int width, 
              std::int64_t* sums, int start = 0);
 int row_sums_scalar(const std::int32_t* labels, const std::uint8_t* pixels, int width, int y,
                     std::int64_t* sums, int start = 0);
+
+// The runs of equal labels of one row: runs[i] starts at runs[i].start and
+// ends where runs[i + 1] starts (the last one at width). Returns the number
+// of runs; `runs` has room for width runs.
+struct LabelRun {
+  std::int32_t start = 0;
+  std::int32_t label = 0;
+};
+int label_runs(const std::int32_t* labels, int width, LabelRun* runs);
+int label_runs_scalar(const std::int32_t* labels, int width, LabelRun* runs);
 
 // Per-cell L1 distances of two cell-major histograms of `cells` x kBins bins:
 // out[k] = sum_b |a[k][b] - b[k][b]| (at most kBins * 65535, fits 32 bits).

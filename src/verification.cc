@@ -63,6 +63,23 @@ TemporalVerifier::TemporalVerifier(const TemporalOptions& options) : options_(op
   options_.check();
 }
 
+void TemporalVerifier::check_cache(const FrameStore& store, SimilarityMetric metric) const {
+  if (pairs_store_ != &store || store.size() < pairs_store_size_ || pairs_metric_ != metric) {
+    pairs_.clear();
+    pairs_store_ = &store;
+    pairs_metric_ = metric;
+  }
+  pairs_store_size_ = store.size();
+}
+
+double TemporalVerifier::stored_similarity(const FrameStore& store, std::int64_t a, std::int64_t b,
+                                           SimilarityMetric metric) const {
+  const std::uint64_t key = static_cast<std::uint64_t>(a) << 32 | static_cast<std::uint64_t>(b);
+  const auto [it, inserted] = pairs_.try_emplace(key, 0.0);
+  if (inserted) it->second = similarity(store.view(a), store.view(b), metric);
+  return it->second;
+}
+
 double TemporalVerifier::sequence_score(const FrameStore& store, const DescriptorView& descriptor,
                                         std::int64_t query, std::int64_t j,
                                         SimilarityMetric metric) const {
@@ -70,10 +87,10 @@ double TemporalVerifier::sequence_score(const FrameStore& store, const Descripto
   const std::int64_t short_steps = std::min<std::int64_t>(options_.frames, j + 1);
   const std::int64_t long_steps = std::min<std::int64_t>(options_.long_frames, j + 1);
   const std::int64_t steps = std::max(short_steps, long_steps);
-  double sum = similarity(descriptor, store.view(j), metric);
+  double sum = similarity(descriptor, store.view(j), metric);  // the query is not stored yet
   double short_sum = sum;
   for (std::int64_t t = 1; t < steps; ++t) {
-    sum += similarity(store.view(query - t), store.view(j - t), metric);
+    sum += stored_similarity(store, query - t, j - t, metric);
     if (t + 1 == short_steps) short_sum = sum;
   }
   const double short_score = short_sum / static_cast<double>(short_steps);
@@ -87,6 +104,7 @@ void TemporalVerifier::rescore(const FrameStore& store, const DescriptorView& de
                                std::vector<Candidate>& out) const {
   out.clear();
   scored_.clear();
+  check_cache(store, metric);
   const auto score_of = [&](std::int64_t j) {
     for (const Candidate& s : scored_) {
       if (s.frame == j) return s;
@@ -109,6 +127,11 @@ void TemporalVerifier::rescore(const FrameStore& store, const DescriptorView& de
   }
   std::sort(out.begin(), out.end(), better);
   if (out.size() > static_cast<std::size_t>(top_n)) out.resize(static_cast<std::size_t>(top_n));
+  // The next query's sequences start at frame query + 1 - max(frames, long_frames) or later.
+  const std::int64_t oldest = query + 1 - std::max(options_.frames, options_.long_frames);
+  for (auto it = pairs_.begin(); it != pairs_.end();) {
+    it = static_cast<std::int64_t>(it->first >> 32) < oldest ? pairs_.erase(it) : std::next(it);
+  }
 }
 
 TemporalVerifier::Check TemporalVerifier::agree(std::int64_t query,

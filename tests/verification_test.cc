@@ -158,6 +158,55 @@ TEST(TemporalSequence, LongFramesAveragesTheTwoLengths) {
   EXPECT_DOUBLE_EQ(score(1, 0, 0), score(1, 12, 0));  // only frame 0 exists: one similarity
 }
 
+// The verifier caches similarities of stored pairs between queries; its
+// scores must equal a fresh verifier's bit for bit, also when the metric or
+// the store changes between calls.
+TEST(TemporalSequence, PairCacheGivesTheScoresOfAFreshVerifier) {
+  auto frame = [](int t) {
+    Descriptor d;
+    d.grid = {1, 2};
+    d.hist.assign(2 * kBins, 0);
+    d.hist[0] = static_cast<Bin>(100 - t);
+    d.hist[1] = static_cast<Bin>(t);
+    d.hist[kBins + 5] = static_cast<Bin>(t / 2 + 10);
+    d.hist[kBins + 6] = static_cast<Bin>(60 - t / 2);
+    d.pixels = {100, 70};
+    return d;
+  };
+  std::vector<Descriptor> frames;
+  for (int i = 0; i < 160; ++i) frames.push_back(frame((i * 37 + (i / 40) * 11) % 101));
+  TemporalOptions o;
+  o.frames = 6;
+  o.long_frames = 20;
+  const TemporalVerifier warm(o);
+  FrameStore store, other;
+  for (int i = 0; i < 30; ++i) store.add(frames[i]);
+  for (int q = 30; q < 160; ++q) {
+    SCOPED_TRACE(q);
+    const SimilarityMetric metric =
+        q >= 90 && q < 100 ? SimilarityMetric::kL1 : SimilarityMetric::kReference;
+    const FrameStore& s = q >= 120 && q < 125 ? other : store;
+    if (q == 120) {
+      for (int i = 0; i < 120; ++i) other.add(frames[(i + 7) % 160]);  // different frames
+    }
+    if (q >= 125 && other.size() > 0) {
+      // back to `store`; `other` keeps growing so its frames differ
+      other.add(frames[q]);
+    }
+    const std::vector<Candidate> raw = {{q - 25, 0.9}, {q / 3, 0.8}, {(q * 7) % (q - 10), 0.7}};
+    std::vector<Candidate> got, want;
+    warm.rescore(s, frames[q].view(), s.size(), raw, 5, metric, 10, got);
+    const TemporalVerifier fresh(o);
+    fresh.rescore(s, frames[q].view(), s.size(), raw, 5, metric, 10, want);
+    ASSERT_EQ(got.size(), want.size());
+    for (std::size_t i = 0; i < got.size(); ++i) {
+      EXPECT_EQ(got[i].frame, want[i].frame);
+      EXPECT_EQ(got[i].score, want[i].score);
+    }
+    if (&s == &store) store.add(frames[q]);
+  }
+}
+
 TEST(TemporalAgree, ConsecutivePlacesAreAcceptedOthersRejected) {
   TemporalOptions options;
   options.agree = 2;

@@ -17,6 +17,7 @@
 #include <cstdint>
 #include <deque>
 #include <string>
+#include <unordered_map>
 #include <vector>
 
 #include "lsgd/frame_store.h"
@@ -113,10 +114,26 @@ class TemporalVerifier {
   double sequence_score(const FrameStore& store, const DescriptorView& descriptor,
                         std::int64_t query, std::int64_t j, SimilarityMetric metric) const;
 
+  // sim(store[a], store[b]) for a > b, from the pair cache or computed and cached.
+  double stored_similarity(const FrameStore& store, std::int64_t a, std::int64_t b,
+                           SimilarityMetric metric) const;
+  // Empties the pair cache unless it was filled from this store (by address,
+  // with no fewer frames) with this metric.
+  void check_cache(const FrameStore& store, SimilarityMetric metric) const;
+
   TemporalOptions options_;
   // Sequence scores computed in the current rescore() call: the windows of
   // neighbouring candidates overlap, so each frame is scored once.
   mutable std::vector<Candidate> scored_;
+  // Similarities of stored pairs (a, b), key a << 32 | b, along the diagonals
+  // of recent queries: the next query's diagonals are mostly the same pairs,
+  // so each is computed once instead of once per query (stored frames never
+  // change). Pairs no later sequence can reach (a older than the longest
+  // sequence) are dropped after each rescore().
+  mutable std::unordered_map<std::uint64_t, double> pairs_;
+  mutable const FrameStore* pairs_store_ = nullptr;
+  mutable std::int64_t pairs_store_size_ = 0;
+  mutable SimilarityMetric pairs_metric_ = SimilarityMetric::kReference;
   std::deque<std::int64_t> places_;  // best place of the previous queries, newest last
   std::int64_t last_query_ = -1;
 };

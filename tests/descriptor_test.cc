@@ -179,15 +179,7 @@ void expect_fused_equals_reference(const GrayImage& image, const SegmentationOpt
   const Descriptor ref = describe(image, ref_seg);
   Segmenter segmenter(o);
   segment_and_describe(segmenter, image, seg, out);
-  EXPECT_EQ(seg.grid, ref_seg.grid);
-  EXPECT_EQ(seg.labels, ref_seg.labels);
-  ASSERT_EQ(seg.centres.size(), ref_seg.centres.size());
-  for (std::size_t k = 0; k < seg.centres.size(); ++k) {
-    EXPECT_EQ(seg.centres[k].x, ref_seg.centres[k].x) << k;
-    EXPECT_EQ(seg.centres[k].y, ref_seg.centres[k].y) << k;
-    EXPECT_EQ(seg.centres[k].intensity, ref_seg.centres[k].intensity) << k;
-    EXPECT_EQ(seg.centres[k].pixels, ref_seg.centres[k].pixels) << k;
-  }
+  test::expect_same_segmentation(seg, ref_seg);
   EXPECT_EQ(out.grid, ref.grid);
   EXPECT_EQ(out.storage, HistogramStorage::kExact);
   EXPECT_EQ(out.hist, ref.hist);
@@ -289,26 +281,14 @@ TEST(SegmentAndDescribe, EqualsSegmentThenDescribeOnStructuredImages) {
 }
 
 // Images where some pixels lie outside every window in the last iteration
-// and join the nearest centre (the two-level cases of segmentation_test.cc,
+// and join the nearest centre (test::kUnreachedPixelCases, shared with segmentation_test.cc,
 // checked here to still have such pixels): their counts must be in the
 // histograms too.
 TEST(SegmentAndDescribe, EqualsSegmentThenDescribeWithUnreachedPixels) {
-  struct Case {
-    int w, h, sp, iterations;
-    double intensity_scale;
-  };
-  const Case cases[] = {{31, 25, 4, 8, 20.0}, {34, 27, 5, 7, 20.0}, {32, 37, 5, 8, 0.001},
-                        {11, 37, 5, 9, 2.3},  {36, 8, 2, 8, 20.0},  {26, 15, 4, 8, 20.0}};
   int unreached = 0;
-  for (const Case& c : cases) {
+  for (const test::UnreachedPixelCase& c : test::kUnreachedPixelCases) {
     SCOPED_TRACE(testing::Message() << c.w << "x" << c.h << " sp " << c.sp);
-    GrayImage img = uniform_image(c.w, c.h, 0);
-    for (int y = 0; y < c.h; ++y) {
-      for (int x = 0; x < c.w; ++x) {
-        img.pixels[static_cast<std::size_t>(y) * c.w + x] =
-            static_cast<std::uint8_t>(((x * 7 / c.w + y * 5 / c.h) % 2) * 255);
-      }
-    }
+    const GrayImage img = test::two_level_image(c.w, c.h);
     const SegmentationOptions o = fused_options(c.sp, c.iterations, c.intensity_scale);
     expect_fused_equals_reference(img, o);
     // Count the pixels outside every window of the last iteration's centres

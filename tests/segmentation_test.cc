@@ -275,21 +275,6 @@ TEST(Segmenter, EmptyClustersDoNotCrash) {
   expect_valid(tall2, harsh.segment(tall2), 2);
 }
 
-// Two-level checkerboard: 7 columns x 5 rows of tiles, alternately 0 and 255.
-GrayImage two_level_image(int width, int height) {
-  GrayImage img;
-  img.width = width;
-  img.height = height;
-  img.pixels.resize(static_cast<std::size_t>(width) * height);
-  for (int y = 0; y < height; ++y) {
-    for (int x = 0; x < width; ++x) {
-      img.pixels[static_cast<std::size_t>(y) * width + x] =
-          static_cast<std::uint8_t>(((x * 7 / width + y * 5 / height) % 2) * 255);
-    }
-  }
-  return img;
-}
-
 // Two-level patterns where k-means moves centres so far that, in the last
 // iteration, some pixels lie outside every centre's search window (+- W/cols x
 // +- H/rows around the rounded centre, algorithm.md section 2; cases found by
@@ -298,16 +283,10 @@ GrayImage two_level_image(int width, int height) {
 // assignment are those of a run with one iteration fewer (k-means is a
 // deterministic prefix).
 TEST(Segmenter, PixelsOutsideEveryWindowJoinTheNearestCentre) {
-  struct Case {
-    int w, h, sp, iterations;
-    double intensity_scale;
-  };
-  const Case cases[] = {{31, 25, 4, 8, 20.0}, {34, 27, 5, 7, 20.0}, {32, 37, 5, 8, 0.001},
-                        {11, 37, 5, 9, 2.3},  {36, 8, 2, 8, 20.0},  {26, 15, 4, 8, 20.0}};
   int unreached_total = 0;
-  for (const Case& c : cases) {
+  for (const test::UnreachedPixelCase& c : test::kUnreachedPixelCases) {
     SCOPED_TRACE(testing::Message() << c.w << "x" << c.h << " sp " << c.sp);
-    const GrayImage img = two_level_image(c.w, c.h);
+    const GrayImage img = test::two_level_image(c.w, c.h);
     SegmentationOptions o = options_with(c.sp, c.iterations);
     o.intensity_scale = c.intensity_scale;
     Segmenter segmenter(o);
@@ -356,7 +335,7 @@ TEST(Segmenter, EmptyClusterKeepsItsPreviousCentre) {
   int empty_total = 0;
   for (const Case& c : cases) {
     SCOPED_TRACE(testing::Message() << c.w << "x" << c.h << " sp " << c.sp);
-    const GrayImage img = two_level_image(c.w, c.h);
+    const GrayImage img = test::two_level_image(c.w, c.h);
     // Check every iteration count, so the iteration where a cluster first
     // empties is covered.
     SegmentationOptions o = options_with(c.sp, 1);
@@ -484,17 +463,7 @@ TEST(Segmenter, Deterministic) {
 }
 
 void expect_same(const Segmentation& a, const Segmentation& b) {
-  EXPECT_EQ(a.grid, b.grid);
-  EXPECT_EQ(a.width, b.width);
-  EXPECT_EQ(a.height, b.height);
-  EXPECT_EQ(a.labels, b.labels);
-  ASSERT_EQ(a.centres.size(), b.centres.size());
-  for (std::size_t k = 0; k < a.centres.size(); ++k) {
-    EXPECT_EQ(a.centres[k].x, b.centres[k].x) << k;
-    EXPECT_EQ(a.centres[k].y, b.centres[k].y) << k;
-    EXPECT_EQ(a.centres[k].intensity, b.centres[k].intensity) << k;
-    EXPECT_EQ(a.centres[k].pixels, b.centres[k].pixels) << k;
-  }
+  test::expect_same_segmentation(a, b);
 }
 
 TEST(Segmenter, ResultDependsOnlyOnTheImage) {
@@ -550,10 +519,11 @@ TEST(Segmenter, RowSinkGetsEveryFinalRowOnceInOrder) {
     GrayImage image;
     int sp, iterations;
   };
-  const Case cases[] = {{random_image(96, 64, 30), 7, 3}, {smooth_image(203, 77, 0.4), 13, 1},
-                        {two_level_image(31, 25), 4, 8},  {two_level_image(26, 15), 4, 8},
-                        {random_image(1, 1, 31), 40, 3},  {random_image(5, 3, 32), 2, 2},
-                        {random_image(1, 50, 33), 3, 3},  {uniform_image(17, 13, 9), 40, 3}};
+  const Case cases[] = {
+      {random_image(96, 64, 30), 7, 3},      {smooth_image(203, 77, 0.4), 13, 1},
+      {test::two_level_image(31, 25), 4, 8}, {test::two_level_image(26, 15), 4, 8},
+      {random_image(1, 1, 31), 40, 3},       {random_image(5, 3, 32), 2, 2},
+      {random_image(1, 50, 33), 3, 3},       {uniform_image(17, 13, 9), 40, 3}};
   for (const Case& c : cases) {
     SCOPED_TRACE(testing::Message() << c.image.width << "x" << c.image.height << " sp " << c.sp);
     const SegmentationOptions o = options_with(c.sp, c.iterations);

@@ -3,17 +3,18 @@
 // Header-only; every generator is deterministic, so tests stay reproducible.
 #pragma once
 
+#include <gtest/gtest.h>
+
 #include <cstddef>
 #include <cstdint>
-#include <string>
 #include <exception>
+#include <string>
 #include <utility>
 #include <vector>
 
-#include <gtest/gtest.h>
-
 #include "lsgd/descriptor.h"
 #include "lsgd/image.h"
+#include "lsgd/segmentation.h"
 
 namespace lsgd::test {
 
@@ -36,6 +37,48 @@ inline GrayImage random_image(int width, int height, std::uint64_t seed) {
   for (auto& p : g.pixels) p = static_cast<std::uint8_t>(splitmix64(s) & 0xFF);
   return g;
 }
+
+// Expects two segmentations to be identical: grid, size, every label and
+// every centre (floats compared exactly).
+inline void expect_same_segmentation(const Segmentation& a, const Segmentation& b) {
+  EXPECT_EQ(a.grid, b.grid);
+  EXPECT_EQ(a.width, b.width);
+  EXPECT_EQ(a.height, b.height);
+  EXPECT_EQ(a.labels, b.labels);
+  ASSERT_EQ(a.centres.size(), b.centres.size());
+  for (std::size_t k = 0; k < a.centres.size(); ++k) {
+    EXPECT_EQ(a.centres[k].x, b.centres[k].x) << k;
+    EXPECT_EQ(a.centres[k].y, b.centres[k].y) << k;
+    EXPECT_EQ(a.centres[k].intensity, b.centres[k].intensity) << k;
+    EXPECT_EQ(a.centres[k].pixels, b.centres[k].pixels) << k;
+  }
+}
+
+// Two-level checkerboard: 7 columns x 5 rows of tiles, alternately 0 and 255.
+inline GrayImage two_level_image(int width, int height) {
+  GrayImage img;
+  img.width = width;
+  img.height = height;
+  img.pixels.resize(static_cast<std::size_t>(width) * height);
+  for (int y = 0; y < height; ++y) {
+    for (int x = 0; x < width; ++x) {
+      img.pixels[static_cast<std::size_t>(y) * width + x] =
+          static_cast<std::uint8_t>(((x * 7 / width + y * 5 / height) % 2) * 255);
+    }
+  }
+  return img;
+}
+
+// Segmentations of two_level_image(w, h) where, in the last iteration, some
+// pixels lie outside every centre's window and join the nearest centre (found
+// by instrumenting the segmenter; the tests check they still occur).
+struct UnreachedPixelCase {
+  int w, h, sp, iterations;
+  double intensity_scale;
+};
+inline constexpr UnreachedPixelCase kUnreachedPixelCases[] = {
+    {31, 25, 4, 8, 20.0}, {34, 27, 5, 7, 20.0}, {32, 37, 5, 8, 0.001},
+    {11, 37, 5, 9, 2.3},  {36, 8, 2, 8, 20.0},  {26, 15, 4, 8, 20.0}};
 
 // Exact descriptor of one row of cells, each cell given as (bin, count) pairs
 // (a bin may repeat: counts add up).

@@ -485,9 +485,12 @@ void register_all(bool large) {
         metric, HistogramStorage::kExact)
         ->Unit(benchmark::kMicrosecond);
   }
-  benchmark::RegisterBenchmark("BM_Similarity/cells80/reference/compact", BM_Similarity,
-                               lsgd::SimilarityMetric::kReference, HistogramStorage::kCompact)
-      ->Unit(benchmark::kMicrosecond);
+  for (auto metric : {lsgd::SimilarityMetric::kReference, lsgd::SimilarityMetric::kL1}) {
+    benchmark::RegisterBenchmark(
+        ("BM_Similarity/cells80/" + std::string(lsgd::to_string(metric)) + "/compact").c_str(),
+        BM_Similarity, metric, HistogramStorage::kCompact)
+        ->Unit(benchmark::kMicrosecond);
+  }
   // Exact and compact storage side by side (name suffix /compact).
   for (HistogramStorage storage : {HistogramStorage::kExact, HistogramStorage::kCompact}) {
     const std::string suffix = storage == HistogramStorage::kCompact ? "/compact" : "";

@@ -280,8 +280,9 @@ void BM_SegmentAndDescribe(benchmark::State& state, Size size) {
   lsgd::Segmenter segmenter;
   lsgd::Segmentation seg;
   lsgd::Descriptor desc;
+  lsgd::DescribeScratch scratch;
   for (auto _ : state) {
-    lsgd::segment_and_describe(segmenter, gray, seg, desc);
+    lsgd::segment_and_describe(segmenter, gray, seg, desc, scratch);
     benchmark::DoNotOptimize(desc.hist.data());
     benchmark::ClobberMemory();
   }

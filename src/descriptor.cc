@@ -132,8 +132,8 @@ namespace {
 // set would make each increment wait for the previous one's store.
 class HistogramRows final : public RowSink {
  public:
-  HistogramRows(const Segmentation& segmentation, Descriptor& out)
-      : segmentation_(segmentation), out_(out) {}
+  HistogramRows(const Segmentation& segmentation, Descriptor& out, DescribeScratch& scratch)
+      : segmentation_(segmentation), out_(out), second_(scratch.second), runs_(scratch.runs) {}
 
   void row(int y, const std::uint8_t* p, const std::int32_t* labels, int width) override {
     if (y == 0) {  // the grid is known once the segmentation runs
@@ -172,15 +172,21 @@ class HistogramRows final : public RowSink {
  private:
   const Segmentation& segmentation_;
   Descriptor& out_;
-  std::vector<Bin> second_;
-  std::vector<internal::LabelRun> runs_;
+  std::vector<Bin>& second_;
+  std::vector<internal::LabelRun>& runs_;
 };
 
 }  // namespace
 
 void segment_and_describe(Segmenter& segmenter, const GrayImage& image, Segmentation& segmentation,
                           Descriptor& out) {
-  HistogramRows rows(segmentation, out);
+  DescribeScratch scratch;
+  segment_and_describe(segmenter, image, segmentation, out, scratch);
+}
+
+void segment_and_describe(Segmenter& segmenter, const GrayImage& image, Segmentation& segmentation,
+                          Descriptor& out, DescribeScratch& scratch) {
+  HistogramRows rows(segmentation, out, scratch);
   segmenter.segment(image, segmentation, rows);
   rows.finish();
   out.storage = HistogramStorage::kExact;

@@ -71,7 +71,7 @@ Result Detector::process_gray(double convert_ms, std::int64_t start_ns) {
   // The histograms are counted during the segmentation's last pass, so
   // segment_ms includes them and describe_ms is the storage encoding.
   std::int64_t t = now_ns();
-  segment_and_describe(segmenter_, gray_, segmentation_, exact_);
+  segment_and_describe(segmenter_, gray_, segmentation_, exact_, describe_scratch_);
   result.timings.segment_ms = ms_since(t);
 
   t = now_ns();

@@ -358,11 +358,13 @@ TEST(SegmentAndDescribe, ReusesOutputsAndResets) {
   expect_fused_equals_reference(random_image(200, 150, 42), fused_options(8, 3), seg, out);
   expect_fused_equals_reference(random_image(40, 30, 43), fused_options(8, 3), seg, out);
   expect_fused_equals_reference(random_image(96, 64, 41), fused_options(8, 3), seg, out);
-  // One Segmenter for many frames, as the detector does.
+  // One Segmenter and one scratch for many frames of changing sizes, as the
+  // detector does (the scratch keeps the previous frame's histograms and runs).
   Segmenter segmenter(fused_options(8, 3));
-  for (std::uint64_t i = 0; i < 4; ++i) {
-    const GrayImage img = street_image(160 + 10 * static_cast<int>(i), 90, i);
-    segment_and_describe(segmenter, img, seg, out);
+  DescribeScratch scratch;
+  for (std::uint64_t i = 0; i < 6; ++i) {
+    const GrayImage img = street_image(i % 2 ? 160 + 10 * static_cast<int>(i) : 90, 90, i);
+    segment_and_describe(segmenter, img, seg, out, scratch);
     const Segmentation ref_seg = Segmenter(fused_options(8, 3)).segment(img);
     EXPECT_EQ(seg.labels, ref_seg.labels);
     EXPECT_EQ(out.hist, describe(img, ref_seg).hist);

@@ -53,15 +53,15 @@ struct Timings {
 };
 
 struct Result {
-  std::int64_t frame = -1;             // id of the processed frame (0, 1, 2, ...)
-  bool loop = false;                   // best.frame >= 0 and best.score >= decision.threshold
+  std::int64_t frame = -1;  // id of the processed frame (0, 1, 2, ...)
+  bool loop = false;        // best.frame >= 0 and best.score >= decision.threshold
   // The reported candidate: the most similar one that every enabled
   // verification stage accepted (its score is the temporal sequence score when
   // that stage runs, else the similarity); frame -1 when there is none.
   Candidate best;
-  std::vector<Candidate> candidates;   // raw search result: up to search.top_n, best first
+  std::vector<Candidate> candidates;       // raw search result: up to search.top_n, best first
   std::vector<StageVerdict> verification;  // every stage verdict, in the order examined
-  std::int64_t node = -1;              // dynamic node joined or created; -1 when exhaustive
+  std::int64_t node = -1;                  // dynamic node joined or created; -1 when exhaustive
   bool node_created = false;
   Timings timings;
 };
@@ -128,6 +128,7 @@ class Detector {
   // Scratch reused across frames (no allocation per frame once warm).
   GrayImage gray_;
   Segmentation segmentation_;
+  DescribeScratch describe_scratch_;
   Descriptor exact_;       // the frame's histograms as computed
   Descriptor descriptor_;  // ... and as stored (descriptor.storage)
   std::vector<Candidate> scratch_;

@@ -19,6 +19,14 @@ struct RowSegment {
   const float* xterm = nullptr;
   int xterm_first = 0;
 };
+
+// One run of equal labels in a row (internal::label_runs in
+// src/internal/kernels.h): it starts at `start` and ends where the next run
+// starts.
+struct LabelRun {
+  std::int32_t start = 0;
+  std::int32_t label = 0;
+};
 }  // namespace lsgd::internal
 
 namespace lsgd {

@@ -84,11 +84,8 @@ int row_sums_scalar(const std::int32_t* labels, const std::uint8_t* pixels, int 
 
 // The runs of equal labels of one row: runs[i] starts at runs[i].start and
 // ends where runs[i + 1] starts (the last one at width). Returns the number
-// of runs; `runs` has room for width runs.
-struct LabelRun {
-  std::int32_t start = 0;
-  std::int32_t label = 0;
-};
+// of runs; `runs` has room for width runs. (LabelRun is defined in
+// lsgd/segmentation.h.)
 int label_runs(const std::int32_t* labels, int width, LabelRun* runs);
 int label_runs_scalar(const std::int32_t* labels, int width, LabelRun* runs);
 

@@ -68,7 +68,7 @@ class StandaloneLsgd {
     };
     const auto time_both = [&] {
       const Stopwatch watch;
-      segment_and_describe(segmenter_, gray_, segmentation_, descriptor_);
+      segment_and_describe(segmenter_, gray_, segmentation_, descriptor_, scratch_);
       both = watch.elapsed();
     };
     if (s.segment.size() / 2 % 2 == 0) {  // SLIC's order flips every frame, this every other
@@ -89,6 +89,7 @@ class StandaloneLsgd {
   GrayImage gray_;
   Segmentation segmentation_;
   Descriptor descriptor_;
+  DescribeScratch scratch_;
 };
 
 void plan_slic(const bench::Setup& a, const DetectorOptions& options, bench::RunData& d) {

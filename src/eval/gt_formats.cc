@@ -309,6 +309,16 @@ class Inflater {
   z_stream z_{};
 };
 
+// The zlib stream of a compressed v5 element (after its 8-byte tag).
+std::string compressed_bytes(const std::string& path, const V5Element& e) {
+  std::string bytes(e.bytes, '\0');
+  std::ifstream in(path, std::ios::binary);
+  in.seekg(static_cast<std::streamoff>(e.offset + 8));
+  in.read(bytes.data(), static_cast<std::streamsize>(bytes.size()));
+  if (!in) throw IoError(concat("error while reading '", path, "'"));
+  return bytes;
+}
+
 // matio sizes its allocations from a compressed variable's header (dimensions,
 // name) before it looks at the data, so a corrupt header asks for gigabytes
 // (fuzzing found 3-4 GB callocs). MATLAB names have at most 63 characters and
@@ -318,12 +328,7 @@ void check_compressed_headers(const std::string& path, const Container& c) {
   constexpr std::uint32_t kMaxDimsBytes = 1024, kMaxNameBytes = 4096;
   for (const V5Element& e : c.elements) {
     if (e.type != kMiCompressed) continue;
-    std::string bytes(e.bytes, '\0');
-    std::ifstream in(path, std::ios::binary);
-    in.seekg(static_cast<std::streamoff>(e.offset + 8));
-    in.read(bytes.data(), static_cast<std::streamsize>(bytes.size()));
-    if (!in) throw IoError(concat("error while reading '", path, "'"));
-    Inflater z(path, std::move(bytes));
+    Inflater z(path, compressed_bytes(path, e));
     if (z.tag()[0] != kMiMatrix) continue;
     const auto flags = z.tag();
     if (!flags[3]) z.skip((std::size_t{flags[1]} + 7) / 8 * 8);
@@ -434,12 +439,7 @@ bool stream_v5(const std::string& path, const Container& c, const std::string& n
   if (c.swapped) return false;
   for (const V5Element& e : c.elements) {
     if (e.type != kMiCompressed) continue;
-    std::string bytes(e.bytes, '\0');
-    std::ifstream in(path, std::ios::binary);
-    in.seekg(static_cast<std::streamoff>(e.offset + 8));
-    in.read(bytes.data(), static_cast<std::streamsize>(bytes.size()));
-    if (!in) throw IoError(concat("error while reading '", path, "'"));
-    Inflater z(path, std::move(bytes));
+    Inflater z(path, compressed_bytes(path, e));
     if (z.tag()[0] != kMiMatrix) continue;
     const auto flags = z.tag();
     std::uint32_t array_flags[2];

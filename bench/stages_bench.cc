@@ -315,6 +315,26 @@ void BM_Similarity(benchmark::State& state, lsgd::SimilarityMetric metric,
       static_cast<std::int64_t>(lsgd::Descriptor::bytes_per_frame(storage, a.cells)));
 }
 
+// similarities(): 64 stored route frames (in cache) scored against one query
+// in a single call, per frame; beside BM_Similarity's one call per pair.
+void BM_Similarities(benchmark::State& state, lsgd::HistogramStorage storage) {
+  constexpr std::int64_t kFrames = 64;
+  const lsgd::FrameStore& store = route_store(kKitti, kFrames, storage);
+  const lsgd::Descriptor query = route_query(kKitti, kFrames, storage);
+  std::vector<lsgd::DescriptorView> views;
+  for (std::int64_t j = 0; j < kFrames; ++j) views.push_back(store.view(j));
+  std::vector<double> scores(views.size());
+  for (auto _ : state) {
+    lsgd::similarities(query.view(), views.data(), views.size(), lsgd::SimilarityMetric::kReference,
+                       scores.data());
+    benchmark::DoNotOptimize(scores.data());
+    benchmark::ClobberMemory();
+  }
+  state.SetItemsProcessed(state.iterations() * kFrames);
+  state.SetBytesProcessed(state.iterations() * kFrames *
+                          static_cast<std::int64_t>(store.bytes_per_frame()));
+}
+
 // ---------------------------------------------------------------- search
 
 void BM_SearchExhaustive(benchmark::State& state, Size size, lsgd::HistogramStorage storage) {
@@ -490,6 +510,13 @@ void register_all(bool large) {
     benchmark::RegisterBenchmark(
         ("BM_Similarity/cells80/" + std::string(lsgd::to_string(metric)) + "/compact").c_str(),
         BM_Similarity, metric, HistogramStorage::kCompact)
+        ->Unit(benchmark::kMicrosecond);
+  }
+  for (HistogramStorage storage : {HistogramStorage::kExact, HistogramStorage::kCompact}) {
+    const std::string suffix = storage == HistogramStorage::kCompact ? "/compact" : "";
+    benchmark::RegisterBenchmark(
+        ("BM_Similarities/cells80/reference" + suffix + "/64_frames").c_str(), BM_Similarities,
+        storage)
         ->Unit(benchmark::kMicrosecond);
   }
   // Exact and compact storage side by side (name suffix /compact).

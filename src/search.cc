@@ -16,12 +16,38 @@ void keep_best(std::vector<Candidate>& pool, int top_n, std::vector<Candidate>& 
   out.assign(pool.begin(), pool.begin() + static_cast<std::ptrdiff_t>(n));
 }
 
+// Scores the stored frames id(0), ..., id(count - 1) against the query and
+// calls f(i, frame, score) for each. similarities() takes them kBatch at a
+// time, which overlaps their reference-metric sums. `backward` visits them
+// from the last to the first (the scores do not depend on the order).
+template <typename Id, typename F>
+void score_frames(const FrameStore& store, const DescriptorView& query, SimilarityMetric metric,
+                  std::int64_t count, bool backward, Id&& id, F&& f) {
+  constexpr std::int64_t kBatch = 16;
+  DescriptorView views[kBatch];
+  double scores[kBatch];
+  for (std::int64_t b = 0; b < count; b += kBatch) {
+    const std::int64_t n = std::min(kBatch, count - b);
+    const std::int64_t i0 = backward ? count - b - n : b;
+    for (std::int64_t i = 0; i < n; ++i) {
+      views[i] = store.view(id(backward ? i0 + n - 1 - i : i0 + i));
+    }
+    similarities(query, views, static_cast<std::size_t>(n), metric, scores);
+    for (std::int64_t i = 0; i < n; ++i) {
+      const std::int64_t at = backward ? i0 + n - 1 - i : i0 + i;
+      f(at, id(at), scores[i]);
+    }
+  }
+}
+
 }  // namespace
 
 const char* to_string(SearchMode mode) {
   switch (mode) {
-    case SearchMode::kExhaustive: return "exhaustive";
-    case SearchMode::kDynamicNodes: return "nodes";
+    case SearchMode::kExhaustive:
+      return "exhaustive";
+    case SearchMode::kDynamicNodes:
+      return "nodes";
   }
   return "unknown";
 }
@@ -57,16 +83,18 @@ void search_exhaustive(const FrameStore& store, const DescriptorView& query, std
                        std::vector<Candidate>& scratch, std::vector<Candidate>& out) {
   scratch.clear();
   const std::int64_t limit = std::min(store.size(), query_id - options.min_gap);
-  for (std::int64_t j = 0; j < limit; ++j) {
-    scratch.push_back({j, similarity(query, store.view(j), metric)});
-  }
+  score_frames(
+      store, query, metric, std::max<std::int64_t>(limit, 0), false,
+      [](std::int64_t j) { return j; },
+      [&](std::int64_t, std::int64_t j, double score) {
+        scratch.push_back({j, score});
+      });
   keep_best(scratch, options.top_n, out);
 }
 
 DynamicNodes::Outcome DynamicNodes::assign(const FrameStore& store, const DescriptorView& query,
                                            std::int64_t query_id, const SearchOptions& options,
-                                           SimilarityMetric metric,
-                                           std::vector<Candidate>& scratch,
+                                           SimilarityMetric metric, std::vector<Candidate>& scratch,
                                            std::vector<Candidate>& out) {
   if (query_id != store.size()) {
     internal::throw_invalid("DynamicNodes::assign: query ", query_id, " must be the next frame (",
@@ -85,14 +113,16 @@ DynamicNodes::Outcome DynamicNodes::assign(const FrameStore& store, const Descri
     const double first = similarity(query, store.view(node.front()), metric);
     ++outcome.similarities;
     if (!(first > options.nodes.alpha * base)) continue;
-    scratch.clear();
-    scratch.push_back({node.front(), first});
-    double sum = first;
-    for (std::size_t m = 1; m < node.size(); ++m) {
-      const double s = similarity(query, store.view(node[m]), metric);
-      scratch.push_back({node[m], s});
-      sum += s;
-    }
+    scratch.resize(node.size());
+    scratch[0] = {node.front(), first};
+    score_frames(
+        store, query, metric, static_cast<std::int64_t>(node.size()) - 1, false,
+        [&node](std::int64_t m) { return node[static_cast<std::size_t>(m) + 1]; },
+        [&](std::int64_t m, std::int64_t frame, double s) {
+          scratch[static_cast<std::size_t>(m) + 1] = {frame, s};
+        });
+    double sum = 0;  // first, then the members in order
+    for (const Candidate& c : scratch) sum += c.score;
     outcome.similarities += static_cast<std::int64_t>(node.size()) - 1;
     if (!(sum / static_cast<double>(node.size()) > options.nodes.beta * base)) continue;
     node.push_back(query_id);

@@ -22,9 +22,10 @@ double normalized_cell_l1(const Bin* a, Count na, const Bin* b, Count nb) {
 // Calls f(k, L1 of cell k) for every cell of two cell-major histograms of
 // `bins` bins per cell, the L1s computed by `kernel` (cell_l1 or cell_sad) a
 // block of cells at a time.
+constexpr int kBlock = 128;
+
 template <typename T, typename Kernel, typename F>
 void for_each_cell(const T* a, const T* b, int cells, int bins, Kernel kernel, F&& f) {
-  constexpr int kBlock = 128;
   std::uint32_t l1[kBlock];
   for (int k0 = 0; k0 < cells; k0 += kBlock) {
     const int n = std::min(kBlock, cells - k0);
@@ -46,24 +47,86 @@ void for_each_cell_sad(const DescriptorView& a, const DescriptorView& b, F&& f) 
                 [&](int, std::uint32_t sad) { f(sad); });
 }
 
-// Compact storage: each cell's SAD is an L1 distance in units of
-// 1 / kCompactMass of a cell, turned into pixels with the mean cell size for
-// the reference metric (so its scores and thresholds match the exact ones'),
-// and used as is for the mass-normalised metrics, for which l1 and
-// normalized_l1 coincide (every cell has mass kCompactMass).
-double compact_similarity(const DescriptorView& a, const DescriptorView& b,
-                          SimilarityMetric metric) {
-  const int cells = a.cells;
-  if (metric == SimilarityMetric::kReference) {
-    const double scale = 0.5 * (a.cell_pixels + b.cell_pixels) / kCompactMass;
-    double sum = 0;
-    for_each_cell_sad(a, b, [&](std::uint32_t sad) { sum += std::sqrt(sad * scale) / kBins; });
-    return 1.0 / (1.0 + sum / cells);
+// What turns a cell's L1 into pixels for the reference metric: 1 for exact
+// histograms; for compact ones the mean cell size over kCompactMass (so
+// compact scores and thresholds match the exact ones).
+double reference_scale(const DescriptorView& a, const DescriptorView& b) {
+  return a.compact != nullptr ? 0.5 * (a.cell_pixels + b.cell_pixels) / kCompactMass : 1.0;
+}
+
+// The reference metric of the query against `count` <= kGroup frames:
+// sum_k sqrt(L1_k * scale) / kBins, added in cell order, then
+// 1 / (1 + sum / cells). A block of cells at a time, SIMD kernels give the
+// per-cell L1s and distances (identical to the scalar expressions); the
+// frames' sums are independent chains of additions, interleaved so the CPU
+// overlaps them. Each is still added in cell order, so every score is bit-identical to
+// scoring its frame alone.
+constexpr int kGroup = 8;
+
+void reference_scores(const DescriptorView& query, const DescriptorView* frames, int count,
+                      double* out) {
+  const int cells = query.cells;
+  std::uint32_t l1[kGroup][kBlock];
+  double d[kGroup][kBlock];
+  double sums[kGroup] = {};
+  for (int k0 = 0; k0 < cells; k0 += kBlock) {
+    const int n = std::min(kBlock, cells - k0);
+    for (int g = 0; g < count; ++g) {
+      if (query.compact != nullptr) {
+        const std::size_t off = static_cast<std::size_t>(k0) * kCompactBins;
+        internal::cell_sad(query.compact + off, frames[g].compact + off, n, l1[g]);
+      } else {
+        const std::size_t off = static_cast<std::size_t>(k0) * kBins;
+        internal::cell_l1(query.hist + off, frames[g].hist + off, n, l1[g]);
+      }
+    }
+    for (int g = 0; g < count; ++g) {
+      internal::cell_distances(l1[g], n, reference_scale(query, frames[g]), d[g]);
+    }
+    if (count == kGroup) {
+      double s0 = sums[0], s1 = sums[1], s2 = sums[2], s3 = sums[3];
+      double s4 = sums[4], s5 = sums[5], s6 = sums[6], s7 = sums[7];
+      for (int i = 0; i < n; ++i) {
+        s0 += d[0][i];
+        s1 += d[1][i];
+        s2 += d[2][i];
+        s3 += d[3][i];
+        s4 += d[4][i];
+        s5 += d[5][i];
+        s6 += d[6][i];
+        s7 += d[7][i];
+      }
+      sums[0] = s0, sums[1] = s1, sums[2] = s2, sums[3] = s3;
+      sums[4] = s4, sums[5] = s5, sums[6] = s6, sums[7] = s7;
+    } else {
+      for (int g = 0; g < count; ++g) {
+        double s = sums[g];
+        for (int i = 0; i < n; ++i) s += d[g][i];
+        sums[g] = s;
+      }
+    }
   }
+  for (int g = 0; g < count; ++g) out[g] = 1.0 / (1.0 + sums[g] / cells);
+}
+
+// The mass-normalised metrics of compact storage, where l1 and normalized_l1
+// coincide (every cell has mass kCompactMass).
+double compact_l1_similarity(const DescriptorView& a, const DescriptorView& b) {
   std::uint64_t sad = 0;
   for_each_cell_sad(a, b, [&](std::uint32_t cell) { sad += cell; });
-  const double score = 1.0 - static_cast<double>(sad) / (2.0 * kCompactMass * cells);
+  const double score = 1.0 - static_cast<double>(sad) / (2.0 * kCompactMass * a.cells);
   return std::max(0.0, score);  // rounding can add a little mass
+}
+
+void check_comparable(const DescriptorView& a, const DescriptorView& b, const char* what) {
+  if (a.cells != b.cells || a.cells <= 0) {
+    internal::throw_invalid(what, ": descriptors have ", a.cells, " and ", b.cells,
+                            " cells; frames must have the same size and superpixel_size");
+  }
+  if (a.storage() != b.storage()) {
+    internal::throw_invalid(what, ": one descriptor is ", to_string(a.storage()), " and the other ",
+                            to_string(b.storage()), "; both must have the same descriptor.storage");
+  }
 }
 
 }  // namespace
@@ -97,25 +160,16 @@ void SimilarityOptions::check() const {
 }
 
 double similarity(const DescriptorView& a, const DescriptorView& b, SimilarityMetric metric) {
-  if (a.cells != b.cells || a.cells <= 0) {
-    internal::throw_invalid("similarity: descriptors have ", a.cells, " and ", b.cells,
-                            " cells; frames must have the same size and superpixel_size");
-  }
-  if (a.storage() != b.storage()) {
-    internal::throw_invalid("similarity: one descriptor is ", to_string(a.storage()),
-                            " and the other ", to_string(b.storage()),
-                            "; both must have the same descriptor.storage");
-  }
-  if (a.storage() == HistogramStorage::kCompact) return compact_similarity(a, b, metric);
+  check_comparable(a, b, "similarity");
   const int cells = a.cells;
   switch (metric) {
     case SimilarityMetric::kReference: {
-      double sum = 0;
-      for_each_cell_l1(
-          a, b, [&](int, std::uint32_t l1) { sum += std::sqrt(static_cast<double>(l1)) / kBins; });
-      return 1.0 / (1.0 + sum / cells);
+      double score = 0;
+      reference_scores(a, &b, 1, &score);
+      return score;
     }
     case SimilarityMetric::kL1: {
+      if (a.compact != nullptr) return compact_l1_similarity(a, b);
       std::uint64_t l1 = 0, mass = 0;
       for_each_cell_l1(a, b, [&](int k, std::uint32_t cell) {
         l1 += cell;
@@ -124,6 +178,7 @@ double similarity(const DescriptorView& a, const DescriptorView& b, SimilarityMe
       return mass == 0 ? 1.0 : 1.0 - static_cast<double>(l1) / static_cast<double>(mass);
     }
     case SimilarityMetric::kNormalizedL1: {
+      if (a.compact != nullptr) return compact_l1_similarity(a, b);
       double sum = 0;
       for (int k = 0; k < cells; ++k) {
         const std::size_t off = static_cast<std::size_t>(k) * kBins;
@@ -133,6 +188,19 @@ double similarity(const DescriptorView& a, const DescriptorView& b, SimilarityMe
     }
   }
   internal::throw_invalid("similarity: unknown metric ", static_cast<int>(metric));
+}
+
+void similarities(const DescriptorView& query, const DescriptorView* frames, std::size_t count,
+                  SimilarityMetric metric, double* out) {
+  for (std::size_t i = 0; i < count; ++i) check_comparable(query, frames[i], "similarities");
+  if (metric != SimilarityMetric::kReference) {
+    for (std::size_t i = 0; i < count; ++i) out[i] = similarity(query, frames[i], metric);
+    return;
+  }
+  for (std::size_t i = 0; i < count; i += kGroup) {
+    const int n = static_cast<int>(std::min<std::size_t>(kGroup, count - i));
+    reference_scores(query, frames + i, n, out + i);
+  }
 }
 
 }  // namespace lsgd

@@ -5,6 +5,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cmath>
 #include <cstdlib>
 #include <limits>
 #include <vector>
@@ -307,31 +308,68 @@ TEST(Kernels, CellL1MatchesScalarOnEveryTargetIncludingExtremes) {
 }
 
 TEST(Kernels, CellSadMatchesScalarOnEveryTargetIncludingExtremes) {
-  const int cells = 9;
+  // 11 cells: two groups of the four cells the kernel sums at once, and a
+  // tail. Cells 0-3 all have the largest distance, so every 16-bit field of
+  // the packed group holds its maximum (a carry would show).
+  const int cells = 11;
   std::vector<CompactBin> a(static_cast<std::size_t>(cells) * kCompactBins), b(a.size());
   std::uint64_t s = 5;
   for (std::size_t i = 0; i < a.size(); ++i) {
     a[i] = static_cast<CompactBin>(splitmix64(s));
     b[i] = static_cast<CompactBin>(splitmix64(s) % 40);
   }
-  std::fill(a.begin(), a.begin() + kCompactBins, CompactBin{255});  // cell 0: the largest distance
-  std::fill(b.begin(), b.begin() + kCompactBins, CompactBin{0});
-  std::fill(a.begin() + kCompactBins, a.begin() + 2 * kCompactBins, CompactBin{7});  // cell 1: 0
-  std::fill(b.begin() + kCompactBins, b.begin() + 2 * kCompactBins, CompactBin{7});
+  std::fill(a.begin(), a.begin() + 4 * kCompactBins, CompactBin{255});  // cells 0-3: the largest
+  std::fill(b.begin(), b.begin() + 4 * kCompactBins, CompactBin{0});
+  std::fill(a.begin() + 4 * kCompactBins, a.begin() + 5 * kCompactBins,
+            CompactBin{7});  // cell 4: 0
+  std::fill(b.begin() + 4 * kCompactBins, b.begin() + 5 * kCompactBins, CompactBin{7});
   std::vector<std::uint32_t> ref(cells);
   cell_sad_scalar(a.data(), b.data(), cells, ref.data());
-  EXPECT_EQ(ref[0], 255u * kCompactBins);
-  EXPECT_EQ(ref[1], 0u);
-  std::uint32_t by_hand = 0;  // cell 2, independently
-  for (int i = 2 * kCompactBins; i < 3 * kCompactBins; ++i) by_hand += std::abs(a[i] - b[i]);
-  EXPECT_EQ(ref[2], by_hand);
+  for (int k = 0; k < 4; ++k) EXPECT_EQ(ref[k], 255u * kCompactBins);
+  EXPECT_EQ(ref[4], 0u);
+  std::uint32_t by_hand = 0;  // cell 5, independently
+  for (int i = 5 * kCompactBins; i < 6 * kCompactBins; ++i) by_hand += std::abs(a[i] - b[i]);
+  EXPECT_EQ(ref[5], by_hand);
   for_each_target([&] {
+    for (int n = 0; n <= cells; ++n) {  // every group / tail split
+      std::vector<std::uint32_t> got(cells, 1);
+      cell_sad(a.data(), b.data(), n, got.data());
+      EXPECT_TRUE(std::equal(got.begin(), got.begin() + n, ref.begin())) << n << " cells";
+      EXPECT_TRUE(std::all_of(got.begin() + n, got.end(), [](std::uint32_t v) { return v == 1; }));
+    }
     std::vector<std::uint32_t> got(cells, 1);
-    cell_sad(a.data(), b.data(), cells, got.data());
-    EXPECT_EQ(got, ref);
     cell_sad(b.data(), a.data(), cells, got.data());  // symmetric
     EXPECT_EQ(got, ref);
   });
+}
+
+// The reference metric's per-cell distances: the SIMD kernel must give the
+// scalar expression's exact doubles (same correctly rounded operations), for
+// every count (vector bodies and tails), L1s from 0 to the largest exact
+// cell L1, and the scales exact (1) and compact storage use.
+TEST(Kernels, CellDistancesMatchScalarBitForBitOnEveryTarget) {
+  std::vector<std::uint32_t> l1(37);
+  std::uint64_t s = 9;
+  for (std::uint32_t& v : l1) v = static_cast<std::uint32_t>(splitmix64(s) % (kBins * 65535u + 1));
+  l1[0] = 0;
+  l1[1] = kBins * 65535u;
+  l1[2] = 1;
+  for (const double scale : {1.0, 0.5 * (5832.7 + 5831.9) / kCompactMass, 1e-3}) {
+    std::vector<double> ref(l1.size());
+    cell_distances_scalar(l1.data(), static_cast<int>(l1.size()), scale, ref.data());
+    for (std::size_t k = 0; k < l1.size(); ++k) {
+      EXPECT_EQ(ref[k], std::sqrt(static_cast<double>(l1[k]) * scale) / kBins) << k;
+    }
+    EXPECT_EQ(ref[0], 0.0);
+    for_each_target([&] {
+      for (int n : {0, 1, 7, 8, 9, 16, 37}) {
+        std::vector<double> got(l1.size(), -1.0);
+        cell_distances(l1.data(), n, scale, got.data());
+        for (int k = 0; k < n; ++k) EXPECT_EQ(got[k], ref[k]) << "scale " << scale << " k " << k;
+        for (std::size_t k = n; k < got.size(); ++k) EXPECT_EQ(got[k], -1.0) << "wrote past " << n;
+      }
+    });
+  }
 }
 
 TEST(Kernels, SegmentationIsIdenticalOnEveryTarget) {

@@ -65,7 +65,8 @@ double expected(const Descriptor& a, const Descriptor& b, SimilarityMetric metri
   switch (metric) {
     case SimilarityMetric::kReference: {
       double sum = 0;
-      for (int k = 0; k < cells; ++k) sum += std::sqrt(static_cast<double>(cell_l1(a, b, k))) / 256.0;
+      for (int k = 0; k < cells; ++k)
+        sum += std::sqrt(static_cast<double>(cell_l1(a, b, k))) / 256.0;
       return 1.0 / (1.0 + sum / cells);
     }
     case SimilarityMetric::kL1: {
@@ -216,6 +217,76 @@ TEST(Similarity, MetricsMatchIndependentImplementationOnVariedMasses) {
     for (SimilarityMetric m : kMetrics) {
       EXPECT_NEAR(similarity(a.view(), b.view(), m), expected(a, b, m), 1e-12) << to_string(m);
     }
+  }
+}
+
+// The reference metric of compact descriptors, by hand: SADs scaled to
+// pixels with the mean cell size, added in cell order.
+double expected_compact_reference(const Descriptor& a, const Descriptor& b) {
+  const int cells = a.grid.cells();
+  const double scale = 0.5 * (a.cell_pixels + b.cell_pixels) / kCompactMass;
+  double sum = 0;
+  for (int k = 0; k < cells; ++k) {
+    std::uint32_t sad = 0;
+    for (int i = 0; i < kCompactBins; ++i) {
+      const std::size_t at = static_cast<std::size_t>(k) * kCompactBins + i;
+      sad += static_cast<std::uint32_t>(std::abs(a.compact[at] - b.compact[at]));
+    }
+    sum += std::sqrt(sad * scale) / 256.0;
+  }
+  return 1.0 / (1.0 + sum / cells);
+}
+
+// similarities() scores frames several at a time (interleaved sums, SIMD
+// per-cell distances); every score must still be the in-order formula, bit
+// for bit: 200 cells span two of its 128-cell blocks, and 0..9 frames cover
+// full and partial groups.
+TEST(Similarities, BatchIsBitIdenticalToTheInOrderFormulaInBothStorages) {
+  const int cells = 200;
+  const Descriptor query = random_descriptor(cells, 77, 0, 3000);
+  std::vector<Descriptor> frames;
+  for (int i = 0; i < 9; ++i) frames.push_back(random_descriptor(cells, 500 + i, 0, 3000));
+  Descriptor cquery;
+  compact(query, cquery);
+  std::vector<Descriptor> cframes(frames.size());
+  for (std::size_t i = 0; i < frames.size(); ++i) compact(frames[i], cframes[i]);
+  for (const bool is_compact : {false, true}) {
+    SCOPED_TRACE(is_compact ? "compact" : "exact");
+    const Descriptor& q = is_compact ? cquery : query;
+    const std::vector<Descriptor>& fs = is_compact ? cframes : frames;
+    std::vector<DescriptorView> views;
+    for (const Descriptor& f : fs) views.push_back(f.view());
+    for (std::size_t count = 0; count <= views.size(); ++count) {
+      for (SimilarityMetric m : kMetrics) {
+        std::vector<double> got(count + 1, -1.0);
+        similarities(q.view(), views.data(), count, m, got.data());
+        EXPECT_EQ(got[count], -1.0) << "wrote past count";
+        for (std::size_t i = 0; i < count; ++i) {
+          EXPECT_EQ(got[i], similarity(q.view(), views[i], m)) << to_string(m) << " " << i;
+          if (m != SimilarityMetric::kReference) continue;
+          const double by_hand =
+              is_compact ? expected_compact_reference(q, fs[i]) : expected(q, fs[i], m);
+          EXPECT_EQ(got[i], by_hand) << "frame " << i << " of " << count;
+        }
+      }
+    }
+  }
+}
+
+TEST(Similarities, MismatchedFrameThrowsBeforeWritingAnything) {
+  const Descriptor q = random_descriptor(6, 1);
+  const Descriptor good = random_descriptor(6, 2);
+  const Descriptor other = random_descriptor(7, 3);
+  Descriptor packed;
+  compact(good, packed);
+  for (const Descriptor* bad : {&other, static_cast<const Descriptor*>(&packed)}) {
+    const DescriptorView views[] = {good.view(), good.view(), bad->view()};
+    double out[3] = {-1, -1, -1};
+    const std::string what = message_of<InvalidArgument>(
+        [&] { similarities(q.view(), views, 3, SimilarityMetric::kReference, out); });
+    EXPECT_NE(what.find("similarities"), std::string::npos) << what;
+    EXPECT_EQ(out[0], -1);
+    EXPECT_EQ(out[1], -1);
   }
 }
 

@@ -6,6 +6,7 @@
 #include "internal/kernels.h"
 
 #include <algorithm>
+#include <cmath>
 #include <limits>
 
 #include "hwy/foreach_target.h"  // IWYU pragma: keep
@@ -160,28 +161,81 @@ void CellL1Simd(const Bin* a, const Bin* b, int cells, std::uint32_t* out) {
   }
 }
 
+// Sums of |a - b| over each 8 bytes, in u64 lanes: one psadbw on x86 (this
+// Highway version has no SumsOf8AbsDiff), portable operations elsewhere.
+template <class D64, class V8>
+HWY_INLINE hn::Vec<D64> SumsOf8AbsDiff(D64 d64, V8 a, V8 b) {
+#if HWY_TARGET == HWY_AVX3 || HWY_TARGET == HWY_AVX3_DL
+  (void)d64;
+  return hn::Vec<D64>{_mm512_sad_epu8(a.raw, b.raw)};
+#elif HWY_TARGET == HWY_AVX2
+  (void)d64;
+  return hn::Vec<D64>{_mm256_sad_epu8(a.raw, b.raw)};
+#elif HWY_TARGET == HWY_SSE4 || HWY_TARGET == HWY_SSSE3
+  (void)d64;
+  return hn::Vec<D64>{_mm_sad_epu8(a.raw, b.raw)};
+#else
+  (void)d64;
+  // |a - b| of unsigned bytes: one of the two saturated differences is 0.
+  return hn::SumsOf8(hn::Or(hn::SaturatedSub(a, b), hn::SaturatedSub(b, a)));
+#endif
+}
+
+// The SAD vector of one cell: u64 lanes whose total is the cell's SAD, at
+// most kCompactBins * 255 = 32640, so every lane fits 16 bits.
+template <class D8, class D64>
+HWY_INLINE hn::Vec<D64> CellSadVector(D8 d8, D64 d64, const CompactBin* pa, const CompactBin* pb) {
+  const std::size_t lanes = hn::Lanes(d8);
+  auto acc = hn::Zero(d64);
+  for (std::size_t i = 0; i < static_cast<std::size_t>(kCompactBins); i += lanes) {
+    acc = hn::Add(acc, SumsOf8AbsDiff(d64, hn::LoadU(d8, pa + i), hn::LoadU(d8, pb + i)));
+  }
+  return acc;
+}
+
+// Four cells share one horizontal sum: their SAD vectors are packed into the
+// four 16-bit fields of each u64 lane (no field can carry into the next: a
+// cell's total is at most 32640), so the sum of the lanes holds all four.
 void CellSadSimd(const CompactBin* a, const CompactBin* b, int cells, std::uint32_t* out) {
   const hn::ScalableTag<std::uint8_t> d8;
   const hn::Repartition<std::uint64_t, decltype(d8)> d64;
-  const std::size_t lanes = hn::Lanes(d8);
-  for (int k = 0; k < cells; ++k) {
-    const CompactBin* pa = a + static_cast<std::size_t>(k) * kCompactBins;
-    const CompactBin* pb = b + static_cast<std::size_t>(k) * kCompactBins;
-    auto acc = hn::Zero(d64);
-    std::size_t i = 0;
-    for (; i + lanes <= static_cast<std::size_t>(kCompactBins); i += lanes) {
-      const auto va = hn::LoadU(d8, pa + i);
-      const auto vb = hn::LoadU(d8, pb + i);
-      // |a - b| of unsigned bytes: one of the two saturated differences is 0.
-      const auto diff = hn::Or(hn::SaturatedSub(va, vb), hn::SaturatedSub(vb, va));
-      acc = hn::Add(acc, hn::SumsOf8(diff));  // psadbw on x86
-    }
-    auto sum = static_cast<std::uint32_t>(hn::GetLane(hn::SumOfLanes(d64, acc)));
-    for (; i < static_cast<std::size_t>(kCompactBins); ++i) {  // vectors wider than a cell
-      sum += pa[i] > pb[i] ? pa[i] - pb[i] : pb[i] - pa[i];
-    }
-    out[k] = sum;
+  if (kCompactBins % hn::Lanes(d8) != 0) {  // vectors wider than a cell: bin by bin
+    cell_sad_scalar(a, b, cells, out);
+    return;
   }
+  const auto cell = [&](int k) {
+    const std::size_t off = static_cast<std::size_t>(k) * kCompactBins;
+    return CellSadVector(d8, d64, a + off, b + off);
+  };
+  int k = 0;
+  for (; k + 4 <= cells; k += 4) {
+    auto packed = cell(k);
+    packed = hn::Or(packed, hn::ShiftLeft<16>(cell(k + 1)));
+    packed = hn::Or(packed, hn::ShiftLeft<32>(cell(k + 2)));
+    packed = hn::Or(packed, hn::ShiftLeft<48>(cell(k + 3)));
+    const std::uint64_t sums = hn::GetLane(hn::SumOfLanes(d64, packed));
+    for (int j = 0; j < 4; ++j)
+      out[k + j] = static_cast<std::uint32_t>((sums >> (16 * j)) & 0xFFFF);
+  }
+  for (; k < cells; ++k)
+    out[k] = static_cast<std::uint32_t>(hn::GetLane(hn::SumOfLanes(d64, cell(k))));
+}
+
+// Vectors of doubles through the same correctly rounded operations as the
+// scalar reference: int -> double is exact, and * (1 / kBins) equals
+// / kBins exactly (a power of two).
+void CellDistancesSimd(const std::uint32_t* l1, int cells, double scale, double* out) {
+  const hn::ScalableTag<double> dd;
+  const hn::Rebind<std::int32_t, decltype(dd)> di;  // L1 <= kBins * 65535 < 2^31
+  const int lanes = static_cast<int>(hn::Lanes(dd));
+  const auto vscale = hn::Set(dd, scale);
+  const auto inv_bins = hn::Set(dd, 1.0 / kBins);
+  int k = 0;
+  for (; k + lanes <= cells; k += lanes) {
+    const auto v = hn::PromoteTo(dd, hn::LoadU(di, reinterpret_cast<const std::int32_t*>(l1 + k)));
+    hn::StoreU(hn::Mul(hn::Sqrt(hn::Mul(v, vscale)), inv_bins), dd, out + k);
+  }
+  cell_distances_scalar(l1 + k, cells - k, scale, out + k);
 }
 
 std::int64_t TargetOf() { return HWY_TARGET; }
@@ -198,6 +252,7 @@ HWY_EXPORT(AssignLanes);
 HWY_EXPORT(CellL1Simd);
 HWY_EXPORT(LabelRunsSimd);
 HWY_EXPORT(CellSadSimd);
+HWY_EXPORT(CellDistancesSimd);
 HWY_EXPORT(RowSumsSimd);
 HWY_EXPORT(TargetOf);
 
@@ -316,6 +371,14 @@ void cell_sad_scalar(const CompactBin* a, const CompactBin* b, int cells, std::u
     for (int i = 0; i < kCompactBins; ++i) sum += pa[i] > pb[i] ? pa[i] - pb[i] : pb[i] - pa[i];
     out[k] = sum;
   }
+}
+
+void cell_distances(const std::uint32_t* l1, int cells, double scale, double* out) {
+  HWY_DYNAMIC_DISPATCH(CellDistancesSimd)(l1, cells, scale, out);
+}
+
+void cell_distances_scalar(const std::uint32_t* l1, int cells, double scale, double* out) {
+  for (int k = 0; k < cells; ++k) out[k] = std::sqrt(static_cast<double>(l1[k]) * scale) / kBins;
 }
 
 std::vector<std::int64_t> simd_targets() {

@@ -100,6 +100,13 @@ void cell_l1_scalar(const Bin* a, const Bin* b, int cells, std::uint32_t* out);
 void cell_sad(const CompactBin* a, const CompactBin* b, int cells, std::uint32_t* out);
 void cell_sad_scalar(const CompactBin* a, const CompactBin* b, int cells, std::uint32_t* out);
 
+// The reference metric's per-cell distances: out[k] = sqrt(l1[k] * scale) /
+// kBins (scale 1 for exact histograms; compact ones scale SADs to pixels).
+// The SIMD kernel computes vectors of them with the same correctly rounded
+// operations, so every value is identical to the scalar one.
+void cell_distances(const std::uint32_t* l1, int cells, double scale, double* out);
+void cell_distances_scalar(const std::uint32_t* l1, int cells, double scale, double* out);
+
 // For tests and benchmarks: the SIMD targets compiled in and supported by
 // this CPU (Highway target bits, best first), their names, and a way to
 // restrict dispatch to one of them (0 restores the default choice).

@@ -1,6 +1,13 @@
 #include "lsgd/frame_store.h"
 
 #include <algorithm>
+#include <cstdlib>
+#include <new>
+#include <type_traits>
+
+#ifdef __linux__
+#include <sys/mman.h>
+#endif
 
 #include "internal/check.h"
 
@@ -21,12 +28,27 @@ std::size_t bins_per_cell(HistogramStorage storage) {
 
 }  // namespace
 
+void FrameStore::FreeChunk::operator()(void* p) const { std::free(p); }
+
 template <typename T>
-void FrameStore::copy_chunks(const std::vector<std::unique_ptr<T[]>>& from, std::size_t elements,
-                             std::vector<std::unique_ptr<T[]>>& to) {
+FrameStore::Chunk<T> FrameStore::allocate_chunk(std::size_t elements) {
+  static_assert(std::is_trivially_default_constructible_v<T>, "chunks hold raw bins");
+  constexpr std::size_t kHugePage = std::size_t{2} << 20;
+  const std::size_t bytes = (elements * sizeof(T) + kHugePage - 1) / kHugePage * kHugePage;
+  void* p = std::aligned_alloc(kHugePage, bytes);
+  if (p == nullptr) throw std::bad_alloc();
+#ifdef __linux__
+  madvise(p, bytes, MADV_HUGEPAGE);  // a hint: without huge pages it is just slower
+#endif
+  return Chunk<T>(static_cast<T*>(p));
+}
+
+template <typename T>
+void FrameStore::copy_chunks(const std::vector<Chunk<T>>& from, std::size_t elements,
+                             std::vector<Chunk<T>>& to) {
   to.reserve(from.size());
   for (const auto& chunk : from) {
-    to.emplace_back(new T[elements]);
+    to.push_back(allocate_chunk<T>(elements));
     std::copy(chunk.get(), chunk.get() + elements, to.back().get());
   }
 }
@@ -50,7 +72,7 @@ FrameStore& FrameStore::operator=(const FrameStore& other) {
 }
 
 template <typename T>
-void FrameStore::add_slot(const std::vector<T>& data, std::vector<std::unique_ptr<T[]>>& chunks,
+void FrameStore::add_slot(const std::vector<T>& data, std::vector<Chunk<T>>& chunks,
                           const std::vector<Count>& pixels) {
   const std::size_t frame_bins = data.size();
   const std::int64_t chunk_frames =
@@ -58,10 +80,10 @@ void FrameStore::add_slot(const std::vector<T>& data, std::vector<std::unique_pt
                 : std::max<std::int64_t>(
                       1, static_cast<std::int64_t>(kChunkBytes / (frame_bins * sizeof(T))));
   // Allocate everything that can fail before changing any member.
-  std::unique_ptr<T[]> chunk;
+  Chunk<T> chunk;
   const bool new_chunk = size_ % chunk_frames == 0;
   if (new_chunk) {
-    chunk.reset(new T[static_cast<std::size_t>(chunk_frames) * frame_bins]);
+    chunk = allocate_chunk<T>(static_cast<std::size_t>(chunk_frames) * frame_bins);
     grow(chunks, 1);
   }
   grow(pixels_, pixels.size());

@@ -1,7 +1,9 @@
 // Where the dynamic-node search spends its similarities, and how much of it an
 // exact lower bound on L1 from coarser histograms could skip.
 //
-//   build/bench/lsgd_nodes_study [frames]     (default 4541; ~90 s at 4541)
+//   build/bench/lsgd_nodes_study [frames] [--timing-only]
+//     (default 4541 frames; ~2 min, or ~1 min with --timing-only, which
+//     skips the bound analysis)
 //
 // The sequence is `lsgd bench`'s: 1241x376 frames of the synthetic street,
 // frame i showing route frame i % 1090, default detector options (S_p = 40,
@@ -20,6 +22,7 @@
 #include <cstdint>
 #include <cstdio>
 #include <cstdlib>
+#include <cstring>
 #include <opencv2/core.hpp>
 #include <opencv2/imgproc.hpp>
 #include <vector>
@@ -68,8 +71,9 @@ double upper_bound(const std::vector<std::uint32_t>& a, const std::vector<std::u
 
 int main(int argc, char** argv) {
   const std::int64_t frames = argc > 1 ? std::atoll(argv[1]) : 4541;
-  if (frames < 1) {
-    std::fprintf(stderr, "usage: %s [frames >= 1]\n", argv[0]);
+  const bool timing_only = argc > 2 && std::strcmp(argv[2], "--timing-only") == 0;
+  if (frames < 1 || (argc > 2 && !timing_only) || argc > 3) {
+    std::fprintf(stderr, "usage: %s [frames >= 1] [--timing-only]\n", argv[0]);
     return 2;
   }
   lsgd::eval::SyntheticOptions world_options;
@@ -87,7 +91,7 @@ int main(int argc, char** argv) {
     cv::cvtColor(world.render(i), gray, cv::COLOR_BGR2GRAY);
     const lsgd::GrayImage image = lsgd::to_gray(gray);
     route[static_cast<std::size_t>(i)] = lsgd::describe(image, segmenter.segment(image));
-    for (int g = 0; g < 3; ++g) {
+    for (int g = 0; g < 3 && !timing_only; ++g) {
       coarse_route[g].push_back(coarse(route[static_cast<std::size_t>(i)], kGroups[g]));
     }
   }
@@ -98,88 +102,98 @@ int main(int argc, char** argv) {
                             lsgd::SimilarityMetric::kReference);
   };
 
-  std::vector<std::vector<std::int64_t>> nodes;
-  std::int64_t first_sims = 0, member_sims = 0, scanned_nodes = 0, accepting_members = 0;
-  std::int64_t saved[3] = {0, 0, 0};
-  for (std::int64_t q = 0; q < frames; ++q) {
-    const double base = search.nodes.threshold_0 * (q > 0 ? sim(q, q - 1) : 1.0);
-    bool joined = false;
-    for (auto& node : nodes) {
-      if (q - node.front() <= search.min_gap) continue;
-      const double first = sim(q, node.front());
-      ++first_sims;
-      if (!(first > search.nodes.alpha * base)) continue;
-      ++scanned_nodes;
-      double sum = first, bound[3] = {first, first, first};
-      for (std::size_t m = 1; m < node.size(); ++m) {
-        sum += sim(q, node[m]);
+  const double n = static_cast<double>(frames);
+  if (!timing_only) {
+    std::vector<std::vector<std::int64_t>> nodes;
+    std::int64_t first_sims = 0, member_sims = 0, scanned_nodes = 0, accepting_members = 0;
+    std::int64_t saved[3] = {0, 0, 0};
+    for (std::int64_t q = 0; q < frames; ++q) {
+      const double base = search.nodes.threshold_0 * (q > 0 ? sim(q, q - 1) : 1.0);
+      bool joined = false;
+      for (auto& node : nodes) {
+        if (q - node.front() <= search.min_gap) continue;
+        const double first = sim(q, node.front());
+        ++first_sims;
+        if (!(first > search.nodes.alpha * base)) continue;
+        ++scanned_nodes;
+        double sum = first, bound[3] = {first, first, first};
+        for (std::size_t m = 1; m < node.size(); ++m) {
+          sum += sim(q, node[m]);
+          for (int g = 0; g < 3; ++g) {
+            bound[g] += upper_bound(coarse_route[g][at(q)], coarse_route[g][at(node[m])], cells);
+          }
+        }
+        const auto members = static_cast<std::int64_t>(node.size()) - 1;
+        member_sims += members;
+        const double size = static_cast<double>(node.size());
         for (int g = 0; g < 3; ++g) {
-          bound[g] += upper_bound(coarse_route[g][at(q)], coarse_route[g][at(node[m])], cells);
+          if (!(bound[g] / size > search.nodes.beta * base)) saved[g] += members;
+        }
+        if (sum / size > search.nodes.beta * base) {
+          accepting_members += members;
+          node.push_back(q);
+          joined = true;
+          break;
         }
       }
-      const auto members = static_cast<std::int64_t>(node.size()) - 1;
-      member_sims += members;
-      const double size = static_cast<double>(node.size());
-      for (int g = 0; g < 3; ++g) {
-        if (!(bound[g] / size > search.nodes.beta * base)) saved[g] += members;
-      }
-      if (sum / size > search.nodes.beta * base) {
-        accepting_members += members;
-        node.push_back(q);
-        joined = true;
-        break;
-      }
+      if (!joined) nodes.push_back({q});
     }
-    if (!joined) nodes.push_back({q});
-  }
-  const double n = static_cast<double>(frames);
-  std::printf("frames %lld, nodes %zu\n", static_cast<long long>(frames), nodes.size());
-  std::printf(
-      "per query: %.1f first-frame similarities, %.1f nodes scanned, %.1f member "
-      "similarities (%.1f of them in the node the query joins)\n",
-      static_cast<double>(first_sims) / n, static_cast<double>(scanned_nodes) / n,
-      static_cast<double>(member_sims) / n, static_cast<double>(accepting_members) / n);
-  for (int g = 0; g < 3; ++g) {
-    std::printf("bound from %d coarse bins: %.1f %% of member similarities skippable\n",
-                lsgd::kBins / kGroups[g],
-                member_sims ? 100.0 * static_cast<double>(saved[g]) / member_sims : 0.0);
+    std::printf("frames %lld, nodes %zu\n", static_cast<long long>(frames), nodes.size());
+    std::printf(
+        "per query: %.1f first-frame similarities, %.1f nodes scanned, %.1f member "
+        "similarities (%.1f of them in the node the query joins)\n",
+        static_cast<double>(first_sims) / n, static_cast<double>(scanned_nodes) / n,
+        static_cast<double>(member_sims) / n, static_cast<double>(accepting_members) / n);
+    for (int g = 0; g < 3; ++g) {
+      std::printf("bound from %d coarse bins: %.1f %% of member similarities skippable\n",
+                  lsgd::kBins / kGroups[g],
+                  member_sims ? 100.0 * static_cast<double>(saved[g]) / member_sims : 0.0);
+    }
   }
 
   // DynamicNodes itself in both storages: similarities spent per query and
-  // wall time of assign() alone (no segmentation, no verification).
-  for (const lsgd::HistogramStorage storage :
-       {lsgd::HistogramStorage::kExact, lsgd::HistogramStorage::kCompact}) {
-    std::vector<lsgd::Descriptor> stored(route.size());
-    for (std::size_t i = 0; i < route.size(); ++i) {
-      if (storage == lsgd::HistogramStorage::kCompact) {
-        lsgd::compact(route[i], stored[i]);
-      } else {
-        stored[i] = route[i];
+  // wall time of assign() alone (no segmentation, no verification), once
+  // with the queries back to back (the node scanned last is still in cache)
+  // and once "cold": 64 MiB written before every query (untimed), so the
+  // stored frames come from memory, as in a pipeline where segmentation and
+  // the rest of the robot's work run between two queries.
+  std::vector<char> flush(std::size_t{64} << 20);
+  for (const bool cold : {false, true})
+    for (const lsgd::HistogramStorage storage :
+         {lsgd::HistogramStorage::kExact, lsgd::HistogramStorage::kCompact}) {
+      std::vector<lsgd::Descriptor> stored(route.size());
+      for (std::size_t i = 0; i < route.size(); ++i) {
+        if (storage == lsgd::HistogramStorage::kCompact) {
+          lsgd::compact(route[i], stored[i]);
+        } else {
+          stored[i] = route[i];
+        }
       }
+      lsgd::SearchOptions o = search;
+      o.mode = lsgd::SearchMode::kDynamicNodes;
+      lsgd::FrameStore store;
+      lsgd::DynamicNodes dn;
+      std::vector<lsgd::Candidate> scratch, out;
+      std::int64_t spent = 0;
+      std::vector<double> ms;
+      for (std::int64_t q = 0; q < frames; ++q) {
+        const lsgd::DescriptorView query = stored[at(q)].view();
+        if (cold) std::fill(flush.begin(), flush.end(), static_cast<char>(q));
+        const auto t0 = std::chrono::steady_clock::now();
+        const auto outcome =
+            dn.assign(store, query, q, o, lsgd::SimilarityMetric::kReference, scratch, out);
+        ms.push_back(
+            std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0)
+                .count());
+        spent += outcome.similarities;
+        store.add(stored[at(q)]);
+      }
+      std::sort(ms.begin(), ms.end());
+      std::printf(
+          "DynamicNodes, %s storage, %s: %lld nodes, %.1f similarities per query, "
+          "assign() median %.3f ms\n",
+          lsgd::to_string(storage), cold ? "cold caches" : "back to back",
+          static_cast<long long>(dn.size()), static_cast<double>(spent) / n, ms[ms.size() / 2]);
     }
-    lsgd::SearchOptions o = search;
-    o.mode = lsgd::SearchMode::kDynamicNodes;
-    lsgd::FrameStore store;
-    lsgd::DynamicNodes dn;
-    std::vector<lsgd::Candidate> scratch, out;
-    std::int64_t spent = 0;
-    std::vector<double> ms;
-    for (std::int64_t q = 0; q < frames; ++q) {
-      const lsgd::DescriptorView query = stored[at(q)].view();
-      const auto t0 = std::chrono::steady_clock::now();
-      const auto outcome =
-          dn.assign(store, query, q, o, lsgd::SimilarityMetric::kReference, scratch, out);
-      ms.push_back(
-          std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count());
-      spent += outcome.similarities;
-      store.add(stored[at(q)]);
-    }
-    std::sort(ms.begin(), ms.end());
-    std::printf(
-        "DynamicNodes, %s storage: %lld nodes, %.1f similarities per query, "
-        "assign() median %.3f ms\n",
-        lsgd::to_string(storage), static_cast<long long>(dn.size()), static_cast<double>(spent) / n,
-        ms[ms.size() / 2]);
-  }
   return 0;
 }

@@ -335,6 +335,50 @@ void BM_Similarities(benchmark::State& state, lsgd::HistogramStorage storage) {
                           static_cast<std::int64_t>(store.bytes_per_frame()));
 }
 
+// ---------------------------------------------------------------- memory
+
+// The ceiling for a search: a single core reading 10,240-byte blocks (one
+// compact KITTI-size frame) out of a 186 MB buffer (4 x 4541 blocks, far
+// beyond the L3 cache), summed with no other work. /sequential reads all of
+// it in order; /scattered reads 1784 sorted random blocks per iteration (a
+// dynamic-node query's member count), from a fresh draw each time, so they
+// come from DRAM. Bytes per second = the bandwidth a search can hope for.
+void BM_MemoryRead(benchmark::State& state, bool scattered) {
+  constexpr std::size_t kBlock = 10240, kBlocks = 4 * 4541, kPicked = 1784;
+  static std::vector<std::uint64_t> buffer(kBlock * kBlocks / 8, 1);
+  std::mt19937 rng(7);
+  std::vector<std::uint32_t> all(kBlocks), picked(kPicked);
+  for (std::size_t i = 0; i < kBlocks; ++i) all[i] = static_cast<std::uint32_t>(i);
+  std::uint64_t total = 0;
+  const auto sum_block = [&](std::size_t block, std::size_t count) {
+    const std::uint64_t* p = buffer.data() + block * (kBlock / 8);
+    std::uint64_t a = 0, b = 0, c = 0, d = 0;
+    for (std::size_t i = 0; i < count * (kBlock / 8); i += 4) {
+      a += p[i], b += p[i + 1], c += p[i + 2], d += p[i + 3];
+    }
+    return a + b + c + d;
+  };
+  std::int64_t bytes = 0;
+  for (auto _ : state) {
+    if (scattered) {
+      state.PauseTiming();
+      for (std::size_t i = 0; i < kPicked; ++i) {
+        std::swap(all[i], all[i + rng() % (kBlocks - i)]);
+      }
+      std::copy(all.begin(), all.begin() + kPicked, picked.begin());
+      std::sort(picked.begin(), picked.end());
+      state.ResumeTiming();
+      for (std::uint32_t block : picked) total += sum_block(block, 1);
+      bytes += static_cast<std::int64_t>(kPicked * kBlock);
+    } else {
+      total += sum_block(0, kBlocks);
+      bytes += static_cast<std::int64_t>(kBlocks * kBlock);
+    }
+    benchmark::DoNotOptimize(total);
+  }
+  state.SetBytesProcessed(bytes);
+}
+
 // ---------------------------------------------------------------- search
 
 void BM_SearchExhaustive(benchmark::State& state, Size size, lsgd::HistogramStorage storage) {
@@ -519,6 +563,10 @@ void register_all(bool large) {
         storage)
         ->Unit(benchmark::kMicrosecond);
   }
+  benchmark::RegisterBenchmark("BM_MemoryRead/sequential", BM_MemoryRead, false)
+      ->Unit(benchmark::kMillisecond);
+  benchmark::RegisterBenchmark("BM_MemoryRead/scattered_10240B_blocks", BM_MemoryRead, true)
+      ->Unit(benchmark::kMillisecond);
   // Exact and compact storage side by side (name suffix /compact).
   for (HistogramStorage storage : {HistogramStorage::kExact, HistogramStorage::kCompact}) {
     const std::string suffix = storage == HistogramStorage::kCompact ? "/compact" : "";

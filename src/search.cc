@@ -17,26 +17,19 @@ void keep_best(std::vector<Candidate>& pool, int top_n, std::vector<Candidate>& 
 }
 
 // Scores the stored frames id(0), ..., id(count - 1) against the query and
-// calls f(i, frame, score) for each. similarities() takes them kBatch at a
-// time, which overlaps their reference-metric sums. `backward` visits them
-// from the last to the first (the scores do not depend on the order).
+// calls f(i, frame, score) for each, in order. similarities() takes them
+// kBatch at a time, which overlaps their reference-metric sums.
 template <typename Id, typename F>
 void score_frames(const FrameStore& store, const DescriptorView& query, SimilarityMetric metric,
-                  std::int64_t count, bool backward, Id&& id, F&& f) {
+                  std::int64_t count, Id&& id, F&& f) {
   constexpr std::int64_t kBatch = 16;
   DescriptorView views[kBatch];
   double scores[kBatch];
-  for (std::int64_t b = 0; b < count; b += kBatch) {
-    const std::int64_t n = std::min(kBatch, count - b);
-    const std::int64_t i0 = backward ? count - b - n : b;
-    for (std::int64_t i = 0; i < n; ++i) {
-      views[i] = store.view(id(backward ? i0 + n - 1 - i : i0 + i));
-    }
+  for (std::int64_t i0 = 0; i0 < count; i0 += kBatch) {
+    const std::int64_t n = std::min(kBatch, count - i0);
+    for (std::int64_t i = 0; i < n; ++i) views[i] = store.view(id(i0 + i));
     similarities(query, views, static_cast<std::size_t>(n), metric, scores);
-    for (std::int64_t i = 0; i < n; ++i) {
-      const std::int64_t at = backward ? i0 + n - 1 - i : i0 + i;
-      f(at, id(at), scores[i]);
-    }
+    for (std::int64_t i = 0; i < n; ++i) f(i0 + i, id(i0 + i), scores[i]);
   }
 }
 
@@ -84,8 +77,7 @@ void search_exhaustive(const FrameStore& store, const DescriptorView& query, std
   scratch.clear();
   const std::int64_t limit = std::min(store.size(), query_id - options.min_gap);
   score_frames(
-      store, query, metric, std::max<std::int64_t>(limit, 0), false,
-      [](std::int64_t j) { return j; },
+      store, query, metric, std::max<std::int64_t>(limit, 0), [](std::int64_t j) { return j; },
       [&](std::int64_t, std::int64_t j, double score) {
         scratch.push_back({j, score});
       });
@@ -116,7 +108,7 @@ DynamicNodes::Outcome DynamicNodes::assign(const FrameStore& store, const Descri
     scratch.resize(node.size());
     scratch[0] = {node.front(), first};
     score_frames(
-        store, query, metric, static_cast<std::int64_t>(node.size()) - 1, false,
+        store, query, metric, static_cast<std::int64_t>(node.size()) - 1,
         [&node](std::int64_t m) { return node[static_cast<std::size_t>(m) + 1]; },
         [&](std::int64_t m, std::int64_t frame, double s) {
           scratch[static_cast<std::size_t>(m) + 1] = {frame, s};

@@ -19,11 +19,11 @@ double normalized_cell_l1(const Bin* a, Count na, const Bin* b, Count nb) {
   return sum;
 }
 
+constexpr int kBlock = 128;  // cells per call of a per-cell L1 kernel
+
 // Calls f(k, L1 of cell k) for every cell of two cell-major histograms of
 // `bins` bins per cell, the L1s computed by `kernel` (cell_l1 or cell_sad) a
 // block of cells at a time.
-constexpr int kBlock = 128;
-
 template <typename T, typename Kernel, typename F>
 void for_each_cell(const T* a, const T* b, int cells, int bins, Kernel kernel, F&& f) {
   std::uint32_t l1[kBlock];
@@ -59,8 +59,8 @@ double reference_scale(const DescriptorView& a, const DescriptorView& b) {
 // 1 / (1 + sum / cells). A block of cells at a time, SIMD kernels give the
 // per-cell L1s and distances (identical to the scalar expressions); the
 // frames' sums are independent chains of additions, interleaved so the CPU
-// overlaps them. Each is still added in cell order, so every score is bit-identical to
-// scoring its frame alone.
+// overlaps them. Each is still added in cell order, so every score is
+// bit-identical to scoring its frame alone.
 constexpr int kGroup = 8;
 
 void reference_scores(const DescriptorView& query, const DescriptorView* frames, int count,

@@ -164,18 +164,14 @@ void CellL1Simd(const Bin* a, const Bin* b, int cells, std::uint32_t* out) {
 // Sums of |a - b| over each 8 bytes, in u64 lanes: one psadbw on x86 (this
 // Highway version has no SumsOf8AbsDiff), portable operations elsewhere.
 template <class D64, class V8>
-HWY_INLINE hn::Vec<D64> SumsOf8AbsDiff(D64 d64, V8 a, V8 b) {
+HWY_INLINE hn::Vec<D64> SumsOf8AbsDiff(D64 /* d64: the result type */, V8 a, V8 b) {
 #if HWY_TARGET == HWY_AVX3 || HWY_TARGET == HWY_AVX3_DL
-  (void)d64;
   return hn::Vec<D64>{_mm512_sad_epu8(a.raw, b.raw)};
 #elif HWY_TARGET == HWY_AVX2
-  (void)d64;
   return hn::Vec<D64>{_mm256_sad_epu8(a.raw, b.raw)};
 #elif HWY_TARGET == HWY_SSE4 || HWY_TARGET == HWY_SSSE3
-  (void)d64;
   return hn::Vec<D64>{_mm_sad_epu8(a.raw, b.raw)};
 #else
-  (void)d64;
   // |a - b| of unsigned bytes: one of the two saturated differences is 0.
   return hn::SumsOf8(hn::Or(hn::SaturatedSub(a, b), hn::SaturatedSub(b, a)));
 #endif

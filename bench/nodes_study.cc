@@ -186,7 +186,7 @@ int main(int argc, char** argv) {
             std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0)
                 .count());
         spent += outcome.similarities;
-        store.add(stored[at(q)]);
+        store.add(stored[at(q)], outcome.node);  // as the detector does
       }
       std::sort(ms.begin(), ms.end());
       std::printf(

@@ -98,7 +98,9 @@ Result Detector::process_gray(double convert_ms, std::int64_t start_ns) {
   t = now_ns();
   verify(result);
   result.timings.verify_ms = ms_since(t);
-  store_.add(descriptor_);
+  // A node's frames sit together in the store: scoring its members reads one
+  // run of memory (FrameStore groups).
+  store_.add(descriptor_, std::max<std::int64_t>(result.node, 0));
   if (result.frame == 0) width_ = gray_.width, height_ = gray_.height;
 
   result.loop = result.best.frame >= 0 && result.best.score >= options_.decision.threshold;
@@ -148,9 +150,17 @@ void Detector::verify(Result& result) {
 }
 
 void Detector::restore_frame(int width, int height, const Descriptor& descriptor,
-                             const std::vector<float>& points,
-                             const std::vector<std::uint8_t>& orb) {
+                             const std::vector<float>& points, const std::vector<std::uint8_t>& orb,
+                             std::int64_t node) {
   const std::int64_t frame = store_.size();
+  const std::int64_t max_node =
+      options_.search.mode == SearchMode::kDynamicNodes ? store_.groups() : 0;
+  if (node < 0 || node > max_node) {
+    internal::throw_invalid(
+        "restore_frame: frame ", frame, " has node ", node, ": expected 0 to ", max_node,
+        options_.search.mode == SearchMode::kDynamicNodes ? " (an earlier node or the next new one)"
+                                                          : " (the search mode is exhaustive)");
+  }
   if (width <= 0 || height <= 0 || (frame > 0 && (width != width_ || height != height_))) {
     internal::throw_invalid("restore_frame: frame ", frame, " is ", width, "x", height,
                             " but the detector holds ", width_, "x", height_, " frames");
@@ -186,7 +196,7 @@ void Detector::restore_frame(int width, int height, const Descriptor& descriptor
                             " keypoint coordinates and ", orb.size(),
                             " ORB bytes: not 2 finite coordinates and 32 bytes per keypoint");
   }
-  store_.add(descriptor);
+  store_.add(descriptor, node);
   if (options_.verification.geometric) geometric_.add_features(points, orb);
   width_ = width;
   height_ = height;

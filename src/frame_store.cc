@@ -2,8 +2,9 @@
 
 #include <algorithm>
 #include <cstdlib>
+#include <cstring>
+#include <limits>
 #include <new>
-#include <type_traits>
 
 #ifdef __linux__
 #include <sys/mman.h>
@@ -22,48 +23,56 @@ void grow(std::vector<T>& v, std::size_t more) {
   v.reserve(std::max(v.size() + more, 2 * v.capacity()));
 }
 
-std::size_t bins_per_cell(HistogramStorage storage) {
-  return storage == HistogramStorage::kCompact ? kCompactBins : kBins;
+constexpr std::size_t kHugePage = std::size_t{2} << 20;
+
+// Chunks of 2 MiB or more are aligned to 2 MiB for huge pages, smaller ones to
+// a cache line; aligned_alloc needs the size to be a multiple of the alignment.
+std::size_t chunk_alignment(std::size_t bytes) { return bytes >= kHugePage ? kHugePage : 64; }
+std::size_t chunk_size(std::int64_t frames, std::size_t frame_bytes) {
+  const std::size_t wanted = static_cast<std::size_t>(frames) * frame_bytes;
+  const std::size_t align = chunk_alignment(wanted);
+  return (wanted + align - 1) / align * align;
 }
 
 }  // namespace
 
-void FrameStore::FreeChunk::operator()(void* p) const { std::free(p); }
+void FrameStore::FreeChunk::operator()(std::byte* p) const { std::free(p); }
 
-template <typename T>
-FrameStore::Chunk<T> FrameStore::allocate_chunk(std::size_t elements) {
-  static_assert(std::is_trivially_default_constructible_v<T>, "chunks hold raw bins");
-  constexpr std::size_t kHugePage = std::size_t{2} << 20;
-  const std::size_t bytes = (elements * sizeof(T) + kHugePage - 1) / kHugePage * kHugePage;
-  void* p = std::aligned_alloc(kHugePage, bytes);
+FrameStore::Chunk FrameStore::allocate_chunk(std::int64_t frames, std::size_t frame_bytes) {
+  const std::size_t bytes = chunk_size(frames, frame_bytes);
+  const std::size_t align = chunk_alignment(bytes);
+  void* p = std::aligned_alloc(align, bytes);
   if (p == nullptr) throw std::bad_alloc();
 #ifdef __linux__
-  madvise(p, bytes, MADV_HUGEPAGE);  // a hint: without huge pages it is just slower
+  if (align == kHugePage) madvise(p, bytes, MADV_HUGEPAGE);  // a hint: without them it is slower
 #endif
-  return Chunk<T>(static_cast<T*>(p));
+  Chunk chunk;
+  chunk.data.reset(static_cast<std::byte*>(p));
+  chunk.frames = frames;
+  return chunk;
 }
 
-template <typename T>
-void FrameStore::copy_chunks(const std::vector<Chunk<T>>& from, std::size_t elements,
-                             std::vector<Chunk<T>>& to) {
-  to.reserve(from.size());
-  for (const auto& chunk : from) {
-    to.push_back(allocate_chunk<T>(elements));
-    std::copy(chunk.get(), chunk.get() + elements, to.back().get());
-  }
+std::size_t FrameStore::frame_bytes() const {
+  const auto cells = static_cast<std::size_t>(grid_.cells());
+  return storage_ == HistogramStorage::kCompact ? cells * kCompactBins * sizeof(CompactBin)
+                                                : cells * kBins * sizeof(Bin);
 }
 
 FrameStore::FrameStore(const FrameStore& other)
     : grid_(other.grid_),
       storage_(other.storage_),
       cell_pixels_(other.cell_pixels_),
-      size_(other.size_),
-      chunk_frames_(other.chunk_frames_),
+      max_chunk_frames_(other.max_chunk_frames_),
+      slots_(other.slots_),
+      groups_(other.groups_),
       pixels_(other.pixels_) {
-  const std::size_t chunk_bins = static_cast<std::size_t>(chunk_frames_) *
-                                 static_cast<std::size_t>(grid_.cells()) * bins_per_cell(storage_);
-  copy_chunks(other.chunks_, chunk_bins, chunks_);
-  copy_chunks(other.compact_chunks_, chunk_bins, compact_chunks_);
+  chunks_.reserve(other.chunks_.size());
+  const std::size_t bytes = frame_bytes();
+  for (const Chunk& chunk : other.chunks_) {
+    chunks_.push_back(allocate_chunk(chunk.frames, bytes));
+    std::memcpy(chunks_.back().data.get(), chunk.data.get(),
+                static_cast<std::size_t>(chunk.frames) * bytes);
+  }
 }
 
 FrameStore& FrameStore::operator=(const FrameStore& other) {
@@ -71,74 +80,96 @@ FrameStore& FrameStore::operator=(const FrameStore& other) {
   return *this;
 }
 
-template <typename T>
-void FrameStore::add_slot(const std::vector<T>& data, std::vector<Chunk<T>>& chunks,
-                          const std::vector<Count>& pixels) {
-  const std::size_t frame_bins = data.size();
-  const std::int64_t chunk_frames =
-      size_ > 0 ? chunk_frames_
-                : std::max<std::int64_t>(
-                      1, static_cast<std::int64_t>(kChunkBytes / (frame_bins * sizeof(T))));
-  // Allocate everything that can fail before changing any member.
-  Chunk<T> chunk;
-  const bool new_chunk = size_ % chunk_frames == 0;
-  if (new_chunk) {
-    chunk = allocate_chunk<T>(static_cast<std::size_t>(chunk_frames) * frame_bins);
-    grow(chunks, 1);
-  }
-  grow(pixels_, pixels.size());
-  // No allocation from here on.
-  if (new_chunk) chunks.push_back(std::move(chunk));
-  chunk_frames_ = chunk_frames;
-  T* slot = chunks.back().get() + static_cast<std::size_t>(size_ % chunk_frames) * frame_bins;
-  std::copy(data.begin(), data.end(), slot);
-  pixels_.insert(pixels_.end(), pixels.begin(), pixels.end());
-}
-
-std::int64_t FrameStore::add(const Descriptor& descriptor) {
+std::int64_t FrameStore::add(const Descriptor& descriptor, std::int64_t group) {
   descriptor.check_consistent("FrameStore::add");
-  if (size_ > 0 && descriptor.grid != grid_) {
+  const bool first = slots_.empty();
+  if (!first && descriptor.grid != grid_) {
     internal::throw_invalid("frame grid ", descriptor.grid.rows, "x", descriptor.grid.cols,
                             " differs from the stored frames' ", grid_.rows, "x", grid_.cols,
                             ": every frame must have the same image size");
   }
-  if (size_ > 0 && descriptor.storage != storage_) {
+  if (!first && descriptor.storage != storage_) {
     internal::throw_invalid("FrameStore::add: a ", to_string(descriptor.storage),
                             " descriptor cannot join a store of ", to_string(storage_),
                             " descriptors");
   }
-  if (size_ > 0 && descriptor.storage == HistogramStorage::kCompact &&
+  if (!first && descriptor.storage == HistogramStorage::kCompact &&
       descriptor.cell_pixels != cell_pixels_) {
     internal::throw_invalid("FrameStore::add: compact descriptor with ", descriptor.cell_pixels,
                             " pixels per cell differs from the stored frames' ", cell_pixels_,
                             ": every frame must have the same image size");
   }
-  if (descriptor.storage == HistogramStorage::kCompact) {
-    add_slot(descriptor.compact, compact_chunks_, descriptor.pixels);
-  } else {
-    add_slot(descriptor.hist, chunks_, descriptor.pixels);
+  if (group < 0 || group > groups()) {
+    internal::throw_invalid("FrameStore::add: group ", group, " is neither one of the ", groups(),
+                            " groups nor the next new one");
   }
+  const bool compact = descriptor.storage == HistogramStorage::kCompact;
+  const std::size_t bytes = compact ? descriptor.compact.size() * sizeof(CompactBin)
+                                    : descriptor.hist.size() * sizeof(Bin);
+  const std::int64_t max_chunk_frames =
+      first ? std::max<std::int64_t>(1, static_cast<std::int64_t>(kChunkBytes / bytes))
+            : max_chunk_frames_;
+  const bool new_group = group == groups();
+  Group g = new_group ? Group{} : groups_[static_cast<std::size_t>(group)];
+
+  // Allocate everything that can fail before changing any member.
+  Chunk chunk;
+  const bool new_chunk = g.used == g.capacity;
+  if (new_chunk) {
+    if (chunks_.size() >= std::numeric_limits<std::uint32_t>::max()) {
+      internal::throw_invalid("FrameStore::add: more than 2^32 - 1 chunks");
+    }
+    chunk = allocate_chunk(std::clamp<std::int64_t>(g.frames / 2, 1, max_chunk_frames), bytes);
+    grow(chunks_, 1);
+  }
+  grow(slots_, 1);
+  if (new_group) grow(groups_, 1);
+  grow(pixels_, descriptor.pixels.size());
+
+  // No allocation from here on.
+  if (new_chunk) {
+    g.chunk = static_cast<std::uint32_t>(chunks_.size());
+    g.capacity = chunk.frames;
+    g.used = 0;
+    chunks_.push_back(std::move(chunk));
+  }
+  std::byte* slot = chunks_[g.chunk].data.get() + static_cast<std::size_t>(g.used) * bytes;
+  if (compact) {
+    std::memcpy(slot, descriptor.compact.data(), bytes);
+  } else {
+    std::memcpy(slot, descriptor.hist.data(), bytes);
+  }
+  slots_.push_back({g.chunk, static_cast<std::uint32_t>(g.used)});
+  ++g.used;
+  ++g.frames;
+  if (new_group) {
+    groups_.push_back(g);
+  } else {
+    groups_[static_cast<std::size_t>(group)] = g;
+  }
+  pixels_.insert(pixels_.end(), descriptor.pixels.begin(), descriptor.pixels.end());
   grid_ = descriptor.grid;
   storage_ = descriptor.storage;
   cell_pixels_ = descriptor.cell_pixels;
-  return size_++;
+  max_chunk_frames_ = max_chunk_frames;
+  return size() - 1;
 }
 
 DescriptorView FrameStore::view(std::int64_t frame) const {
-  if (frame < 0 || frame >= size_) {
-    internal::throw_invalid("frame ", frame, " is not stored (", size_, " frames)");
+  if (frame < 0 || frame >= size()) {
+    internal::throw_invalid("frame ", frame, " is not stored (", size(), " frames)");
   }
-  const std::size_t cells = static_cast<std::size_t>(grid_.cells());
-  const auto chunk = static_cast<std::size_t>(frame / chunk_frames_);
-  const auto slot = static_cast<std::size_t>(frame % chunk_frames_);
+  const Slot s = slots_[static_cast<std::size_t>(frame)];
+  const std::byte* data =
+      chunks_[s.chunk].data.get() + static_cast<std::size_t>(s.slot) * frame_bytes();
   DescriptorView v;
   v.cells = grid_.cells();
   if (storage_ == HistogramStorage::kCompact) {
-    v.compact = compact_chunks_[chunk].get() + slot * cells * kCompactBins;
+    v.compact = reinterpret_cast<const CompactBin*>(data);
     v.cell_pixels = cell_pixels_;
   } else {
-    v.hist = chunks_[chunk].get() + slot * cells * kBins;
-    v.pixels = pixels_.data() + static_cast<std::size_t>(frame) * cells;
+    v.hist = reinterpret_cast<const Bin*>(data);
+    v.pixels = pixels_.data() + static_cast<std::size_t>(frame) * static_cast<std::size_t>(v.cells);
   }
   return v;
 }
@@ -147,15 +178,18 @@ std::size_t FrameStore::bytes_per_frame() const {
   return Descriptor::bytes_per_frame(storage_, grid_.cells());
 }
 
+std::size_t FrameStore::allocated_bytes() const {
+  std::size_t bytes = 0;
+  for (const Chunk& chunk : chunks_) bytes += chunk_size(chunk.frames, frame_bytes());
+  return bytes + pixels_.capacity() * sizeof(Count) + slots_.capacity() * sizeof(Slot) +
+         groups_.capacity() * sizeof(Group) + chunks_.capacity() * sizeof(Chunk);
+}
+
 void FrameStore::reserve(std::int64_t frames) {
-  if (frames <= 0 || grid_.cells() == 0) return;
-  const std::size_t cells = static_cast<std::size_t>(grid_.cells());
-  const auto chunks = static_cast<std::size_t>((frames + chunk_frames_ - 1) / chunk_frames_);
-  if (storage_ == HistogramStorage::kCompact) {
-    compact_chunks_.reserve(chunks);
-  } else {
-    chunks_.reserve(chunks);
-    pixels_.reserve(static_cast<std::size_t>(frames) * cells);
+  if (frames <= 0) return;
+  slots_.reserve(static_cast<std::size_t>(frames));
+  if (storage_ == HistogramStorage::kExact && grid_.cells() > 0) {
+    pixels_.reserve(static_cast<std::size_t>(frames) * static_cast<std::size_t>(grid_.cells()));
   }
 }
 

@@ -240,6 +240,40 @@ TEST(CompactDetector, TenKilobytesPerKittiFrameAndResultsCloseToExact) {
   EXPECT_EQ(exact.bytes_per_frame(), cells * (kBins * 2 + 4));
 }
 
+TEST(CompactDetector, RestoreFramePlacesFramesByNode) {
+  DetectorOptions o;
+  o.segmentation.superpixel_size = 16;
+  o.descriptor.storage = HistogramStorage::kCompact;
+  const std::vector<Descriptor> exact = street(1, 1);
+  const Descriptor c = compacted(exact[0]);
+  {
+    Detector d(o);  // exhaustive: every frame in group 0
+    const std::string m =
+        message_of<InvalidArgument>([&] { d.restore_frame(160, 120, c, {}, {}, 1); });
+    EXPECT_NE(m.find("node 1: expected 0 to 0 (the search mode is exhaustive)"), std::string::npos)
+        << m;
+    EXPECT_EQ(d.size(), 0);
+  }
+  o.search.mode = SearchMode::kDynamicNodes;
+  Detector d(o);
+  for (const std::int64_t bad : {-1, 1}) {
+    const std::string m =
+        message_of<InvalidArgument>([&] { d.restore_frame(160, 120, c, {}, {}, bad); });
+    EXPECT_NE(m.find("(an earlier node or the next new one)"), std::string::npos) << m;
+  }
+  EXPECT_EQ(d.size(), 0);
+  // A group's chunks hold 1, 1, 1, 1, 2, 3, ... frames (half what it has), so
+  // node 0's fifth and sixth frames (ids 5 and 7) share a chunk, side by side.
+  for (const std::int64_t node : {0, 0, 0, 0, 1, 0, 2, 0, 1}) {
+    d.restore_frame(160, 120, c, {}, {}, node);
+  }
+  EXPECT_EQ(d.store().groups(), 3);
+  const std::size_t stride = static_cast<std::size_t>(c.grid.cells()) * kCompactBins;
+  EXPECT_EQ(d.store().view(7).compact, d.store().view(5).compact + stride);
+  EXPECT_THROW(d.restore_frame(160, 120, c, {}, {}, 4), InvalidArgument);
+  EXPECT_EQ(d.size(), 9);
+}
+
 TEST(CompactDetector, RestoreFrameChecksStorageAndSize) {
   DetectorOptions o;
   o.segmentation.superpixel_size = 16;

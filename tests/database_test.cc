@@ -116,6 +116,7 @@ void expect_same_state(const Detector& a, const Detector& b) {
     ASSERT_TRUE(std::equal(x.pixels, x.pixels + x.cells, y.pixels)) << "frame " << f;
   }
   ASSERT_EQ(a.nodes(), b.nodes());
+  EXPECT_EQ(a.store().groups(), b.store().groups());
   for (std::int64_t k = 0; k < a.nodes(); ++k) {
     EXPECT_EQ(a.dynamic_nodes().members(k), b.dynamic_nodes().members(k));
   }

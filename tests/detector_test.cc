@@ -336,6 +336,7 @@ TEST(Detector, NodeModeReportsNodes) {
   }
   EXPECT_EQ(det.nodes(), created);
   EXPECT_EQ(det.dynamic_nodes().size(), created);
+  EXPECT_EQ(det.store().groups(), created);  // each node's frames placed together
 }
 
 TEST(Detector, ImageViewAndMatGiveIdenticalResults) {

@@ -1,8 +1,16 @@
 // Storage of every stored frame's descriptor in fixed-stride slots, in chunks
-// of about 4 MiB of consecutive frames: memory grows linearly with the number
-// of frames and never needs a copy of what is stored (peak memory = the store
-// plus at most one chunk), views stay valid while frames are added, and a scan
-// over frames walks memory in order. Frame ids are dense: 0, 1, 2, ...
+// of at most about 4 MiB: memory grows linearly with the number of frames and
+// never needs a copy of what is stored, views stay valid while frames are
+// added, and a scan over frames walks memory in order. Frame ids are dense:
+// 0, 1, 2, ...
+//
+// Frames are placed by group: the frames of one group sit together in
+// memory, in the order they were added, and never share a chunk with another
+// group. The detector uses the frame's dynamic node as its group, so that
+// scoring a node's members (Algorithm 1) reads one run of memory instead of
+// the node's frames scattered among all the others; with one group (the
+// default, exhaustive search) frames sit in id order. A group is only a
+// placement: it never changes what view() returns.
 #pragma once
 
 #include <cstddef>
@@ -17,60 +25,79 @@ namespace lsgd {
 class FrameStore {
  public:
   FrameStore() = default;
-  FrameStore(const FrameStore& other);  // deep copy
+  FrameStore(const FrameStore& other);  // deep copy, same placement
   FrameStore& operator=(const FrameStore& other);
   FrameStore(FrameStore&&) noexcept = default;
   FrameStore& operator=(FrameStore&&) noexcept = default;
 
-  // The grid, the storage (exact or compact) and, for compact storage, the
-  // cell size are fixed by the first frame added; later frames must match
-  // (throws InvalidArgument otherwise, leaving the store unchanged). Strong
-  // guarantee: if allocation fails the store is unchanged too.
-  std::int64_t add(const Descriptor& descriptor);
+  // Stores the frame in `group` and returns its id. The grid, the storage
+  // (exact or compact) and, for compact storage, the cell size are fixed by
+  // the first frame added; later frames must match. `group` must be an
+  // existing group or the next new one: 0 <= group <= groups(). Throws
+  // InvalidArgument otherwise, leaving the store unchanged. Strong guarantee:
+  // if allocation fails the store is unchanged too.
+  std::int64_t add(const Descriptor& descriptor, std::int64_t group = 0);
 
-  std::int64_t size() const { return size_; }
-  bool empty() const { return size_ == 0; }
+  std::int64_t size() const { return static_cast<std::int64_t>(slots_.size()); }
+  bool empty() const { return slots_.empty(); }
   const GridSize& grid() const { return grid_; }
   HistogramStorage storage() const { return storage_; }
   DescriptorView view(std::int64_t frame) const;
+  // Number of groups: one more than the highest group used, 0 when empty.
+  std::int64_t groups() const { return static_cast<std::int64_t>(groups_.size()); }
 
   // Bytes of descriptor data held per frame.
   std::size_t bytes_per_frame() const;
+  // Bytes allocated for descriptors, pixel counts and the frame table: at
+  // least size() * bytes_per_frame(). A group's next chunk holds half as many
+  // frames as the group already has (1 at first, at most max_chunk_frames()),
+  // so each group has at most half as many empty slots as filled ones.
+  std::size_t allocated_bytes() const;
+  // Room for `frames` frames in the frame table (the chunks grow by group).
   void reserve(std::int64_t frames);
-  // Frames per chunk (0 before the first frame).
-  std::int64_t chunk_frames() const { return chunk_frames_; }
+  // Frames in a full-size chunk (0 before the first frame).
+  std::int64_t max_chunk_frames() const { return max_chunk_frames_; }
 
  private:
   static constexpr std::size_t kChunkBytes = std::size_t{4} << 20;
 
-  // Chunks are allocated aligned to 2 MiB and, on Linux, marked for
-  // transparent huge pages: a search reads stored frames in scattered 10-40
-  // KB slots, and with 4 KiB pages most of them cost TLB misses.
+  // Chunks of 2 MiB or more are allocated aligned to 2 MiB and, on Linux,
+  // marked for transparent huge pages: a search reads stored frames in
+  // scattered 10-40 KB slots, and with 4 KiB pages most of them cost TLB
+  // misses. Smaller chunks are 64-byte aligned.
   struct FreeChunk {
-    void operator()(void* p) const;
+    void operator()(std::byte* p) const;
   };
-  template <typename T>
-  using Chunk = std::unique_ptr<T[], FreeChunk>;
-  template <typename T>
-  static Chunk<T> allocate_chunk(std::size_t elements);
-  template <typename T>
-  static void copy_chunks(const std::vector<Chunk<T>>& from, std::size_t elements,
-                          std::vector<Chunk<T>>& to);
-  template <typename T>
-  void add_slot(const std::vector<T>& data, std::vector<Chunk<T>>& chunks,
-                const std::vector<Count>& pixels);
+  struct Chunk {
+    std::unique_ptr<std::byte[], FreeChunk> data;
+    std::int64_t frames = 0;  // capacity in slots
+  };
+  static Chunk allocate_chunk(std::int64_t frames, std::size_t frame_bytes);
+  // Where a frame's histograms live: slot `slot` of chunk `chunk`.
+  struct Slot {
+    std::uint32_t chunk = 0;
+    std::uint32_t slot = 0;
+  };
+  // A group fills its last chunk before it gets a new one.
+  struct Group {
+    std::int64_t frames = 0;
+    std::uint32_t chunk = 0;  // its last chunk
+    std::int64_t used = 0;    // slots of that chunk already filled
+    std::int64_t capacity = 0;
+  };
+
+  std::size_t frame_bytes() const;  // histogram bytes per slot
 
   GridSize grid_;
   HistogramStorage storage_ = HistogramStorage::kExact;
   double cell_pixels_ = 0;  // compact storage: mean pixels per cell
-  std::int64_t size_ = 0;
-  std::int64_t chunk_frames_ = 0;
-  // Exact storage: chunk_frames_ * cells * kBins bins per chunk, and cells
-  // pixel counts per frame.
-  std::vector<Chunk<Bin>> chunks_;
-  std::vector<Count> pixels_;
-  // Compact storage: chunk_frames_ * cells * kCompactBins bins per chunk.
-  std::vector<Chunk<CompactBin>> compact_chunks_;
+  std::int64_t max_chunk_frames_ = 0;
+  // Exact storage: cells * kBins 16-bit bins per slot; compact storage:
+  // cells * kCompactBins 8-bit bins.
+  std::vector<Chunk> chunks_;
+  std::vector<Slot> slots_;    // by frame id
+  std::vector<Group> groups_;  // by group id
+  std::vector<Count> pixels_;  // exact storage: cells pixel counts per frame, by frame id
 };
 
 }  // namespace lsgd

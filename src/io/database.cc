@@ -629,8 +629,8 @@ void Database::restore(Detector& detector) const {
     row.pixels = sqlite3_column_blob(s, 4);
     row.pixels_size = sqlite3_column_bytes(s, 4);
     if (row.hist_size != static_cast<std::int64_t>(hist_bytes)) {
-      bad("histogram blob has ", row.hist_size, " bytes, expected ", hist_bytes, " (",
-          m.grid.rows, "x", m.grid.cols, " cells of ",
+      bad("histogram blob has ", row.hist_size, " bytes, expected ", hist_bytes, " (", m.grid.rows,
+          "x", m.grid.cols, " cells of ",
           compact ? "128 8-bit bins, descriptor.storage compact"
                   : "256 16-bit bins, descriptor.storage exact",
           ")");
@@ -688,17 +688,16 @@ void Database::restore(Detector& detector) const {
       std::memcpy(points.data(), bits.data(), bits.size() * sizeof(float));
       orb.assign(bytes + 2 * n * sizeof(float), bytes + n * kFeatureBytes);
     }
+    if (nodes_mode && (row.node < 0 || row.node > static_cast<std::int64_t>(nodes.size()))) {
+      bad("node ", row.node, " does not exist yet (", nodes.size(), " nodes before this frame)");
+    }
     try {
-      detector.restore_frame(m.width, m.height, descriptor, points, orb);
+      detector.restore_frame(m.width, m.height, descriptor, points, orb, nodes_mode ? row.node : 0);
     } catch (const InvalidArgument& e) {
       bad(e.what());
     }
     if (nodes_mode) {
-      if (row.node == static_cast<std::int64_t>(nodes.size())) {
-        nodes.emplace_back();
-      } else if (row.node < 0 || row.node > static_cast<std::int64_t>(nodes.size())) {
-        bad("node ", row.node, " does not exist yet (", nodes.size(), " nodes before this frame)");
-      }
+      if (row.node == static_cast<std::int64_t>(nodes.size())) nodes.emplace_back();
       nodes[static_cast<std::size_t>(row.node)].push_back(id);
     }
     if (temporal) {

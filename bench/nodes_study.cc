@@ -1,9 +1,12 @@
 // Where the dynamic-node search spends its similarities, and how much of it an
-// exact lower bound on L1 from coarser histograms could skip.
+// exact lower bound on L1 from coarser histograms could skip; then how long
+// DynamicNodes::assign takes depending on what the CPU did between queries.
 //
 //   build/bench/lsgd_nodes_study [frames] [--timing-only]
-//     (default 4541 frames; ~2 min, or ~1 min with --timing-only, which
-//     skips the bound analysis)
+//       [--between none,flush,render,busy,sleep] [--storage exact,compact]
+//     (default 4541 frames, --between none,flush, both storages: ~2 min, or
+//     ~1 min with --timing-only, which skips the bound analysis; render adds
+//     ~100 s per storage)
 //
 // The sequence is `lsgd bench`'s: 1241x376 frames of the synthetic street,
 // frame i showing route frame i % 1090, default detector options (S_p = 40,
@@ -14,8 +17,17 @@
 // L1, so the bound is exact). A node whose bound on the mean stays at or below
 // beta * base could be rejected without scoring its members. It prints the
 // similarities spent per query and the share a bound would have saved, then
-// runs DynamicNodes::assign itself on the same frames in exact and compact
-// storage and prints its median time per query.
+// runs DynamicNodes::assign itself on the same frames, storing each frame in
+// its node's group as the detector does, and prints its median time per
+// query for each storage and each of these, done (untimed) before every query:
+//   none    nothing: the node scanned last may still be in the caches;
+//   flush   64 MiB written: the stored frames come from memory;
+//   render  render, convert and segment the next frame, as `lsgd bench` does
+//           between two queries (~22 ms);
+//   busy    flush, then 20 ms of arithmetic that touches no memory;
+//   sleep   flush, then 20 ms asleep.
+// busy and sleep separate the cache contents from time without memory
+// traffic, which on some machines lowers the read rate of the next query.
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -24,7 +36,10 @@
 #include <cstdlib>
 #include <cstring>
 #include <opencv2/core.hpp>
+#include <opencv2/core/utility.hpp>
 #include <opencv2/imgproc.hpp>
+#include <string>
+#include <thread>
 #include <vector>
 
 #include "lsgd/descriptor.h"
@@ -67,13 +82,86 @@ double upper_bound(const std::vector<std::uint32_t>& a, const std::vector<std::u
   return 1.0 / (1.0 + sum / cells);
 }
 
+enum class Between { kNone, kFlush, kRender, kBusy, kSleep };
+
+const char* name(Between b) {
+  switch (b) {
+    case Between::kNone:
+      return "none (back to back)";
+    case Between::kFlush:
+      return "flush (64 MiB written)";
+    case Between::kRender:
+      return "render (render + segment the next frame)";
+    case Between::kBusy:
+      return "busy (flush, 20 ms arithmetic)";
+    case Between::kSleep:
+      return "sleep (flush, 20 ms asleep)";
+  }
+  return "?";
+}
+
+// Splits "a,b,c" and maps each item through `parse`; false on an unknown one.
+template <typename T, typename Parse>
+bool parse_list(const std::string& list, Parse parse, std::vector<T>& out) {
+  out.clear();
+  std::size_t at = 0;
+  while (at <= list.size()) {
+    const std::size_t end = std::min(list.find(',', at), list.size());
+    T value{};
+    if (!parse(list.substr(at, end - at), value)) return false;
+    out.push_back(value);
+    at = end + 1;
+  }
+  return !out.empty();
+}
+
+bool parse_between(const std::string& s, Between& b) {
+  const std::pair<const char*, Between> names[] = {{"none", Between::kNone},
+                                                   {"flush", Between::kFlush},
+                                                   {"render", Between::kRender},
+                                                   {"busy", Between::kBusy},
+                                                   {"sleep", Between::kSleep}};
+  for (const auto& [n, v] : names) {
+    if (s == n) return b = v, true;
+  }
+  return false;
+}
+
+bool parse_storage(const std::string& s, lsgd::HistogramStorage& storage) {
+  if (s != "exact" && s != "compact") return false;
+  storage = lsgd::parse_histogram_storage(s.c_str());
+  return true;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
-  const std::int64_t frames = argc > 1 ? std::atoll(argv[1]) : 4541;
-  const bool timing_only = argc > 2 && std::strcmp(argv[2], "--timing-only") == 0;
-  if (frames < 1 || (argc > 2 && !timing_only) || argc > 3) {
-    std::fprintf(stderr, "usage: %s [frames >= 1] [--timing-only]\n", argv[0]);
+  cv::setNumThreads(0);  // as lsgd bench: OpenCV sequential
+  std::int64_t frames = 4541;
+  bool timing_only = false;
+  std::vector<Between> between = {Between::kNone, Between::kFlush};
+  std::vector<lsgd::HistogramStorage> storages = {lsgd::HistogramStorage::kExact,
+                                                  lsgd::HistogramStorage::kCompact};
+  bool ok = true;
+  for (int i = 1; i < argc && ok; ++i) {
+    const std::string arg = argv[i];
+    if (arg == "--timing-only") {
+      timing_only = true;
+    } else if (arg == "--between" && i + 1 < argc) {
+      ok = parse_list<Between>(argv[++i], parse_between, between);
+    } else if (arg == "--storage" && i + 1 < argc) {
+      ok = parse_list<lsgd::HistogramStorage>(argv[++i], parse_storage, storages);
+    } else if (i == 1 && std::atoll(argv[1]) >= 1) {
+      frames = std::atoll(argv[1]);
+    } else {
+      ok = false;
+    }
+  }
+  if (!ok) {
+    std::fprintf(stderr,
+                 "usage: %s [frames >= 1] [--timing-only] [--between "
+                 "none,flush,render,busy,sleep] [--storage exact,compact]\n",
+                 argv[0]);
     return 2;
   }
   lsgd::eval::SyntheticOptions world_options;
@@ -151,16 +239,33 @@ int main(int argc, char** argv) {
     }
   }
 
-  // DynamicNodes itself in both storages: similarities spent per query and
-  // wall time of assign() alone (no segmentation, no verification), once
-  // with the queries back to back (the node scanned last is still in cache)
-  // and once "cold": 64 MiB written before every query (untimed), so the
-  // stored frames come from memory, as in a pipeline where segmentation and
-  // the rest of the robot's work run between two queries.
+  // DynamicNodes itself: similarities spent per query and wall time of
+  // assign() alone (no segmentation, no verification), with `between` done
+  // before every query outside the timed part.
   std::vector<char> flush(std::size_t{64} << 20);
-  for (const bool cold : {false, true})
-    for (const lsgd::HistogramStorage storage :
-         {lsgd::HistogramStorage::kExact, lsgd::HistogramStorage::kCompact}) {
+  std::size_t sink = 0;  // keeps the untimed work from being optimised away
+  const auto before_query = [&](Between b, std::int64_t q) {
+    if (b == Between::kNone) return;
+    if (b == Between::kRender) {
+      cv::Mat gray;
+      cv::cvtColor(world.render(q % world.frames()), gray, cv::COLOR_BGR2GRAY);
+      sink += segmenter.segment(lsgd::to_gray(gray)).labels.size();
+      return;
+    }
+    std::fill(flush.begin(), flush.end(), static_cast<char>(q));
+    if (b == Between::kBusy) {
+      const auto t0 = std::chrono::steady_clock::now();
+      double x = 1.0;
+      while (std::chrono::steady_clock::now() - t0 < std::chrono::milliseconds(20)) {
+        for (int r = 0; r < 1000; ++r) x = x * 1.0000001 + 1e-9;
+      }
+      sink += static_cast<std::size_t>(x);
+    } else if (b == Between::kSleep) {
+      std::this_thread::sleep_for(std::chrono::milliseconds(20));
+    }
+  };
+  for (const Between b : between)
+    for (const lsgd::HistogramStorage storage : storages) {
       std::vector<lsgd::Descriptor> stored(route.size());
       for (std::size_t i = 0; i < route.size(); ++i) {
         if (storage == lsgd::HistogramStorage::kCompact) {
@@ -178,7 +283,7 @@ int main(int argc, char** argv) {
       std::vector<double> ms;
       for (std::int64_t q = 0; q < frames; ++q) {
         const lsgd::DescriptorView query = stored[at(q)].view();
-        if (cold) std::fill(flush.begin(), flush.end(), static_cast<char>(q));
+        before_query(b, q);
         const auto t0 = std::chrono::steady_clock::now();
         const auto outcome =
             dn.assign(store, query, q, o, lsgd::SimilarityMetric::kReference, scratch, out);
@@ -190,10 +295,11 @@ int main(int argc, char** argv) {
       }
       std::sort(ms.begin(), ms.end());
       std::printf(
-          "DynamicNodes, %s storage, %s: %lld nodes, %.1f similarities per query, "
-          "assign() median %.3f ms\n",
-          lsgd::to_string(storage), cold ? "cold caches" : "back to back",
-          static_cast<long long>(dn.size()), static_cast<double>(spent) / n, ms[ms.size() / 2]);
+          "DynamicNodes, %s storage, between queries %s: %lld nodes, %.1f similarities per "
+          "query, assign() median %.3f ms\n",
+          lsgd::to_string(storage), name(b), static_cast<long long>(dn.size()),
+          static_cast<double>(spent) / n, ms[ms.size() / 2]);
     }
+  std::fprintf(stderr, "%s", sink == 1 ? " " : "");
   return 0;
 }

@@ -429,7 +429,7 @@ const NodesSetup& nodes_setup(Size size, std::int64_t frames, const lsgd::Search
   d.storage = storage;
   for (std::int64_t j = b.state.store.size(); j < frames; ++j) {
     const lsgd::DescriptorView v = full.view(j);
-    b.state.nodes.assign(b.state.store, v, j, options, metric, scratch, out);
+    const auto outcome = b.state.nodes.assign(b.state.store, v, j, options, metric, scratch, out);
     if (storage == lsgd::HistogramStorage::kCompact) {
       d.compact.assign(v.compact,
                        v.compact + static_cast<std::size_t>(v.cells) * lsgd::kCompactBins);
@@ -438,7 +438,7 @@ const NodesSetup& nodes_setup(Size size, std::int64_t frames, const lsgd::Search
       d.hist.assign(v.hist, v.hist + static_cast<std::size_t>(v.cells) * lsgd::kBins);
       d.pixels.assign(v.pixels, v.pixels + v.cells);
     }
-    b.state.store.add(d);
+    b.state.store.add(d, outcome.node);  // a node's frames together, as the detector does
   }
   return b.snapshots.emplace(frames, b.state).first->second;
 }

@@ -25,31 +25,21 @@ void grow(std::vector<T>& v, std::size_t more) {
 
 constexpr std::size_t kHugePage = std::size_t{2} << 20;
 
-// Chunks of 2 MiB or more are aligned to 2 MiB for huge pages, smaller ones to
-// a cache line; aligned_alloc needs the size to be a multiple of the alignment.
-std::size_t chunk_alignment(std::size_t bytes) { return bytes >= kHugePage ? kHugePage : 64; }
-std::size_t chunk_size(std::int64_t frames, std::size_t frame_bytes) {
-  const std::size_t wanted = static_cast<std::size_t>(frames) * frame_bytes;
-  const std::size_t align = chunk_alignment(wanted);
-  return (wanted + align - 1) / align * align;
-}
-
 }  // namespace
 
-void FrameStore::FreeChunk::operator()(std::byte* p) const { std::free(p); }
+void FrameStore::FreeArena::operator()(std::byte* p) const { std::free(p); }
 
-FrameStore::Chunk FrameStore::allocate_chunk(std::int64_t frames, std::size_t frame_bytes) {
-  const std::size_t bytes = chunk_size(frames, frame_bytes);
-  const std::size_t align = chunk_alignment(bytes);
-  void* p = std::aligned_alloc(align, bytes);
+FrameStore::Arena FrameStore::allocate_arena(std::size_t bytes) {
+  bytes = (bytes + kHugePage - 1) / kHugePage * kHugePage;  // aligned_alloc needs a multiple
+  void* p = std::aligned_alloc(kHugePage, bytes);
   if (p == nullptr) throw std::bad_alloc();
 #ifdef __linux__
-  if (align == kHugePage) madvise(p, bytes, MADV_HUGEPAGE);  // a hint: without them it is slower
+  madvise(p, bytes, MADV_HUGEPAGE);  // a hint: without huge pages it is just slower
 #endif
-  Chunk chunk;
-  chunk.data.reset(static_cast<std::byte*>(p));
-  chunk.frames = frames;
-  return chunk;
+  Arena arena;
+  arena.data.reset(static_cast<std::byte*>(p));
+  arena.size = bytes;
+  return arena;
 }
 
 std::size_t FrameStore::frame_bytes() const {
@@ -63,16 +53,17 @@ FrameStore::FrameStore(const FrameStore& other)
       storage_(other.storage_),
       cell_pixels_(other.cell_pixels_),
       max_chunk_frames_(other.max_chunk_frames_),
+      chunks_(other.chunks_),
       slots_(other.slots_),
       groups_(other.groups_),
       pixels_(other.pixels_) {
-  chunks_.reserve(other.chunks_.size());
-  const std::size_t bytes = frame_bytes();
-  for (const Chunk& chunk : other.chunks_) {
-    chunks_.push_back(allocate_chunk(chunk.frames, bytes));
-    std::memcpy(chunks_.back().data.get(), chunk.data.get(),
-                static_cast<std::size_t>(chunk.frames) * bytes);
+  arenas_.reserve(other.arenas_.size());
+  for (const Arena& arena : other.arenas_) {
+    arenas_.push_back(allocate_arena(arena.size));
+    arenas_.back().used = arena.used;
+    std::memcpy(arenas_.back().data.get(), arena.data.get(), arena.used);
   }
+  for (Chunk& chunk : chunks_) chunk.data = arenas_[chunk.arena].data.get() + chunk.offset;
 }
 
 FrameStore& FrameStore::operator=(const FrameStore& other) {
@@ -112,14 +103,23 @@ std::int64_t FrameStore::add(const Descriptor& descriptor, std::int64_t group) {
   const bool new_group = group == groups();
   Group g = new_group ? Group{} : groups_[static_cast<std::size_t>(group)];
 
-  // Allocate everything that can fail before changing any member.
-  Chunk chunk;
+  // Allocate everything that can fail before changing any member. A new
+  // chunk is cut from the last arena, or from a new one when it does not fit.
   const bool new_chunk = g.used == g.capacity;
+  const std::int64_t chunk_frames = std::clamp<std::int64_t>(g.frames / 2, 1, max_chunk_frames);
+  const std::size_t chunk_size = static_cast<std::size_t>(chunk_frames) * bytes;
+  const bool new_arena =
+      new_chunk && (arenas_.empty() || arenas_.back().size - arenas_.back().used < chunk_size);
+  Arena arena;
   if (new_chunk) {
-    if (chunks_.size() >= std::numeric_limits<std::uint32_t>::max()) {
+    if (chunks_.size() >= std::numeric_limits<std::uint32_t>::max() ||
+        arenas_.size() >= std::numeric_limits<std::uint32_t>::max()) {
       internal::throw_invalid("FrameStore::add: more than 2^32 - 1 chunks");
     }
-    chunk = allocate_chunk(std::clamp<std::int64_t>(g.frames / 2, 1, max_chunk_frames), bytes);
+    if (new_arena) {
+      arena = allocate_arena(std::max(kArenaBytes, chunk_size));
+      grow(arenas_, 1);
+    }
     grow(chunks_, 1);
   }
   grow(slots_, 1);
@@ -127,13 +127,17 @@ std::int64_t FrameStore::add(const Descriptor& descriptor, std::int64_t group) {
   grow(pixels_, descriptor.pixels.size());
 
   // No allocation from here on.
+  if (new_arena) arenas_.push_back(std::move(arena));
   if (new_chunk) {
-    g.chunk = static_cast<std::uint32_t>(chunks_.size());
-    g.capacity = chunk.frames;
+    Arena& last = arenas_.back();
+    chunks_.push_back({last.data.get() + last.used, static_cast<std::uint32_t>(arenas_.size() - 1),
+                       last.used, chunk_frames});
+    last.used += chunk_size;
+    g.chunk = static_cast<std::uint32_t>(chunks_.size() - 1);
+    g.capacity = chunk_frames;
     g.used = 0;
-    chunks_.push_back(std::move(chunk));
   }
-  std::byte* slot = chunks_[g.chunk].data.get() + static_cast<std::size_t>(g.used) * bytes;
+  std::byte* slot = chunks_[g.chunk].data + static_cast<std::size_t>(g.used) * bytes;
   if (compact) {
     std::memcpy(slot, descriptor.compact.data(), bytes);
   } else {
@@ -160,8 +164,7 @@ DescriptorView FrameStore::view(std::int64_t frame) const {
     internal::throw_invalid("frame ", frame, " is not stored (", size(), " frames)");
   }
   const Slot s = slots_[static_cast<std::size_t>(frame)];
-  const std::byte* data =
-      chunks_[s.chunk].data.get() + static_cast<std::size_t>(s.slot) * frame_bytes();
+  const std::byte* data = chunks_[s.chunk].data + static_cast<std::size_t>(s.slot) * frame_bytes();
   DescriptorView v;
   v.cells = grid_.cells();
   if (storage_ == HistogramStorage::kCompact) {
@@ -180,9 +183,10 @@ std::size_t FrameStore::bytes_per_frame() const {
 
 std::size_t FrameStore::allocated_bytes() const {
   std::size_t bytes = 0;
-  for (const Chunk& chunk : chunks_) bytes += chunk_size(chunk.frames, frame_bytes());
+  for (const Arena& arena : arenas_) bytes += arena.size;
   return bytes + pixels_.capacity() * sizeof(Count) + slots_.capacity() * sizeof(Slot) +
-         groups_.capacity() * sizeof(Group) + chunks_.capacity() * sizeof(Chunk);
+         groups_.capacity() * sizeof(Group) + chunks_.capacity() * sizeof(Chunk) +
+         arenas_.capacity() * sizeof(Arena);
 }
 
 void FrameStore::reserve(std::int64_t frames) {

@@ -48,10 +48,13 @@ class FrameStore {
 
   // Bytes of descriptor data held per frame.
   std::size_t bytes_per_frame() const;
-  // Bytes allocated for descriptors, pixel counts and the frame table: at
-  // least size() * bytes_per_frame(). A group's next chunk holds half as many
-  // frames as the group already has (1 at first, at most max_chunk_frames()),
-  // so each group has at most half as many empty slots as filled ones.
+  // Bytes allocated for descriptors (the arenas below), pixel counts and the
+  // tables: at least size() * bytes_per_frame(). A group's next chunk holds
+  // half as many frames as the group already has (1 at first, at most
+  // max_chunk_frames()), so each group has at most half as many empty slots as
+  // filled ones; chunks are cut from 16 MiB arenas, whose last few MiB stay
+  // unused when the next chunk does not fit. Memory is only committed as
+  // slots are written: unused arena pages cost address space, not RAM.
   std::size_t allocated_bytes() const;
   // Room for `frames` frames in the frame table (the chunks grow by group).
   void reserve(std::int64_t frames);
@@ -60,19 +63,28 @@ class FrameStore {
 
  private:
   static constexpr std::size_t kChunkBytes = std::size_t{4} << 20;
+  static constexpr std::size_t kArenaBytes = std::size_t{16} << 20;
 
-  // Chunks of 2 MiB or more are allocated aligned to 2 MiB and, on Linux,
-  // marked for transparent huge pages: a search reads stored frames in
-  // scattered 10-40 KB slots, and with 4 KiB pages most of them cost TLB
-  // misses. Smaller chunks are 64-byte aligned.
-  struct FreeChunk {
+  // Arenas are allocated aligned to 2 MiB and, on Linux, marked for
+  // transparent huge pages: a search reads stored frames in 10-40 KB slots,
+  // and with 4 KiB pages most of them cost TLB misses. Chunks are cut from
+  // them in order and never freed on their own, so a group's small first
+  // chunks sit on huge pages too, next to each other.
+  struct FreeArena {
     void operator()(std::byte* p) const;
   };
+  struct Arena {
+    std::unique_ptr<std::byte[], FreeArena> data;
+    std::size_t size = 0;  // bytes
+    std::size_t used = 0;  // bytes handed out to chunks
+  };
+  static Arena allocate_arena(std::size_t bytes);
   struct Chunk {
-    std::unique_ptr<std::byte[], FreeChunk> data;
+    std::byte* data = nullptr;  // inside arenas_[arena] at `offset`
+    std::uint32_t arena = 0;
+    std::size_t offset = 0;
     std::int64_t frames = 0;  // capacity in slots
   };
-  static Chunk allocate_chunk(std::int64_t frames, std::size_t frame_bytes);
   // Where a frame's histograms live: slot `slot` of chunk `chunk`.
   struct Slot {
     std::uint32_t chunk = 0;
@@ -94,6 +106,7 @@ class FrameStore {
   std::int64_t max_chunk_frames_ = 0;
   // Exact storage: cells * kBins 16-bit bins per slot; compact storage:
   // cells * kCompactBins 8-bit bins.
+  std::vector<Arena> arenas_;
   std::vector<Chunk> chunks_;
   std::vector<Slot> slots_;    // by frame id
   std::vector<Group> groups_;  // by group id

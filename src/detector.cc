@@ -99,8 +99,10 @@ Result Detector::process_gray(double convert_ms, std::int64_t start_ns) {
   verify(result);
   result.timings.verify_ms = ms_since(t);
   // A node's frames sit together in the store: scoring its members reads one
-  // run of memory (FrameStore groups).
-  store_.add(descriptor_, std::max<std::int64_t>(result.node, 0));
+  // run of memory (FrameStore groups). The group is only a placement, so a
+  // node the store has no group for (frames restored without their nodes)
+  // gets a new one rather than an error.
+  store_.add(descriptor_, std::clamp<std::int64_t>(result.node, 0, store_.groups()));
   if (result.frame == 0) width_ = gray_.width, height_ = gray_.height;
 
   result.loop = result.best.frame >= 0 && result.best.score >= options_.decision.threshold;

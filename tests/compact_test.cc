@@ -274,6 +274,35 @@ TEST(CompactDetector, RestoreFramePlacesFramesByNode) {
   EXPECT_EQ(d.size(), 9);
 }
 
+// restore_frame's node is only a placement: frames restored without it (all
+// in group 0) and nodes restored afterwards must still run.
+TEST(CompactDetector, NodesRestoredWithoutPlacementStillRun) {
+  DetectorOptions o;
+  o.segmentation.superpixel_size = 16;
+  o.descriptor.storage = HistogramStorage::kCompact;
+  o.search.mode = SearchMode::kDynamicNodes;
+  o.search.min_gap = 2;
+  o.search.nodes.alpha = 10;
+  const std::vector<Descriptor> exact = street(8, 40);
+  Detector d(o);
+  for (const Descriptor& e : exact) d.restore_frame(160, 120, compacted(e));
+  d.restore_nodes({{0, 2, 4}, {1, 3}, {5}, {6, 7}});
+  EXPECT_EQ(d.store().groups(), 1);
+  eval::SyntheticOptions wo;
+  wo.width = 160;
+  wo.height = 120;
+  const eval::SyntheticWorld world(wo);
+  for (int i = 0; i < 3; ++i) {
+    // alpha = 10: no node passes the first-frame test, so each query creates
+    // node 4 + i, which the store has no group for.
+    const Result r = d.process(world.render(40 * i));
+    EXPECT_TRUE(r.node_created);
+    EXPECT_EQ(r.node, 4 + i);
+    EXPECT_LE(d.store().groups(), d.nodes());
+  }
+  EXPECT_EQ(d.size(), 11);
+}
+
 TEST(CompactDetector, RestoreFrameChecksStorageAndSize) {
   DetectorOptions o;
   o.segmentation.superpixel_size = 16;

@@ -130,8 +130,8 @@ std::int64_t FrameStore::add(const Descriptor& descriptor, std::int64_t group) {
   if (new_arena) arenas_.push_back(std::move(arena));
   if (new_chunk) {
     Arena& last = arenas_.back();
-    chunks_.push_back({last.data.get() + last.used, static_cast<std::uint32_t>(arenas_.size() - 1),
-                       last.used, chunk_frames});
+    chunks_.push_back(
+        {last.data.get() + last.used, static_cast<std::uint32_t>(arenas_.size() - 1), last.used});
     last.used += chunk_size;
     g.chunk = static_cast<std::uint32_t>(chunks_.size() - 1);
     g.capacity = chunk_frames;

@@ -100,13 +100,14 @@ class Detector {
   // Stores frame size() as process() would have, without its image: its
   // descriptor and, when geometric verification is on, its ORB features
   // (GeometricVerifier::features; must be empty when it is off). Dynamic nodes
-  // and temporal places are restored separately, after the frames; `node` is
-  // the frame's dynamic node in nodes mode (0 otherwise), which places it
-  // beside the node's other frames in the store (0 <= node <= the highest node
-  // given so far + 1). It is a placement only: frames restored with node 0
-  // and their nodes restored afterwards give the same results, a little slower. Throws
-  // InvalidArgument (detector unchanged) for another frame size, a descriptor whose grid or sizes
-  // do not match, inconsistent features or a node out of range.
+  // and temporal places are restored separately, after the frames. `node` is
+  // the frame's dynamic node in nodes mode (0 otherwise): it places the frame
+  // beside the node's other frames in the store (0 <= node <= the highest
+  // node given so far + 1). It is a placement only: frames restored with node
+  // 0 and their nodes restored afterwards give the same results, a little
+  // slower. Throws InvalidArgument (detector unchanged) for another frame
+  // size, a descriptor whose grid or sizes do not match, inconsistent
+  // features or a node out of range.
   void restore_frame(int width, int height, const Descriptor& descriptor,
                      const std::vector<float>& points = {},
                      const std::vector<std::uint8_t>& orb = {}, std::int64_t node = 0);

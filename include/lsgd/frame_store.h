@@ -83,7 +83,6 @@ class FrameStore {
     std::byte* data = nullptr;  // inside arenas_[arena] at `offset`
     std::uint32_t arena = 0;
     std::size_t offset = 0;
-    std::int64_t frames = 0;  // capacity in slots
   };
   // Where a frame's histograms live: slot `slot` of chunk `chunk`.
   struct Slot {

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <limits>
 #include <opencv2/core.hpp>
 
 #include "internal/check.h"
@@ -21,10 +22,6 @@ double ms_since(std::int64_t start_ns) { return (now_ns() - start_ns) * 1e-6; }
 
 }  // namespace
 
-void DecisionOptions::check() const {
-  internal::check_range("decision.threshold", threshold, 0.0, 1.0);
-}
-
 void DetectorOptions::check() const {
   segmentation.check();
   descriptor.check();
@@ -34,9 +31,24 @@ void DetectorOptions::check() const {
   decision.check();
 }
 
+namespace {
+
+SequenceOptions sequence_options(const VerificationOptions& v) {
+  SequenceOptions s;
+  s.enabled = v.temporal;
+  s.frames = v.temporal_options.frames;
+  s.long_frames = v.temporal_options.long_frames;
+  s.tolerance = v.temporal_options.tolerance;
+  return s;
+}
+
+}  // namespace
+
 Detector::Detector(const DetectorOptions& options)
     : options_(options),
       segmenter_((options.check(), options.segmentation)),
+      evidence_(sequence_options(options.verification), options.search.min_gap,
+                options.search.mode == SearchMode::kDynamicNodes),
       temporal_(options.verification.temporal_options),
       geometric_(options.verification.geometric_options) {}
 
@@ -84,15 +96,20 @@ Result Detector::process_gray(double convert_ms, std::int64_t start_ns) {
 
   t = now_ns();
   const SimilarityMetric metric = options_.similarity.metric;
-  if (options_.search.mode == SearchMode::kDynamicNodes) {
+  const bool exhaustive = options_.search.mode == SearchMode::kExhaustive;
+  if (exhaustive) {
+    search_exhaustive(store_, descriptor_.view(), result.frame, options_.search, metric, scratch_,
+                      raw_, &row_);
+  } else {
     const auto outcome = nodes_.assign(store_, descriptor_.view(), result.frame, options_.search,
-                                       metric, scratch_, result.candidates);
+                                       metric, scratch_, raw_);
     result.node = outcome.node;
     result.node_created = outcome.created;
-  } else {
-    search_exhaustive(store_, descriptor_.view(), result.frame, options_.search, metric, scratch_,
-                      result.candidates);
   }
+  // After a restore the evidence is recomputed from the stored frames first.
+  if (evidence_.last_query() != result.frame - 1) evidence_.rebuild(store_, metric);
+  evidence_.add_query(store_, descriptor_.view(), result.frame, metric, exhaustive ? &row_ : nullptr);
+  score_candidates(result);
   result.timings.search_ms = ms_since(t);
 
   t = now_ns();
@@ -105,50 +122,155 @@ Result Detector::process_gray(double convert_ms, std::int64_t start_ns) {
   store_.add(descriptor_, std::clamp<std::int64_t>(result.node, 0, store_.groups()));
   if (result.frame == 0) width_ = gray_.width, height_ = gray_.height;
 
-  result.loop = result.best.frame >= 0 && result.best.score >= options_.decision.threshold;
   result.timings.total_ms = ms_since(start_ns);
   return result;
 }
 
-// Re-ranks the candidates by sequence score (temporal), then examines the
-// best ones in order and reports the first that every enabled gate accepts
-// (the temporal agreement first: it is the cheaper one).
-void Detector::verify(Result& result) {
-  const VerificationOptions& v = options_.verification;
-  if (v.geometric) geometric_.add(gray_);
-  if (v.temporal) {
-    temporal_.rescore(store_, descriptor_.view(), result.frame, result.candidates,
-                      options_.search.min_gap, options_.similarity.metric, options_.search.top_n,
-                      scratch_);
-    result.candidates.swap(scratch_);
-  }
-  if (!v.temporal && !v.geometric) {
-    if (!result.candidates.empty()) result.best = result.candidates.front();
+// Appearance scores in sigma (evidence.h): the temporal stage's sequence
+// evidence, else the standardised similarity of the search's candidates.
+void Detector::score_candidates(Result& result) {
+  const SimilarityMetric metric = options_.similarity.metric;
+  const int top_n = options_.search.top_n;
+  if (options_.verification.temporal) {
+    if (options_.search.mode == SearchMode::kExhaustive) {
+      evidence_.best_places(top_n, result.candidates);
+    } else {
+      evidence_.realign(store_, descriptor_.view(), raw_, metric, top_n, result.candidates);
+    }
     return;
   }
+  result.candidates.clear();
+  if (!evidence_.similarity_statistics().valid()) return;
+  for (const Candidate& c : raw_) result.candidates.push_back({c.frame, evidence_.single_frame(c.score)});
+}
+
+// Examines the best candidates (decision.h): the agreement gate (temporal,
+// agree > 0) and the geometric check can reject a candidate; a confirmed one
+// earns the bonuses. Geometry is only checked for a candidate that could
+// reach the threshold with them. When the previous frame declared a loop, the
+// best frame that continues it stands in for every candidate that does, and
+// is examined even when no candidate does (dynamic nodes may not hold it; a
+// weak continuation may rank low); the candidate that could earn the highest
+// score goes first. The first confirmed candidate is reported; when none is,
+// the best candidate the agreement gate let through is reported with its
+// appearance score (below the threshold if geometry rejected it), so that the
+// ranking of unconfirmed reports is the temporal stage's own.
+void Detector::verify(Result& result) {
+  const VerificationOptions& v = options_.verification;
+  const DecisionOptions& d = options_.decision;
+  const int tolerance = v.temporal_options.tolerance;
+  if (v.geometric) geometric_.add(gray_);
+  result.evidence.appearance = std::numeric_limits<double>::quiet_NaN();
   const std::size_t n =
       std::min(result.candidates.size(), static_cast<std::size_t>(v.max_candidates));
-  for (std::size_t i = 0; i < n && result.best.frame < 0; ++i) {
-    const Candidate& candidate = result.candidates[i];
-    bool accepted = true;
-    if (v.temporal) {
+
+  // 1. The agreement gate.
+  gated_.assign(n, 0);  // 1: the gate rejected it
+  if (v.temporal && v.temporal_options.agree > 0) {
+    for (std::size_t i = 0; i < n; ++i) {
+      const Candidate& c = result.candidates[i];
       const std::int64_t start = now_ns();
-      const auto check = temporal_.agree(result.frame, candidate);
+      const auto check = temporal_.agree(result.frame, c);
       result.verification.push_back(
-          {candidate.frame, "temporal", check.accepted, check.reason, ms_since(start)});
-      accepted = check.accepted;
+          {c.frame, "temporal", check.accepted, check.reason, ms_since(start)});
+      gated_[i] = check.accepted ? 0 : 1;
     }
-    if (accepted && v.geometric) {
-      const auto check = geometric_.verify(result.frame, candidate.frame);
-      result.verification.push_back(
-          {candidate.frame, "geometric", check.accepted, check.reason, check.ms});
-      accepted = check.accepted;
-    }
-    if (accepted) result.best = candidate;
   }
+  std::size_t first = 0;  // the best candidate the gate let through
+  while (first < n && gated_[first]) ++first;
+
+  // 2. Geometric confirmation, continuation first when it could score higher.
+  int first_inliers = -1;   // inliers of result.candidates[first] when checked
+  bool first_rejected = false;
+  if (v.geometric) {
+    const bool continuity = v.temporal && d.continuity_bonus > 0;
+    const auto continues = [&](const Candidate& c) {
+      return continuity && continuity_.continues(result.frame, c.frame, tolerance);
+    };
+    const Candidate continuation =
+        continuity && continuity_.continues(result.frame, continuity_.loop + 1, tolerance)
+            ? continuation_candidate(result.frame)
+            : Candidate{};
+    examined_.clear();
+    bool has_continuation = false;
+    for (std::size_t i = 0; i < n; ++i) {
+      if (gated_[i]) continue;
+      const Candidate& c = result.candidates[i];
+      if (continuation.frame >= 0 && continues(c)) {
+        if (has_continuation) continue;  // the window is examined once
+        has_continuation = true;
+        examined_.push_back(better(continuation, c) ? continuation : c);
+      } else {
+        examined_.push_back(c);
+      }
+    }
+    if (continuation.frame >= 0 && !has_continuation) examined_.push_back(continuation);
+    const auto potential = [&](const Candidate& c) {
+      return c.score + d.geometric_bonus + (continues(c) ? d.continuity_bonus : 0.0);
+    };
+    std::stable_sort(examined_.begin(), examined_.end(),
+                     [&](const Candidate& a, const Candidate& b) { return potential(a) > potential(b); });
+    for (const Candidate& c : examined_) {
+      const double score = potential(c);
+      if (score < d.threshold) break;  // sorted: no later one can reach it either
+      GeometricCheck check = geometric_.verify(result.frame, c.frame);
+      const bool continuing = continues(c);
+      if (continuing) {
+        const double needed = d.continuity_inliers * continuity_.inliers;
+        check.accepted = check.inliers > 0 && check.inliers >= needed;
+        check.reason += internal::concat("; continues the loop of frame ", result.frame - 1,
+                                         ": needs ", needed, " inliers (", d.continuity_inliers,
+                                         " of its average ", continuity_.inliers, ")");
+      }
+      result.verification.push_back({c.frame, "geometric", check.accepted, check.reason, check.ms});
+      if (first < n && c.frame == result.candidates[first].frame) {
+        first_inliers = check.inliers;
+        first_rejected = !check.accepted;
+      }
+      if (check.accepted) {
+        result.best = {c.frame, score};
+        result.evidence = {c.score, check.inliers, true, continuing};
+        break;
+      }
+    }
+  }
+
+  // 3. Nothing confirmed: the best candidate through the gate, unconfirmed.
+  if (result.best.frame < 0 && first < n) {
+    const Candidate& c = result.candidates[first];
+    double score = c.score;
+    if (first_rejected) score = std::min(score, std::nextafter(d.threshold, -1.0));
+    result.best = {c.frame, score};
+    result.evidence.appearance = c.score;
+    result.evidence.inliers = first_inliers;
+  }
+  result.loop = result.best.frame >= 0 && result.best.score >= d.threshold;
+  continuity_.record(result.frame, result.loop ? result.best.frame : -1, result.evidence.inliers,
+                     result.loop && result.evidence.continues);
   if (v.temporal) {
     temporal_.push(result.frame, result.candidates.empty() ? -1 : result.candidates.front().frame);
   }
+}
+
+// The best-scored frame that continues the previous frame's loop
+// (ContinuityState::continues; outside the temporal window), scored as the
+// candidates are; frame -1 when there is none.
+Candidate Detector::continuation_candidate(std::int64_t query) {
+  const SimilarityMetric metric = options_.similarity.metric;
+  const int tolerance = options_.verification.temporal_options.tolerance;
+  const std::int64_t limit = query - options_.search.min_gap;
+  Candidate best;
+  for (std::int64_t j = continuity_.loop; j <= std::min(limit - 1, continuity_.loop + 1 + tolerance);
+       ++j) {
+    const double score =
+        options_.verification.temporal
+            ? evidence_.sequence(store_, descriptor_.view(), j, metric)
+            : evidence_.single_frame(lsgd::similarity(descriptor_.view(), store_.view(j), metric));
+    if (std::isnan(score)) return {};
+    const Candidate c{j, score};
+    if (best.frame < 0 || better(c, best)) best = c;
+  }
+  return best;
 }
 
 void Detector::restore_frame(int width, int height, const Descriptor& descriptor,
@@ -199,7 +321,7 @@ void Detector::restore_frame(int width, int height, const Descriptor& descriptor
                             " ORB bytes: not 2 finite coordinates and 32 bytes per keypoint");
   }
   store_.add(descriptor, node);
-  if (options_.verification.geometric) geometric_.add_features(points, orb);
+  if (options_.verification.geometric) geometric_.add_features(points, orb, width, height);
   width_ = width;
   height_ = height;
 }
@@ -217,6 +339,16 @@ void Detector::restore_nodes(std::vector<std::vector<std::int64_t>> nodes) {
     }
   }
   nodes_.restore(std::move(nodes));
+}
+
+void Detector::restore_continuity(const ContinuityState& state) {
+  if (state.query != store_.size() - 1 || state.loop < -1 || state.loop >= state.query ||
+      !std::isfinite(state.inliers) || state.inliers < 0) {
+    internal::throw_invalid("restore_continuity: frame ", state.query, " with loop ", state.loop,
+                            " and ", state.inliers, " inliers, but ", store_.size(),
+                            " frames are stored");
+  }
+  continuity_ = state;
 }
 
 void Detector::restore_temporal(std::int64_t last_query, std::vector<std::int64_t> places) {

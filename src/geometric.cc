@@ -195,6 +195,11 @@ ModelFit fit_model(bool homography, const std::vector<cv::Point2f>& a,
 void GeometricOptions::check() const {
   internal::check_range("geometric.max_features", max_features, 16, 20000);
   internal::check_range("geometric.min_side", min_side, 0, 4096, "pixels");
+  internal::check_range("geometric.max_side", max_side, 0, 4096, "pixels");
+  if (max_side > 0 && min_side > max_side) {
+    internal::throw_invalid("geometric.min_side = ", min_side, " is above geometric.max_side = ",
+                            max_side, ": the working size needs min_side <= max_side (or max_side 0)");
+  }
   internal::check_range_open_low("geometric.ratio", ratio, 0.0, 1.0);
   internal::check_range_open_low("geometric.ransac_threshold", ransac_threshold, 0.0, 100.0,
                                  "pixels");
@@ -224,6 +229,7 @@ GeometricVerifier::GeometricVerifier(const GeometricVerifier& other)
       offsets_(other.offsets_),
       points_(other.points_),
       descriptors_(other.descriptors_),
+      scales_(other.scales_),
       orb_(std::make_unique<Orb>(other.options_)) {}
 
 GeometricVerifier& GeometricVerifier::operator=(const GeometricVerifier& other) {
@@ -241,20 +247,14 @@ void GeometricVerifier::add(const GrayImage& image) {
   const cv::Mat gray(image.height, image.width, CV_8UC1,
                      const_cast<std::uint8_t*>(image.pixels.data()));
   cv::Mat work = gray;
-  double sx = 1, sy = 1;  // upscaled pixels per original pixel, per axis
-  const int shorter = std::min(image.width, image.height);
-  const int longer = std::max(image.width, image.height);
-  if (shorter < options_.min_side) {
-    // Cap the longer side so that a thin strip is not blown up to gigabytes.
-    const double scale = std::min(static_cast<double>(options_.min_side) / shorter,
-                                  static_cast<double>(kMaxImageSide) / longer);
-    if (scale > 1) {
-      const int w = std::max(1, static_cast<int>(std::lround(image.width * scale)));
-      const int h = std::max(1, static_cast<int>(std::lround(image.height * scale)));
-      cv::resize(gray, work, cv::Size(w, h), 0, 0, cv::INTER_LINEAR);
-      sx = static_cast<double>(w) / image.width;
-      sy = static_cast<double>(h) / image.height;
-    }
+  double sx = 1, sy = 1;  // working pixels per original pixel, per axis
+  const double scale = working_scale(image.width, image.height);
+  if (scale != 1) {
+    const int w = std::max(1, static_cast<int>(std::lround(image.width * scale)));
+    const int h = std::max(1, static_cast<int>(std::lround(image.height * scale)));
+    cv::resize(gray, work, cv::Size(w, h), 0, 0, scale > 1 ? cv::INTER_LINEAR : cv::INTER_AREA);
+    sx = static_cast<double>(w) / image.width;
+    sy = static_cast<double>(h) / image.height;
   }
 
   std::vector<cv::KeyPoint> keypoints;
@@ -281,18 +281,36 @@ void GeometricVerifier::add(const GrayImage& image) {
   // Append with the vectors' geometric growth (an exact reserve() per frame
   // would copy the whole store on every add); roll back if an append throws.
   const std::size_t old_points = points_.size(), old_descriptors = descriptors_.size();
+  const std::size_t old_frames = scales_.size();
   try {
     points_.insert(points_.end(), points.begin(), points.end());
     for (int i = 0; i < n; ++i) {
       const std::uint8_t* row = descriptors.ptr<std::uint8_t>(i);
       descriptors_.insert(descriptors_.end(), row, row + kDescriptorBytes);
     }
+    scales_.push_back(static_cast<float>(scale));
     offsets_.push_back(offsets_.back() + n);
   } catch (...) {
     points_.resize(old_points);
     descriptors_.resize(old_descriptors);
+    scales_.resize(old_frames);
     throw;
   }
+}
+
+double GeometricVerifier::working_scale(int width, int height) const {
+  const int shorter = std::min(width, height);
+  const int longer = std::max(width, height);
+  if (shorter <= 0) return 1;
+  double scale = 1;
+  if (shorter < options_.min_side) {
+    scale = static_cast<double>(options_.min_side) / shorter;
+  } else if (options_.max_side > 0 && shorter > options_.max_side) {
+    scale = static_cast<double>(options_.max_side) / shorter;
+  }
+  // Cap the longer side so that a thin strip is not blown up to gigabytes.
+  if (scale > 1) scale = std::max(1.0, std::min(scale, static_cast<double>(kMaxImageSide) / longer));
+  return scale;
 }
 
 std::int64_t GeometricVerifier::size() const {
@@ -348,8 +366,11 @@ GeometricCheck GeometricVerifier::verify(std::int64_t query, std::int64_t candid
   // 2. Both models; the better one decides. H wins ties: when every match has
   // zero displacement F is degenerate (any skew-symmetric F fits) while H = I
   // is exact, and for a rotation or a plane H is the right model anyway.
-  const ModelFit h = fit_model(true, a, b, options_.ransac_threshold);
-  const ModelFit f = fit_model(false, a, b, options_.ransac_threshold);
+  // The threshold is in working-size pixels; the points are in original ones.
+  const double threshold =
+      options_.ransac_threshold / scales_[static_cast<std::size_t>(query)];
+  const ModelFit h = fit_model(true, a, b, threshold);
+  const ModelFit f = fit_model(false, a, b, threshold);
   const bool use_h = h.inliers >= f.inliers;
   const ModelFit& best = use_h ? h : f;
   check.inliers = best.inliers;
@@ -382,7 +403,11 @@ void GeometricVerifier::features(std::int64_t frame, std::vector<float>& points,
 }
 
 void GeometricVerifier::add_features(const std::vector<float>& points,
-                                     const std::vector<std::uint8_t>& descriptors) {
+                                     const std::vector<std::uint8_t>& descriptors, int width,
+                                     int height) {
+  if (width <= 0 || height <= 0) {
+    internal::throw_invalid("GeometricVerifier::add_features: image size ", width, "x", height);
+  }
   const std::size_t n = points.size() / 2;
   if (points.size() != 2 * n || descriptors.size() != n * kDescriptorBytes) {
     internal::throw_invalid("GeometricVerifier::add_features: ", points.size(), " coordinates and ",
@@ -393,13 +418,16 @@ void GeometricVerifier::add_features(const std::vector<float>& points,
     if (!std::isfinite(v)) internal::throw_invalid("GeometricVerifier::add_features: coordinate ", v);
   }
   const std::size_t old_points = points_.size(), old_descriptors = descriptors_.size();
+  const std::size_t old_frames = scales_.size();
   try {
     points_.insert(points_.end(), points.begin(), points.end());
     descriptors_.insert(descriptors_.end(), descriptors.begin(), descriptors.end());
+    scales_.push_back(static_cast<float>(working_scale(width, height)));
     offsets_.push_back(offsets_.back() + static_cast<std::int64_t>(n));
   } catch (...) {
     points_.resize(old_points);
     descriptors_.resize(old_descriptors);
+    scales_.resize(old_frames);
     throw;
   }
 }

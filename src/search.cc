@@ -73,13 +73,16 @@ bool better(const Candidate& a, const Candidate& b) {
 
 void search_exhaustive(const FrameStore& store, const DescriptorView& query, std::int64_t query_id,
                        const SearchOptions& options, SimilarityMetric metric,
-                       std::vector<Candidate>& scratch, std::vector<Candidate>& out) {
+                       std::vector<Candidate>& scratch, std::vector<Candidate>& out,
+                       std::vector<double>* row) {
   scratch.clear();
-  const std::int64_t limit = std::min(store.size(), query_id - options.min_gap);
+  const std::int64_t limit = std::max<std::int64_t>(0, std::min(store.size(), query_id - options.min_gap));
+  if (row != nullptr) row->resize(static_cast<std::size_t>(limit));
   score_frames(
-      store, query, metric, std::max<std::int64_t>(limit, 0), [](std::int64_t j) { return j; },
+      store, query, metric, limit, [](std::int64_t j) { return j; },
       [&](std::int64_t, std::int64_t j, double score) {
         scratch.push_back({j, score});
+        if (row != nullptr) (*row)[static_cast<std::size_t>(j)] = score;
       });
   keep_best(scratch, options.top_n, out);
 }

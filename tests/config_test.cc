@@ -41,11 +41,15 @@ void expect_equal(const DetectorOptions& a, const DetectorOptions& b) {
   const GeometricOptions& gb = b.verification.geometric_options;
   EXPECT_EQ(ga.max_features, gb.max_features);
   EXPECT_EQ(ga.min_side, gb.min_side);
+  EXPECT_EQ(ga.max_side, gb.max_side);
   EXPECT_EQ(ga.ratio, gb.ratio);
   EXPECT_EQ(ga.ransac_threshold, gb.ransac_threshold);
   EXPECT_EQ(ga.min_inliers, gb.min_inliers);
   EXPECT_EQ(ga.min_inlier_ratio, gb.min_inlier_ratio);
   EXPECT_EQ(a.decision.threshold, b.decision.threshold);
+  EXPECT_EQ(a.decision.geometric_bonus, b.decision.geometric_bonus);
+  EXPECT_EQ(a.decision.continuity_bonus, b.decision.continuity_bonus);
+  EXPECT_EQ(a.decision.continuity_inliers, b.decision.continuity_inliers);
 }
 
 // Options that differ from the defaults in every field.
@@ -68,11 +72,15 @@ DetectorOptions custom_options() {
   o.verification.temporal_options = {11, 4, 2, 30};
   o.verification.geometric_options.max_features = 321;
   o.verification.geometric_options.min_side = 100;
+  o.verification.geometric_options.max_side = 480;
   o.verification.geometric_options.ratio = 0.77;
   o.verification.geometric_options.ransac_threshold = 2.5;
   o.verification.geometric_options.min_inliers = 33;
   o.verification.geometric_options.min_inlier_ratio = 0.4;
   o.decision.threshold = 0.7000000000000001;
+  o.decision.geometric_bonus = 1.0 / 3.0;
+  o.decision.continuity_bonus = 0;
+  o.decision.continuity_inliers = 0.55;
   return o;
 }
 
@@ -141,7 +149,8 @@ TEST(ParseConfig, ToYamlRoundTrips) {
   for (const char* key :
        {"segmentation:", "superpixel_size: 40", "iterations: 3", "intensity_scale: 20",
         "distance_scale: 1.0", "metric: reference", "mode: exhaustive", "min_gap: 50", "top_n: 10",
-        "threshold_0: 0.9", "alpha: 0.8", "beta: 1.0", "decision:", "threshold: 0.841", "stages: temporal"}) {
+        "threshold_0: 0.9", "alpha: 0.8", "beta: 1.0", "decision:", "threshold: 7.0", "geometric_bonus: 3.5", "continuity_bonus: 2.5",
+        "continuity_inliers: 0.2", "stages: temporal,geometric", "max_side: 240"}) {
     EXPECT_NE(text.find(key), std::string::npos) << key << " missing in:\n" << text;
   }
 }
@@ -232,7 +241,9 @@ TEST(ParseConfig, DescriptorStorage) {
 TEST(ParseConfig, OutOfRangeValuesAreInvalidArguments) {
   for (const char* text :
        {"segmentation: {superpixel_size: 0}", "segmentation: {iterations: 0}",
-        "decision: {threshold: 1.5}", "search: {top_n: 0}", "search: {min_gap: -1}",
+        "decision: {threshold: 0}", "decision: {threshold: 1001}", "decision: {geometric_bonus: -1}",
+        "decision: {continuity_inliers: 0}", "verification: {geometric: {max_side: 100}}",
+        "search: {top_n: 0}", "search: {min_gap: -1}",
         "segmentation: {intensity_scale: -1.0}", "decision: {threshold: .nan}",
         "segmentation: {superpixel_size: 99999999999}"}) {
     expect_error<InvalidArgument>(text, {kSource});

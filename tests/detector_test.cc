@@ -57,8 +57,16 @@ DetectorOptions small_options(SearchMode mode = SearchMode::kExhaustive, std::in
   o.search.mode = mode;
   o.search.min_gap = min_gap;
   o.search.top_n = top_n;
-  o.verification.temporal = false;  // the faithful method: these tests check the search itself
+  // The faithful method: these tests check the search itself.
+  o.verification.temporal = false;
+  o.verification.geometric = false;
   return o;
+}
+
+// Processes `n` distinct frames: scores are standardised only once a query
+// has kMinCalibration candidates (evidence.h).
+void calibrate(Detector& det, int n = static_cast<int>(kMinCalibration) + 4) {
+  for (int i = 0; i < n; ++i) det.process(random_frame(5000 + i));
 }
 
 void expect_same_result(const Result& a, const Result& b) {
@@ -88,19 +96,22 @@ ImageView view_of_mat(const cv::Mat& m) {
 }
 
 TEST(Detector, FrameIsItsOwnBestMatch) {
-  Detector det(small_options(SearchMode::kExhaustive, 3, 5));
+  const DetectorOptions o = small_options(SearchMode::kExhaustive, 3, 5);
+  Detector det(o);
   const cv::Mat a = random_frame(1);
   EXPECT_EQ(det.process(a).frame, 0);
-  for (int i = 0; i < 6; ++i) det.process(random_frame(100 + i));
+  calibrate(det);
   const Result r = det.process(a);
-  EXPECT_EQ(r.frame, 7);
+  EXPECT_EQ(r.frame, 1 + static_cast<int>(kMinCalibration) + 4);
   EXPECT_EQ(r.best.frame, 0);
-  EXPECT_EQ(r.best.score, 1.0);
-  EXPECT_TRUE(r.loop);
+  EXPECT_GT(r.best.score, 3.0);  // standardised: far above the other frames
+  EXPECT_EQ(r.loop, r.best.score >= o.decision.threshold);
   ASSERT_FALSE(r.candidates.empty());
   EXPECT_EQ(r.candidates[0].frame, 0);
-  for (std::size_t i = 1; i < r.candidates.size(); ++i) EXPECT_LT(r.candidates[i].score, 1.0);
-  EXPECT_EQ(det.similarity(0, 7), 1.0);
+  for (std::size_t i = 1; i < r.candidates.size(); ++i) {
+    EXPECT_LT(r.candidates[i].score, r.candidates[0].score);
+  }
+  EXPECT_EQ(det.similarity(0, r.frame), 1.0);
 }
 
 TEST(Detector, OwnMatchInEveryMetricAndMode) {
@@ -115,10 +126,11 @@ TEST(Detector, OwnMatchInEveryMetricAndMode) {
       Detector det(o);
       const cv::Mat a = random_frame(2);
       det.process(a);
-      for (int i = 0; i < 4; ++i) det.process(random_frame(200 + i));
+      calibrate(det);
       const Result r = det.process(a);
       EXPECT_EQ(r.best.frame, 0);
-      EXPECT_EQ(r.best.score, 1.0);
+      ASSERT_GE(r.candidates.size(), 2u);
+      EXPECT_GT(r.best.score, r.candidates[1].score);
     }
   }
 }
@@ -131,19 +143,21 @@ TEST(Detector, GrayVersionOfABgrFrameMatchesIt) {
   cv::Mat bgra;
   cv::cvtColor(a, bgra, cv::COLOR_BGR2BGRA);
   det.process(a);
-  det.process(random_frame(4));
+  calibrate(det);
   const Result rg = det.process(gray);
   EXPECT_EQ(rg.best.frame, 0);
-  EXPECT_EQ(rg.best.score, 1.0);
+  EXPECT_EQ(det.similarity(0, rg.frame), 1.0);
   const Result ra = det.process(bgra);
   EXPECT_EQ(ra.best.frame, 0);
-  EXPECT_EQ(ra.best.score, 1.0);
+  EXPECT_EQ(det.similarity(0, ra.frame), 1.0);
 }
 
 TEST(Detector, Deterministic) {
   for (SearchMode mode : {SearchMode::kExhaustive, SearchMode::kDynamicNodes}) {
     SCOPED_TRACE(to_string(mode));
     Detector a(small_options(mode, 2, 4)), b(small_options(mode, 2, 4));
+    calibrate(a);
+    calibrate(b);
     for (int i = 0; i < 14; ++i) {
       const cv::Mat f = random_frame(300 + i % 5);  // revisits
       const Result ra = a.process(f);
@@ -160,9 +174,10 @@ TEST(Detector, ExhaustiveAndNodesAgreeWhenOneNode) {
   dn.search.nodes.alpha = 0;
   dn.search.nodes.beta = 0;
   Detector a(ex), b(dn);
-  for (int i = 0; i < 16; ++i) {
+  const int n = static_cast<int>(kMinCalibration) + 16;
+  for (int i = 0; i < n; ++i) {
     SCOPED_TRACE(i);
-    const cv::Mat f = random_frame(400 + (i * 7) % 9);
+    const cv::Mat f = random_frame(400 + (i * 7) % 45);
     const Result ra = a.process(f);
     const Result rb = b.process(f);
     EXPECT_EQ(ra.node, -1);
@@ -179,7 +194,7 @@ TEST(Detector, ExhaustiveAndNodesAgreeWhenOneNode) {
   }
   EXPECT_EQ(a.nodes(), 0);
   EXPECT_EQ(b.nodes(), 1);
-  EXPECT_EQ(b.dynamic_nodes().members(0).size(), 16u);
+  EXPECT_EQ(b.dynamic_nodes().members(0).size(), static_cast<std::size_t>(n));
 }
 
 TEST(Detector, OtherSizeThrowsAndLeavesDetectorUnchanged) {
@@ -250,29 +265,37 @@ TEST(Detector, RejectedFirstFrameLeavesDetectorEmpty) {
 
 TEST(Detector, ResultFields) {
   DetectorOptions o = small_options(SearchMode::kExhaustive, 2, 3);
-  o.decision.threshold = 0.9;
+  o.decision.threshold = 2.5;
   Detector det(o);
-  for (int i = 0; i < 12; ++i) {
+  const int calibrated = 2 + static_cast<int>(kMinCalibration);  // the first query with scores
+  for (int i = 0; i < calibrated + 10; ++i) {
     SCOPED_TRACE(i);
-    const Result r = det.process(random_frame(800 + i % 4));
+    const Result r = det.process(random_frame(800 + i % 20));  // revisits every 20 frames
     EXPECT_EQ(r.frame, i);
     EXPECT_EQ(det.size(), i + 1);
-    EXPECT_LE(r.candidates.size(), 3u);
-    // Candidates j < i - 2 exist from frame 3 on.
-    EXPECT_EQ(r.candidates.size(), static_cast<std::size_t>(std::max(0, std::min(3, i - 2))));
+    EXPECT_EQ(r.candidates.size(), i >= calibrated ? 3u : 0u);
     if (r.candidates.empty()) {
       EXPECT_EQ(r.best.frame, -1);
       EXPECT_FALSE(r.loop);
+      EXPECT_TRUE(std::isnan(r.evidence.appearance));
     } else {
       EXPECT_EQ(r.best.frame, r.candidates[0].frame);
       EXPECT_EQ(r.best.score, r.candidates[0].score);
-      EXPECT_EQ(r.loop, r.best.score >= 0.9);
+      EXPECT_EQ(r.evidence.appearance, r.best.score);
+      EXPECT_EQ(r.evidence.inliers, -1);
+      EXPECT_FALSE(r.evidence.confirmed);
+      EXPECT_EQ(r.loop, r.best.score >= 2.5);
     }
+    // Scores are the similarities standardised over every candidate.
+    double sum = 0, squares = 0;
+    for (int j = 0; j < i - 2; ++j) sum += det.similarity(i, j);
+    const double mean = sum / std::max(1, i - 2);
+    for (int j = 0; j < i - 2; ++j) squares += std::pow(det.similarity(i, j) - mean, 2);
+    const double sd = std::sqrt(squares / std::max(1, i - 2));
     for (std::size_t k = 0; k < r.candidates.size(); ++k) {
       EXPECT_LT(r.candidates[k].frame, i - 2);
-      EXPECT_GE(r.candidates[k].score, 0.0);
-      EXPECT_LE(r.candidates[k].score, 1.0);
-      EXPECT_EQ(r.candidates[k].score, det.similarity(i, r.candidates[k].frame));
+      EXPECT_NEAR(r.candidates[k].score, (det.similarity(i, r.candidates[k].frame) - mean) / sd,
+                  1e-9);
       if (k > 0) {
         EXPECT_TRUE(better(r.candidates[k - 1], r.candidates[k]));
       }
@@ -286,33 +309,35 @@ TEST(Detector, ResultFields) {
     EXPECT_GE(t.search_ms, 0.0);
     EXPECT_GE(t.total_ms, t.segment_ms);
     EXPECT_GE(t.total_ms + 1e-9, t.convert_ms + t.segment_ms + t.describe_ms + t.search_ms);
+    if (i >= calibrated) {
+      // Revisits (period 20) beyond the window are exact matches, best first.
+      EXPECT_EQ((i - r.best.frame) % 20, 0);
+      EXPECT_EQ(det.similarity(i, r.best.frame), 1.0);
+    }
   }
-  // Revisits (period 4) beyond the window are exact matches and loops.
-  const Result r = det.process(random_frame(800));  // frame 12 == frame 0, 4, 8
-  EXPECT_EQ(r.best.frame, 0);
-  EXPECT_EQ(r.best.score, 1.0);
-  EXPECT_TRUE(r.loop);
-  ASSERT_EQ(r.candidates.size(), 3u);
-  EXPECT_EQ(r.candidates[1].frame, 4);
-  EXPECT_EQ(r.candidates[2].frame, 8);
   EXPECT_EQ(det.nodes(), 0);
 }
 
+// A loop is declared exactly when the score reaches the threshold.
 TEST(Detector, LoopDecisionThresholdBoundaries) {
-  DetectorOptions o = small_options(SearchMode::kExhaustive, 0, 1);
-  o.decision.threshold = 1.0;
-  Detector strict(o);
-  o.decision.threshold = 0.0;
-  Detector lax(o);
-  const cv::Mat a = random_frame(900), b = random_frame(901);
-  EXPECT_FALSE(strict.process(a).loop);  // no candidate
-  EXPECT_FALSE(lax.process(a).loop);
-  const Result sb = strict.process(b);
-  const Result lb = lax.process(b);
-  EXPECT_LT(sb.best.score, 1.0);
-  EXPECT_FALSE(sb.loop);
-  EXPECT_TRUE(lb.loop);  // any candidate is >= 0
-  EXPECT_TRUE(strict.process(a).loop);  // identical: score exactly 1 >= 1
+  const auto scores = [](double threshold) {
+    DetectorOptions o = small_options(SearchMode::kExhaustive, 0, 1);
+    o.decision.threshold = threshold;
+    Detector det(o);
+    calibrate(det);
+    std::vector<Result> out;
+    for (int i = 0; i < 6; ++i) out.push_back(det.process(random_frame(5000 + i)));  // revisits
+    return out;
+  };
+  const auto base = scores(7.0);
+  for (std::size_t i = 0; i < base.size(); ++i) {
+    SCOPED_TRACE(i);
+    const double s = base[i].best.score;
+    ASSERT_GT(s, 0.0);
+    EXPECT_TRUE(scores(s)[i].loop);  // score >= threshold
+    EXPECT_FALSE(scores(std::nextafter(s, 2 * s))[i].loop);
+    EXPECT_EQ(scores(s)[i].best.score, s);  // the threshold does not change the score
+  }
 }
 
 TEST(Detector, NodeModeReportsNodes) {
@@ -401,13 +426,17 @@ TEST(Detector, SimilarityAccessor) {
 
 TEST(Detector, OptionsValidatedAtConstruction) {
   DetectorOptions o;
-  o.decision.threshold = 1.5;
+  o.decision.threshold = 0;
   EXPECT_THROW(o.check(), InvalidArgument);
   EXPECT_THROW(Detector{o}, InvalidArgument);
   const std::string msg = message_of<InvalidArgument>([&] { Detector d(o); });
   EXPECT_NE(msg.find("threshold"), std::string::npos) << msg;
-  o.decision.threshold = -0.1;
+  o.decision.threshold = 1001;
   EXPECT_THROW(Detector{o}, InvalidArgument);
+  o = DetectorOptions{};
+  o.verification.geometric_options.min_side = 300;  // above max_side 240
+  EXPECT_NE(message_of<InvalidArgument>([&] { Detector d(o); }).find("max_side"),
+            std::string::npos);
   o = DetectorOptions{};
   o.segmentation.superpixel_size = 1;
   EXPECT_THROW(Detector{o}, InvalidArgument);

@@ -14,15 +14,19 @@
 namespace lsgd::eval {
 namespace {
 
-// Ten frames; frame i shows noise pattern i % 3, so frames 3 apart are
-// identical. Frame 2 cannot be read and frame 5 has another size.
+// 50 frames: frames 0..39 show noise patterns 0..39 (enough candidates to
+// calibrate the scores, evidence.h), frame 40 + k shows pattern k % 3, so it is
+// identical to frame k % 3 and to the frames 3 apart. Frame 2 cannot be read
+// and frame 45 has another size.
+constexpr std::int64_t kBase = 40;
 FrameSource flawed_source() {
   FrameSource source;
-  source.frames = 10;
+  source.frames = kBase + 10;
   source.load = [](std::int64_t i) -> cv::Mat {
     if (i == 2) throw FormatError("image 'f2.png' is truncated");
-    if (i == 5) return cv::Mat(32, 32, CV_8UC1, cv::Scalar(7));
-    const GrayImage g = test::random_image(64, 48, static_cast<std::uint64_t>(i % 3) + 1);
+    if (i == kBase + 5) return cv::Mat(32, 32, CV_8UC1, cv::Scalar(7));
+    const std::int64_t pattern = i < kBase ? i : (i - kBase) % 3;
+    const GrayImage g = test::random_image(64, 48, static_cast<std::uint64_t>(pattern) + 1);
     return cv::Mat(48, 64, CV_8UC1, const_cast<std::uint8_t*>(g.pixels.data())).clone();
   };
   source.name = [](std::int64_t i) { return "f" + std::to_string(i) + ".png"; };
@@ -35,6 +39,7 @@ DetectorOptions options() {
   o.search.min_gap = 0;
   o.search.top_n = 20;
   o.verification.temporal = false;
+  o.verification.geometric = false;
   return o;
 }
 
@@ -61,30 +66,32 @@ TEST(RunDetector, SkipsBadFramesAndKeepsSourceIndices) {
                      skipped.push_back(frame);
                      errors.push_back(name + ": " + error);
                    });
-  EXPECT_EQ(skipped, (std::vector<std::int64_t>{2, 5}));
+  EXPECT_EQ(skipped, (std::vector<std::int64_t>{2, kBase + 5}));
   EXPECT_NE(errors[0].find("f2.png: image 'f2.png' is truncated"), std::string::npos);
-  EXPECT_NE(errors[1].find("f5.png"), std::string::npos);
+  EXPECT_NE(errors[1].find("f45.png"), std::string::npos);
   EXPECT_NE(errors[1].find("size"), std::string::npos) << errors[1];
-  EXPECT_EQ(detector.size(), 8);  // the skipped frames never reached the detector
-  ASSERT_EQ(records.size(), 10u);
-  for (std::int64_t i = 0; i < 10; ++i) {
+  EXPECT_EQ(detector.size(), kBase + 8);  // the skipped frames never reached the detector
+  ASSERT_EQ(records.size(), static_cast<std::size_t>(kBase + 10));
+  for (std::int64_t i = 0; i < kBase + 10; ++i) {
     EXPECT_EQ(records[i].frame, i);
-    EXPECT_EQ(records[i].skipped, i == 2 || i == 5);
+    EXPECT_EQ(records[i].skipped, i == 2 || i == kBase + 5);
   }
   EXPECT_EQ(records[2].reported.frame, -1);
-  // Frame 7 shows pattern 1, as frames 1 and 4 do: its identical candidates
-  // are named by source index (4), not by detector id (3).
-  std::set<std::int64_t> identical;
-  for (const Candidate& c : records[7].candidates) {
-    if (c.score == 1.0) identical.insert(c.frame);
-  }
-  EXPECT_EQ(identical, (std::set<std::int64_t>{1, 4}));
-  EXPECT_EQ(records[7].reported.frame, 1);  // ties go to the older frame
-  identical.clear();  // frame 9, pattern 0: frames 0, 3 and 6 (detector ids 0, 2, 4)
-  for (const Candidate& c : records[9].candidates) {
-    if (c.score == 1.0) identical.insert(c.frame);
-  }
-  EXPECT_EQ(identical, (std::set<std::int64_t>{0, 3, 6}));
+  // The identical candidates of a frame score highest, equally.
+  const auto identical = [&](std::int64_t frame) {
+    std::set<std::int64_t> out;
+    const auto& c = records[static_cast<std::size_t>(frame)].candidates;
+    for (const Candidate& x : c) {
+      if (x.score == c.front().score) out.insert(x.frame);
+    }
+    return out;
+  };
+  // Frame 47 shows pattern 1, as frames 1, 41 and 44 do: its identical
+  // candidates are named by source index (41, 44), not by detector id (40, 43).
+  EXPECT_EQ(identical(kBase + 7), (std::set<std::int64_t>{1, kBase + 1, kBase + 4}));
+  EXPECT_EQ(records[kBase + 7].reported.frame, 1);  // ties go to the older frame
+  // Frame 49, pattern 0: frames 0, 40, 43 and 46 (detector ids 0, 39, 42, 44).
+  EXPECT_EQ(identical(kBase + 9), (std::set<std::int64_t>{0, kBase, kBase + 3, kBase + 6}));
 }
 
 }  // namespace

@@ -7,7 +7,9 @@
 #include <memory>
 #include <vector>
 
+#include "lsgd/decision.h"
 #include "lsgd/descriptor.h"
+#include "lsgd/evidence.h"
 #include "lsgd/frame_store.h"
 #include "lsgd/image.h"
 #include "lsgd/search.h"
@@ -20,17 +22,6 @@ class Mat;
 }
 
 namespace lsgd {
-
-struct DecisionOptions {
-  // A reported candidate whose score is >= threshold is a loop; in [0, 1].
-  // Scores are similarities in [0, 1] (see SimilarityMetric), averaged along
-  // the sequence when temporal verification runs. 0.841 is (rounded up) the
-  // smallest value with precision 1 on corridor and the synthetic street with
-  // the default (temporal, 16 + 48 frames) verification in both search modes;
-  // without verification use 0.87 (docs/results.md).
-  double threshold = 0.841;
-  void check() const;
-};
 
 struct DetectorOptions {
   SegmentationOptions segmentation;
@@ -54,12 +45,20 @@ struct Timings {
 
 struct Result {
   std::int64_t frame = -1;  // id of the processed frame (0, 1, 2, ...)
-  bool loop = false;        // best.frame >= 0 and best.score >= decision.threshold
-  // The reported candidate: the most similar one that every enabled
-  // verification stage accepted (its score is the temporal sequence score when
-  // that stage runs, else the similarity); frame -1 when there is none.
+  // The loop decision: best.frame >= 0 and best.score >= decision.threshold.
+  bool loop = false;
+  // The reported candidate: the first one (best first, up to
+  // verification.max_candidates) that no enabled stage rejected, preferring
+  // one the geometric stage confirmed. Its score is the loop score of
+  // decision.h, in standard deviations (sigma): its appearance score plus the
+  // bonuses it earned. Frame -1 when there is none (also while the map is too
+  // short to calibrate scores: kMinCalibration candidates).
   Candidate best;
-  std::vector<Candidate> candidates;       // raw search result: up to search.top_n, best first
+  LoopEvidence evidence;  // what the score of `best` is made of
+  // Candidates best first, up to search.top_n, scored by appearance (sigma):
+  // sequence evidence with the temporal stage (distinct places in exhaustive
+  // search), the standardised similarity without it (evidence.h).
+  std::vector<Candidate> candidates;
   std::vector<StageVerdict> verification;  // every stage verdict, in the order examined
   std::int64_t node = -1;                  // dynamic node joined or created; -1 when exhaustive
   bool node_created = false;
@@ -97,6 +96,9 @@ class Detector {
   int height() const { return height_; }
   const TemporalVerifier& temporal_verifier() const { return temporal_; }
   const GeometricVerifier& geometric_verifier() const { return geometric_; }
+  // The decision's state after the last frame (loop declared for it, its
+  // loop's inliers).
+  const ContinuityState& continuity() const { return continuity_; }
   // Stores frame size() as process() would have, without its image: its
   // descriptor and, when geometric verification is on, its ORB features
   // (GeometricVerifier::features; must be empty when it is off). Dynamic nodes
@@ -117,10 +119,16 @@ class Detector {
   // Temporal places (TemporalVerifier::restore); last_query must be size() - 1.
   // Only with temporal verification.
   void restore_temporal(std::int64_t last_query, std::vector<std::int64_t> places);
+  // The decision's state (continuity()); state.query must be size() - 1 and
+  // state.loop an earlier frame or -1. The appearance statistics need no
+  // restoring: the next process() recomputes them from the stored frames.
+  void restore_continuity(const ContinuityState& state);
 
  private:
   Result process_gray(double convert_ms, std::int64_t start_ns);
+  void score_candidates(Result& result);
   void verify(Result& result);
+  Candidate continuation_candidate(std::int64_t query);
 
   DetectorOptions options_;
   int width_ = 0;  // size of the first frame; every later frame must match
@@ -128,8 +136,10 @@ class Detector {
   Segmenter segmenter_;
   FrameStore store_;
   DynamicNodes nodes_;
+  AppearanceEvidence evidence_;
   TemporalVerifier temporal_;
   GeometricVerifier geometric_;
+  ContinuityState continuity_;
   // Scratch reused across frames (no allocation per frame once warm).
   GrayImage gray_;
   Segmentation segmentation_;
@@ -137,6 +147,10 @@ class Detector {
   Descriptor exact_;       // the frame's histograms as computed
   Descriptor descriptor_;  // ... and as stored (descriptor.storage)
   std::vector<Candidate> scratch_;
+  std::vector<Candidate> raw_;  // the search's candidates, by similarity
+  std::vector<Candidate> examined_;  // candidates verify() checks geometrically, in order
+  std::vector<char> gated_;          // verify(): 1 for a candidate the agreement gate rejected
+  std::vector<double> row_;     // exhaustive: the query's similarity to every candidate
 };
 
 }  // namespace lsgd

@@ -26,13 +26,17 @@ namespace lsgd {
 struct GeometricOptions {
   // ORB keypoints kept per frame, [16, 20000].
   int max_features = 500;
-  // Images whose shorter side is below this are upscaled (bilinear) before
-  // ORB, so small frames (160x120) still yield keypoints; pixels, [0, 4096]
-  // (0: never upscale).
+  // The working size: ORB runs on the image scaled so that its shorter side
+  // is within [min_side, max_side]. Small frames (160x120) are upscaled
+  // (bilinear) so they still yield keypoints; large ones are downscaled (area
+  // average), so ORB costs the same ~2-4 ms on every camera and inlier counts
+  // mean the same on every camera. Pixels, [0, 4096]; min_side 0: never
+  // upscale; max_side 0: never downscale; else min_side <= max_side.
   int min_side = 240;
+  int max_side = 240;
   // Lowe's ratio test: a match is kept when best distance < ratio * second best; (0, 1].
   double ratio = 0.8;
-  // RANSAC reprojection threshold in pixels of the original image; (0, 100].
+  // RANSAC reprojection threshold in pixels of the working-size image; (0, 100].
   double ransac_threshold = 3.0;
   // A candidate is accepted when the better model (F or H) has at least this
   // many inliers; [8, 10000].
@@ -96,10 +100,15 @@ class GeometricVerifier {
   // throws InvalidArgument for ids not added.
   void features(std::int64_t frame, std::vector<float>& points,
                 std::vector<std::uint8_t>& descriptors) const;
-  // Appends the next frame's features as add() computed them, without the
-  // image. Throws InvalidArgument, leaving the verifier unchanged, when
-  // points.size() != 2 n or descriptors.size() != 32 n, or a point is not finite.
-  void add_features(const std::vector<float>& points, const std::vector<std::uint8_t>& descriptors);
+  // Appends the next frame's features as add() computed them from a
+  // width x height image, without the image. Throws InvalidArgument, leaving
+  // the verifier unchanged, when points.size() != 2 n or descriptors.size() !=
+  // 32 n, a point is not finite, or the size is not positive.
+  void add_features(const std::vector<float>& points, const std::vector<std::uint8_t>& descriptors,
+                    int width, int height);
+  // Working-size pixels per original pixel of an image of this size (the
+  // scale ORB ran at).
+  double working_scale(int width, int height) const;
 
  private:
   friend struct GeometricVerifierTestPeer;  // tests read the stored keypoints
@@ -109,6 +118,7 @@ class GeometricVerifier {
   std::vector<std::int64_t> offsets_{0};
   std::vector<float> points_;              // x, y per keypoint, original image pixels
   std::vector<std::uint8_t> descriptors_;  // 32 bytes per keypoint (ORB)
+  std::vector<float> scales_;              // working_scale() of each frame
   struct Orb;                              // cv::ORB, kept out of this header
   std::unique_ptr<Orb> orb_;               // created once, in the constructor
 };

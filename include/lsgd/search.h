@@ -50,10 +50,13 @@ struct Candidate {
 bool better(const Candidate& a, const Candidate& b);
 
 // Keeps the top_n best candidates of all frames j < query - min_gap.
-// `scratch` is reused between calls; the result is written best first.
+// `scratch` is reused between calls; the result is written best first. When
+// `row` is given it receives every candidate's similarity, in frame order
+// (row[j] for j < query - min_gap).
 void search_exhaustive(const FrameStore& store, const DescriptorView& query, std::int64_t query_id,
                        const SearchOptions& options, SimilarityMetric metric,
-                       std::vector<Candidate>& scratch, std::vector<Candidate>& out);
+                       std::vector<Candidate>& scratch, std::vector<Candidate>& out,
+                       std::vector<double>* row = nullptr);
 
 // Dynamic nodes: groups of similar earlier frames, created online.
 class DynamicNodes {

@@ -258,9 +258,20 @@ void read_search(const YAML::Node& node, const std::string& source, SearchOption
 }
 
 void read_decision(const YAML::Node& node, const std::string& source, DecisionOptions& o) {
-  read_map(node, source, "decision", {{"threshold", [&](const YAML::Node& v, const std::string& k) {
-                                         o.threshold = read_double(v, source, k);
-                                       }}});
+  read_map(node, source, "decision",
+           {{"threshold",
+             [&](const YAML::Node& v, const std::string& k) { o.threshold = read_double(v, source, k); }},
+            {"geometric_bonus",
+             [&](const YAML::Node& v, const std::string& k) {
+               o.geometric_bonus = read_double(v, source, k);
+             }},
+            {"continuity_bonus",
+             [&](const YAML::Node& v, const std::string& k) {
+               o.continuity_bonus = read_double(v, source, k);
+             }},
+            {"continuity_inliers", [&](const YAML::Node& v, const std::string& k) {
+               o.continuity_inliers = read_double(v, source, k);
+             }}});
 }
 
 void read_temporal(const YAML::Node& node, const std::string& source, TemporalOptions& o) {
@@ -282,6 +293,8 @@ void read_geometric(const YAML::Node& node, const std::string& source, Geometric
         [&](const YAML::Node& v, const std::string& k) { o.max_features = read_int(v, source, k); }},
        {"min_side",
         [&](const YAML::Node& v, const std::string& k) { o.min_side = read_int(v, source, k); }},
+       {"max_side",
+        [&](const YAML::Node& v, const std::string& k) { o.max_side = read_int(v, source, k); }},
        {"ratio",
         [&](const YAML::Node& v, const std::string& k) { o.ratio = read_double(v, source, k); }},
        {"ransac_threshold",
@@ -460,12 +473,16 @@ std::string to_yaml(const DetectorOptions& options) {
       << ", tolerance: " << v.temporal_options.tolerance
       << ", agree: " << v.temporal_options.agree << "}\n"
       << "  geometric: {max_features: " << geo.max_features << ", min_side: " << geo.min_side
+      << ", max_side: " << geo.max_side
       << ", ratio: " << format_double(geo.ratio)
       << ", ransac_threshold: " << format_double(geo.ransac_threshold)
       << ", min_inliers: " << geo.min_inliers
       << ", min_inlier_ratio: " << format_double(geo.min_inlier_ratio) << "}\n"
       << "decision:\n"
-      << "  threshold: " << format_double(options.decision.threshold) << "\n";
+      << "  threshold: " << format_double(options.decision.threshold) << "\n"
+      << "  geometric_bonus: " << format_double(options.decision.geometric_bonus) << "\n"
+      << "  continuity_bonus: " << format_double(options.decision.continuity_bonus) << "\n"
+      << "  continuity_inliers: " << format_double(options.decision.continuity_inliers) << "\n";
   return out.str();
 }
 

@@ -9,6 +9,7 @@
 #include <zlib.h>
 
 #include <algorithm>
+#include <cmath>
 #include <cstring>
 #include <deque>
 #include <limits>
@@ -105,6 +106,11 @@ std::uint32_t crc_blob(std::uint32_t crc, const void* data, std::int64_t n) {
 
 struct RowBytes {
   std::int64_t id = 0, session = 0, node = kNull, place = kNull;
+  // The decision's state after the frame (format 2); loop_inliers NULL: a row
+  // written by format 1, whose checksum does not cover them.
+  std::int64_t loop = kNull;
+  bool has_loop_inliers = false;
+  double loop_inliers = 0;
   const void* name = nullptr;
   std::int64_t name_size = 0;
   const void* hist = nullptr;
@@ -116,13 +122,21 @@ struct RowBytes {
 };
 
 // CRC-32 of a frame row: id, session, node, place as int64 little-endian
-// (NULL = INT64_MIN), then name, histogram, pixels, features as blobs.
+// (NULL = INT64_MIN), then (rows with loop_inliers, format 2) loop as int64
+// and loop_inliers' IEEE-754 bits as int64, then name, histogram, pixels,
+// features as blobs.
 std::uint32_t row_checksum(const RowBytes& r) {
   std::uint32_t crc = static_cast<std::uint32_t>(crc32(0, Z_NULL, 0));
   crc = crc_int(crc, r.id);
   crc = crc_int(crc, r.session);
   crc = crc_int(crc, r.node);
   crc = crc_int(crc, r.place);
+  if (r.has_loop_inliers) {
+    std::int64_t bits = 0;
+    std::memcpy(&bits, &r.loop_inliers, sizeof bits);
+    crc = crc_int(crc, r.loop);
+    crc = crc_int(crc, bits);
+  }
   crc = crc_blob(crc, r.name, r.name_size);
   crc = crc_blob(crc, r.hist, r.hist_size);
   crc = crc_blob(crc, r.pixels, r.pixels_size);
@@ -229,15 +243,23 @@ const char* kSchema =
     "CREATE TABLE frames("
     "id INTEGER PRIMARY KEY, session INTEGER NOT NULL, name TEXT NOT NULL,"
     "histogram BLOB NOT NULL, pixels BLOB NOT NULL, node INTEGER, place INTEGER,"
-    "features BLOB, crc32 INTEGER NOT NULL);";
+    "features BLOB, crc32 INTEGER NOT NULL, loop INTEGER, loop_inliers REAL);";
 
+// Format 1 files have no loop columns: they read as NULL.
 const char* kSelectFrames =
-    "SELECT id, session, name, histogram, pixels, node, place, features, crc32 FROM frames "
-    "ORDER BY id";
+    "SELECT id, session, name, histogram, pixels, node, place, features, crc32, loop, "
+    "loop_inliers FROM frames ORDER BY id";
+const char* kSelectFramesV1 =
+    "SELECT id, session, name, histogram, pixels, node, place, features, crc32, NULL, NULL "
+    "FROM frames ORDER BY id";
 
 const char* kInsertFrame =
-    "INSERT INTO frames(id, session, name, histogram, pixels, node, place, features, crc32) "
-    "VALUES(?1, ?2, ?3, ?4, ?5, ?6, ?7, ?8, ?9)";
+    "INSERT INTO frames(id, session, name, histogram, pixels, node, place, features, crc32, "
+    "loop, loop_inliers) VALUES(?1, ?2, ?3, ?4, ?5, ?6, ?7, ?8, ?9, ?10, ?11)";
+
+// Format 1 -> 2, inside the caller's transaction.
+const char* kUpgradeV1 =
+    "ALTER TABLE frames ADD COLUMN loop INTEGER; ALTER TABLE frames ADD COLUMN loop_inliers REAL;";
 
 const std::vector<std::string> kIntegerMeta = {"format_version", "width",     "height",
                                                "grid_rows",      "grid_cols", "checksum"};
@@ -255,6 +277,7 @@ struct Database::Impl {
   GridSize grid{0, 0};
   std::int64_t frames = 0;
   std::int64_t last_session = -1;
+  int format = kDatabaseFormatVersion;
   std::string checked_yaml;  // options YAML already found compatible
   Statement insert;
   // Scratch of append(), reused between frames.
@@ -296,8 +319,10 @@ struct Database::Impl {
   }
 
   void load_header();
+  // `continuity`: the decision's state after the frame, or null when unknown.
   void insert_frame(const Detector& detector, std::int64_t frame, std::int64_t session,
-                    const std::string& name, std::int64_t node, std::int64_t place);
+                    const std::string& name, std::int64_t node, std::int64_t place,
+                    const ContinuityState* continuity);
 };
 
 void Database::Impl::load_header() {
@@ -356,6 +381,7 @@ void Database::Impl::load_header() {
                  ") reads (", kDatabaseFormatVersion, "): use a newer lsgd");
   }
   if (format < 1) format_error(path, "unknown format version ", format);
+  this->format = static_cast<int>(format);
   for (const char* key :
        {"library_version", "options", "width", "height", "grid_rows", "grid_cols", "checksum"}) {
     if (meta.find(key) == meta.end()) format_error(path, "meta has no ", key);
@@ -376,7 +402,11 @@ void Database::Impl::load_header() {
     // default (verification.temporal.long_frames came with default 48).
     DetectorOptions before;
     before.verification.temporal_options.long_frames = 0;
+    before.verification.geometric_options.max_side = 0;  // came with format 2
     options = parse_config(meta["options"], "database " + path + " meta options", before);
+    // Format 1 decision thresholds were raw similarities: this version's
+    // decision (in sigma) replaces them.
+    if (format < 2) options.decision = DecisionOptions{};
   } catch (const InvalidArgument& e) {
     throw FormatError(e.what());
   }
@@ -398,7 +428,10 @@ void Database::Impl::load_header() {
                  options.segmentation.superpixel_size);
   }
   // 4. Frames: columns present, ids dense.
-  { Statement columns(db, path, (std::string(kSelectFrames) + " LIMIT 0").c_str()); }
+  {
+    const char* select = format < 2 ? kSelectFramesV1 : kSelectFrames;
+    Statement columns(db, path, (std::string(select) + " LIMIT 0").c_str());
+  }
   {
     Statement count(db, path, "SELECT count(*), min(id), max(id) FROM frames");
     step_read(db, count.get(), path);
@@ -437,6 +470,23 @@ Database Database::open(const std::string& path, Mode mode) {
   sqlite3_extended_result_codes(impl->db, 1);
   sqlite3_busy_timeout(impl->db, 5000);
   impl->load_header();
+  if (impl->writable && impl->format < 2) {
+    // Upgrade in place, atomically: the columns and the new meta or nothing.
+    Impl& m = *impl;
+    exec_write(m.db, path, "BEGIN IMMEDIATE");
+    try {
+      exec_write(m.db, path, kUpgradeV1);
+      m.meta["format_version"] = std::to_string(kDatabaseFormatVersion);
+      m.meta["options"] = to_yaml(m.options);
+      m.write_meta();
+      exec_write(m.db, path, "COMMIT");
+    } catch (...) {
+      sqlite3_exec(m.db, "ROLLBACK", nullptr, nullptr, nullptr);
+      m.meta["format_version"] = std::to_string(m.format);
+      throw;
+    }
+    m.format = kDatabaseFormatVersion;
+  }
   if (impl->writable) {
     // WAL: an append writes its pages once, sequentially, to the log; FULL:
     // the log is synced at every commit, so a committed frame survives a
@@ -554,7 +604,7 @@ void Database::check_compatible(const DetectorOptions& options) const {
   const auto theirs = flat_options(options);
   const std::string stages = verification_stages(stored.verification);
   for (const auto& [key, value] : mine) {
-    if (key == "decision.threshold") continue;
+    if (starts_with(key, "decision.")) continue;
     if (stored.search.mode != SearchMode::kDynamicNodes && starts_with(key, "search.nodes."))
       continue;
     if (!stored.verification.temporal && starts_with(key, "verification.temporal.")) continue;
@@ -565,7 +615,7 @@ void Database::check_compatible(const DetectorOptions& options) const {
     if (given != value) {
       internal::throw_invalid("database ", impl_->path, ": option ", key, " = ", given,
                               " differs from the stored ", value,
-                              " (only decision.threshold may change when resuming)");
+                              " (only decision.* may change when resuming)");
     }
   }
 }
@@ -607,7 +657,8 @@ void Database::restore(Detector& detector) const {
   std::vector<std::vector<std::int64_t>> nodes;
   std::deque<std::int64_t> places;  // last `keep` places; kNull when not recorded
 
-  Statement stmt(m.db, m.path, kSelectFrames);
+  Statement stmt(m.db, m.path, m.format < 2 ? kSelectFramesV1 : kSelectFrames);
+  ContinuityState continuity;  // after the last row that recorded it
   std::int64_t id = 0;
   for (; step_read(m.db, stmt.get(), m.path); ++id) {
     sqlite3_stmt* s = stmt.get();
@@ -662,6 +713,18 @@ void Database::restore(Detector& detector) const {
     } else if (type(7) != SQLITE_NULL) {
       bad("has ORB features but geometric verification is off");
     }
+    if (type(10) == SQLITE_FLOAT || type(10) == SQLITE_INTEGER) {
+      if (type(9) != SQLITE_INTEGER) bad("loop is not an integer");
+      row.loop = sqlite3_column_int64(s, 9);
+      row.has_loop_inliers = true;
+      row.loop_inliers = sqlite3_column_double(s, 10);
+      if (row.loop < -1 || row.loop >= id || !std::isfinite(row.loop_inliers) ||
+          row.loop_inliers < 0) {
+        bad("loop ", row.loop, " with ", row.loop_inliers, " inliers is not an earlier frame or -1");
+      }
+    } else if (type(10) != SQLITE_NULL || type(9) != SQLITE_NULL) {
+      bad("loop_inliers is not a number");
+    }
     const std::string name = column_text(s, 2);  // after the blobs: text conversion is not needed
     row.name = name.data();
     row.name_size = static_cast<std::int64_t>(name.size());
@@ -704,6 +767,8 @@ void Database::restore(Detector& detector) const {
       places.push_back(row.place);
       if (places.size() > keep) places.pop_front();
     }
+    continuity = ContinuityState{};
+    if (row.has_loop_inliers) continuity = {id, row.loop, row.loop_inliers};
   }
   if (id != m.frames) {
     format_error(m.path, "read ", id, " frames but the database held ", m.frames, " at open");
@@ -719,6 +784,10 @@ void Database::restore(Detector& detector) const {
       }
       detector.restore_temporal(id - 1, {places.begin(), places.end()});
     }
+    // A last row without the decision's state (format 1, or written by
+    // append_all): the next frame starts no loop's continuation.
+    if (continuity.query < 0) continuity = {id - 1, -1, 0};
+    detector.restore_continuity(continuity);
   } catch (const InvalidArgument& e) {
     throw FormatError(concat("database ", m.path, ": ", e.what()));
   }
@@ -726,7 +795,7 @@ void Database::restore(Detector& detector) const {
 
 void Database::Impl::insert_frame(const Detector& detector, std::int64_t frame,
                                   std::int64_t session, const std::string& name, std::int64_t node,
-                                  std::int64_t place) {
+                                  std::int64_t place, const ContinuityState* continuity) {
   const DescriptorView view = detector.store().view(frame);
   const auto cells = static_cast<std::size_t>(view.cells);
   hist_bytes.clear();
@@ -751,6 +820,11 @@ void Database::Impl::insert_frame(const Detector& detector, std::int64_t frame,
   row.session = session;
   row.node = node;
   row.place = place;
+  if (continuity != nullptr) {
+    row.loop = continuity->loop;
+    row.has_loop_inliers = true;
+    row.loop_inliers = continuity->inliers;
+  }
   row.name = name.data();
   row.name_size = static_cast<std::int64_t>(name.size());
   row.hist = hist_bytes.data();
@@ -785,6 +859,10 @@ void Database::Impl::insert_frame(const Detector& detector, std::int64_t frame,
     }
   }
   sqlite3_bind_int64(s, 9, row_checksum(row));
+  if (continuity != nullptr) {
+    sqlite3_bind_int64(s, 10, row.loop);
+    sqlite3_bind_double(s, 11, row.loop_inliers);
+  }
   const int rc = sqlite3_step(s);
   sqlite3_reset(s);
   if (rc != SQLITE_DONE)
@@ -850,7 +928,7 @@ void Database::append(const Detector& detector, const Result& result, std::int64
       }
     }
     try {
-      m.insert_frame(detector, result.frame, session, name, node, place);
+      m.insert_frame(detector, result.frame, session, name, node, place, &detector.continuity());
     } catch (...) {
       m.meta = saved;
       throw;
@@ -906,7 +984,8 @@ void Database::append_all(const Detector& detector, std::int64_t session) {
         const std::int64_t node = node_of.empty() ? kNull : node_of[static_cast<std::size_t>(f)];
         const std::int64_t place =
             f >= first_place ? places[static_cast<std::size_t>(f - first_place)] : kNull;
-        m.insert_frame(detector, f, session, "", node, place);
+        m.insert_frame(detector, f, session, "", node, place,
+                       f + 1 == detector.size() ? &detector.continuity() : nullptr);
       }
     } catch (...) {
       m.meta = saved;

@@ -49,8 +49,12 @@
 
 namespace lsgd::io {
 
-// The format this lsgd writes and the newest it reads.
-constexpr int kDatabaseFormatVersion = 1;
+// The format this lsgd writes and the newest it reads. Version 2 keeps the
+// loop decision's state per frame (Detector::continuity()); a version 1 file
+// is read as it is and, opened for writing, upgraded in place (two columns
+// added, its decision options reset to this version's defaults: version 1
+// thresholds were raw similarities, version 2's are in sigma).
+constexpr int kDatabaseFormatVersion = 2;
 
 struct DatabaseInfo {
   std::string path;

@@ -1,0 +1,159 @@
+// Appearance evidence that transfers across cameras (beyond the paper).
+//
+// A raw similarity's range moves with the camera and the scene (loops score
+// 0.74-0.78 on one camera, 0.85-0.88 on another), so no fixed threshold on it
+// transfers. Every score the detector reports is therefore standardised
+// against the query's own distribution of scores over the map:
+//
+// 1. Similarities. For query i, s(i, j) over its candidates j < i - w has a
+//    mean m_i and a standard deviation sd_i; z(i, j) = (s(i, j) - m_i) / sd_i
+//    is in standard deviations (sigma) and does not depend on the camera's
+//    similarity range.
+// 2. Sequences (the temporal stage). The sequence score of candidate j is the
+//    mean of z along the diagonal, A_L(i, j) = 1/L sum_{t<L} z(i-t, j-t), for
+//    L = frames and long_frames (their mean when both are on). A term that does
+//    not exist (j - t < 0, or a query too early to have a distribution) counts
+//    as 0, the mean of z, and the divisor stays L: a candidate near the start
+//    of the map has no noisier score than any other (no edge effect).
+// 3. Sequence scores are standardised once more against their own
+//    distribution over the query's candidates: R(i, j) = (A(i, j) - mean_j A)
+//    / sd_j A. Averaging correlated frames narrows A by an amount that depends
+//    on the frame rate and the scene; R measures how far the candidate's
+//    sequence stands out from every other place the query could be, in sigma.
+//
+// The distributions come from every candidate in exhaustive search. With
+// dynamic nodes (which do not score every frame) they come from a sample of
+// diagonals: offsets d = i - j of min_gap + 1 + k * stride, at most
+// kMaxSampledDiagonals of them (the stride doubles as the map grows). Along a
+// diagonal the offset is constant, so each diagonal's running sums carry from
+// query to query in both modes.
+//
+// All sums are exact: z is kept in fixed point (1/1024 sigma), so a detector
+// restored from a database (which recomputes the last long_frames queries'
+// rows from the stored descriptors) scores exactly as one that never stopped.
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <deque>
+#include <unordered_map>
+#include <vector>
+
+#include "lsgd/frame_store.h"
+#include "lsgd/search.h"
+#include "lsgd/similarity.h"
+
+namespace lsgd {
+
+// A query's scores are standardised only when it has at least this many
+// candidates (exhaustive) or sampled diagonals (nodes); before that it
+// reports no candidate.
+constexpr std::int64_t kMinCalibration = 32;
+// Dynamic nodes: the most diagonals sampled per query (between half this and this).
+constexpr std::int64_t kMaxSampledDiagonals = 512;
+
+struct ScoreStatistics {
+  double mean = 0;
+  double sd = 0;            // population standard deviation
+  std::int64_t count = 0;   // values the statistics were computed over
+  bool valid() const { return count >= kMinCalibration && sd > 0; }
+  double standardise(double value) const { return (value - mean) / sd; }
+};
+
+// Mean and standard deviation of values[0 .. n).
+ScoreStatistics statistics(const double* values, std::size_t n);
+
+struct SequenceOptions {
+  bool enabled = true;    // sequence scores (temporal stage); false: single-frame z only
+  int frames = 16;        // L of the short sequence
+  int long_frames = 48;   // L of the long sequence, 0: off
+  int tolerance = 2;      // realignment and distinct-place radius, frames
+};
+
+// The appearance evidence of one detector: per-query statistics and the
+// sequence sums along the kept diagonals. Not thread-safe.
+class AppearanceEvidence {
+ public:
+  AppearanceEvidence(const SequenceOptions& sequence, std::int64_t min_gap, bool sample);
+
+  // Adds query `query` (== store.size(): the frame is not stored yet, its
+  // descriptor is `descriptor`). `row`, when given, holds s(query, j) for
+  // every j < query - min_gap in frame order (exhaustive search already
+  // computed it); otherwise the kept diagonals are scored here. Queries must
+  // come in order; a detector restored from storage is brought up to date
+  // first (rebuild()).
+  void add_query(const FrameStore& store, const DescriptorView& descriptor, std::int64_t query,
+                 SimilarityMetric metric, const std::vector<double>* row);
+
+  // Statistics of the last added query's similarities (level 1) and, with
+  // sequences on, of its sequence scores (level 2).
+  const ScoreStatistics& similarity_statistics() const { return level1_; }
+  const ScoreStatistics& sequence_statistics() const { return level2_; }
+
+  // Standardised single-frame score of candidate `frame` for the last query,
+  // given its raw similarity; NaN when the query is not calibrated.
+  double single_frame(double similarity) const;
+
+  // Sequence evidence R of candidate `frame` of the last query (the query's
+  // descriptor again, for the t = 0 term); NaN when not calibrated.
+  double sequence(const FrameStore& store, const DescriptorView& descriptor, std::int64_t frame,
+                  SimilarityMetric metric);
+
+  // Exhaustive only: the best `top_n` distinct places of the last query by
+  // sequence evidence (local maxima of A at least 2 * tolerance + 2 frames
+  // apart), best first, scores R. Empty when not calibrated.
+  void best_places(int top_n, std::vector<Candidate>& out) const;
+
+  // Re-aligns each raw candidate within +-tolerance frames to its best
+  // sequence, drops duplicates, and writes the best top_n by R (nodes mode).
+  void realign(const FrameStore& store, const DescriptorView& descriptor,
+               const std::vector<Candidate>& raw, SimilarityMetric metric, int top_n,
+               std::vector<Candidate>& out);
+
+  // Recomputes the state of the last max(frames, long_frames) queries from
+  // the stored frames, as if they had been added one by one (after a detector
+  // was restored from storage). The queries are store.size() - L .. store.size() - 1.
+  void rebuild(const FrameStore& store, SimilarityMetric metric);
+
+  // The last query added (-1: none).
+  std::int64_t last_query() const { return last_query_; }
+  // Diagonals kept for `query`: offsets min_gap + 1 + k * stride(query), k < count.
+  std::int64_t stride(std::int64_t query) const;
+  std::int64_t diagonals(std::int64_t query) const;
+
+ private:
+  struct Row {
+    std::int64_t query = -1;
+    ScoreStatistics stats;
+    std::vector<std::int32_t> z;  // fixed point, one per kept diagonal (slot order)
+  };
+  std::int32_t quantise(const ScoreStatistics& stats, double similarity) const;
+  void push_row(Row row);
+  // Fills `out` with s(query, query - d) for the kept diagonals of `query`.
+  void diagonal_similarities(const FrameStore& store, const DescriptorView& descriptor,
+                             std::int64_t query, SimilarityMetric metric,
+                             const std::vector<double>* row, std::vector<double>& out) const;
+  double sequence_mean(std::int64_t short_sum, std::int64_t long_sum) const;
+  // z(a, b) for a stored query a (in the ring) and frame b, fixed point.
+  std::int32_t stored_z(const FrameStore& store, std::int64_t a, std::int64_t b,
+                        SimilarityMetric metric);
+  const Row* ring_row(std::int64_t query) const;
+
+  SequenceOptions options_;
+  std::int64_t min_gap_ = 0;
+  bool sample_ = false;
+  int span_ = 1;                   // rows kept: max(frames, long_frames) with sequences, else 1
+  std::int64_t last_query_ = -1;
+  std::int64_t stride_ = 1;        // current stride (sampled mode)
+  std::deque<Row> ring_;           // the last span_ queries, oldest first
+  std::vector<std::int32_t> short_sum_, long_sum_;  // per kept diagonal
+  std::vector<double> sequence_;   // A per kept diagonal of the last query
+  ScoreStatistics level1_, level2_;
+  // Similarities of stored pairs (a, b) for the sequences of candidates off
+  // the kept diagonals (nodes mode); pairs no later sequence reaches are dropped.
+  std::unordered_map<std::uint64_t, double> pairs_;
+  std::vector<double> scratch_;
+  std::vector<Candidate> scored_;  // sequence scores computed for the last query
+};
+
+}  // namespace lsgd

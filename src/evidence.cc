@@ -1,0 +1,305 @@
+#include "lsgd/evidence.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+#include "internal/check.h"
+
+namespace lsgd {
+namespace {
+
+constexpr double kZScale = 1024.0;   // fixed point: 1/1024 sigma
+constexpr double kZLimit = 64.0;     // |z| is clamped to 64 sigma
+constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+
+// Offsets d of the candidates of `query`: min_gap + 1 .. query.
+std::int64_t offsets(std::int64_t query, std::int64_t min_gap) {
+  return std::max<std::int64_t>(0, query - min_gap);
+}
+
+}  // namespace
+
+ScoreStatistics statistics(const double* values, std::size_t n) {
+  ScoreStatistics s;
+  s.count = static_cast<std::int64_t>(n);
+  if (n == 0) return s;
+  double sum = 0;
+  for (std::size_t i = 0; i < n; ++i) sum += values[i];
+  s.mean = sum / static_cast<double>(n);
+  double squares = 0;
+  for (std::size_t i = 0; i < n; ++i) squares += (values[i] - s.mean) * (values[i] - s.mean);
+  s.sd = std::sqrt(squares / static_cast<double>(n));
+  return s;
+}
+
+AppearanceEvidence::AppearanceEvidence(const SequenceOptions& sequence, std::int64_t min_gap,
+                                       bool sample)
+    : options_(sequence), min_gap_(min_gap), sample_(sample) {
+  if (min_gap < 0) internal::throw_invalid("AppearanceEvidence: min_gap ", min_gap, " < 0");
+  if (options_.enabled) {
+    if (options_.frames < 1 || options_.long_frames < 0 || options_.tolerance < 0) {
+      internal::throw_invalid("AppearanceEvidence: sequence lengths ", options_.frames, ", ",
+                              options_.long_frames, " and tolerance ", options_.tolerance,
+                              " are out of range");
+    }
+    span_ = std::max(options_.frames, options_.long_frames);
+  }
+}
+
+std::int64_t AppearanceEvidence::stride(std::int64_t query) const {
+  if (!sample_) return 1;
+  std::int64_t s = 1;
+  while ((offsets(query, min_gap_) + s - 1) / s > kMaxSampledDiagonals) s *= 2;
+  return s;
+}
+
+std::int64_t AppearanceEvidence::diagonals(std::int64_t query) const {
+  const std::int64_t s = stride(query);
+  return (offsets(query, min_gap_) + s - 1) / s;
+}
+
+std::int32_t AppearanceEvidence::quantise(const ScoreStatistics& stats, double similarity) const {
+  if (!stats.valid()) return 0;
+  const double z = std::clamp(stats.standardise(similarity), -kZLimit, kZLimit);
+  return static_cast<std::int32_t>(std::lround(z * kZScale));
+}
+
+void AppearanceEvidence::diagonal_similarities(const FrameStore& store,
+                                               const DescriptorView& descriptor,
+                                               std::int64_t query, SimilarityMetric metric,
+                                               const std::vector<double>* row,
+                                               std::vector<double>& out) const {
+  const std::int64_t n = diagonals(query);
+  const std::int64_t s = stride(query);
+  out.resize(static_cast<std::size_t>(n));
+  const std::int64_t newest = query - min_gap_ - 1;  // frame of slot 0
+  if (row != nullptr) {
+    if (static_cast<std::int64_t>(row->size()) != offsets(query, min_gap_) || s != 1) {
+      internal::throw_invalid("AppearanceEvidence: a row of ", row->size(),
+                              " similarities for query ", query, ", expected ",
+                              offsets(query, min_gap_));
+    }
+    for (std::int64_t k = 0; k < n; ++k) out[static_cast<std::size_t>(k)] = (*row)[static_cast<std::size_t>(newest - k)];
+    return;
+  }
+  constexpr std::int64_t kBatch = 16;
+  DescriptorView views[kBatch];
+  for (std::int64_t k0 = 0; k0 < n; k0 += kBatch) {
+    const std::int64_t m = std::min(kBatch, n - k0);
+    for (std::int64_t k = 0; k < m; ++k) views[k] = store.view(newest - (k0 + k) * s);
+    similarities(descriptor, views, static_cast<std::size_t>(m), metric,
+                 out.data() + static_cast<std::ptrdiff_t>(k0));
+  }
+}
+
+double AppearanceEvidence::sequence_mean(std::int64_t short_sum, std::int64_t long_sum) const {
+  const double a = static_cast<double>(short_sum) / (kZScale * options_.frames);
+  if (options_.long_frames == 0) return a;
+  return 0.5 * (a + static_cast<double>(long_sum) / (kZScale * options_.long_frames));
+}
+
+void AppearanceEvidence::push_row(Row row) {
+  const std::int64_t i = row.query;
+  const std::size_t n = row.z.size();
+  if (short_sum_.size() < n) {
+    short_sum_.resize(n, 0);
+    long_sum_.resize(n, 0);
+  }
+  const bool two = options_.long_frames > 0;
+  for (std::size_t k = 0; k < n; ++k) {
+    short_sum_[k] += row.z[k];
+    if (two) long_sum_[k] += row.z[k];
+  }
+  const auto leave = [&](std::int64_t query, std::vector<std::int32_t>& sums) {
+    if (const Row* old = ring_row(query)) {
+      const std::size_t m = std::min(old->z.size(), sums.size());
+      for (std::size_t k = 0; k < m; ++k) sums[k] -= old->z[k];
+    }
+  };
+  leave(i - options_.frames, short_sum_);
+  if (two) leave(i - options_.long_frames, long_sum_);
+  ring_.push_back(std::move(row));
+  while (static_cast<int>(ring_.size()) > span_) ring_.pop_front();
+}
+
+const AppearanceEvidence::Row* AppearanceEvidence::ring_row(std::int64_t query) const {
+  if (ring_.empty() || query < ring_.front().query || query > ring_.back().query) return nullptr;
+  return &ring_[static_cast<std::size_t>(query - ring_.front().query)];
+}
+
+void AppearanceEvidence::add_query(const FrameStore& store, const DescriptorView& descriptor,
+                                   std::int64_t query, SimilarityMetric metric,
+                                   const std::vector<double>* row) {
+  if (query != store.size() || query != last_query_ + 1) {
+    internal::throw_invalid("AppearanceEvidence::add_query: query ", query, " after query ",
+                            last_query_, " with ", store.size(), " frames stored");
+  }
+  diagonal_similarities(store, descriptor, query, metric, row, scratch_);
+  level1_ = statistics(scratch_.data(), scratch_.size());
+  level2_ = ScoreStatistics{};
+  scored_.clear();
+  last_query_ = query;
+  if (!options_.enabled) return;
+
+  // The stride doubled: keep every other diagonal in the ring and the sums.
+  const std::int64_t s = stride(query);
+  if (query > 0 && s != stride(query - 1)) {
+    const auto halve = [](auto& v) {
+      for (std::size_t k = 0; 2 * k < v.size(); ++k) v[k] = v[2 * k];
+      v.resize((v.size() + 1) / 2);
+    };
+    for (Row& r : ring_) halve(r.z);
+    halve(short_sum_);
+    halve(long_sum_);
+  }
+  Row r;
+  r.query = query;
+  r.stats = level1_;
+  r.z.resize(scratch_.size());
+  for (std::size_t k = 0; k < scratch_.size(); ++k) r.z[k] = quantise(level1_, scratch_[k]);
+  push_row(std::move(r));
+
+  const std::size_t n = scratch_.size();
+  sequence_.resize(n);
+  for (std::size_t k = 0; k < n; ++k) sequence_[k] = sequence_mean(short_sum_[k], long_sum_[k]);
+  if (level1_.valid()) level2_ = statistics(sequence_.data(), n);
+  // Pairs whose first frame no later sequence reaches.
+  const std::int64_t oldest = query + 1 - span_;
+  for (auto it = pairs_.begin(); it != pairs_.end();) {
+    it = static_cast<std::int64_t>(it->first >> 32) < oldest ? pairs_.erase(it) : std::next(it);
+  }
+}
+
+double AppearanceEvidence::single_frame(double similarity) const {
+  return level1_.valid() ? level1_.standardise(similarity) : kNaN;
+}
+
+std::int32_t AppearanceEvidence::stored_z(const FrameStore& store, std::int64_t a, std::int64_t b,
+                                          SimilarityMetric metric) {
+  const Row* r = ring_row(a);
+  if (r == nullptr || b < 0 || !r->stats.valid()) return 0;
+  const std::uint64_t key = static_cast<std::uint64_t>(a) << 32 | static_cast<std::uint64_t>(b);
+  const auto [it, inserted] = pairs_.try_emplace(key, 0.0);
+  if (inserted) it->second = similarity(store.view(a), store.view(b), metric);
+  return quantise(r->stats, it->second);
+}
+
+double AppearanceEvidence::sequence(const FrameStore& store, const DescriptorView& descriptor,
+                                    std::int64_t frame, SimilarityMetric metric) {
+  if (!options_.enabled) internal::throw_invalid("AppearanceEvidence: sequences are off");
+  if (!level2_.valid() || level2_.sd <= 0) return kNaN;
+  for (const Candidate& c : scored_) {
+    if (c.frame == frame) return level2_.standardise(c.score);
+  }
+  const std::int64_t i = last_query_;
+  // On a kept diagonal the sums are already there.
+  const std::int64_t d = i - frame, s = stride(i);
+  if ((d - min_gap_ - 1) % s == 0) {
+    const std::int64_t k = (d - min_gap_ - 1) / s;
+    if (k >= 0 && k < static_cast<std::int64_t>(sequence_.size())) {
+      scored_.push_back({frame, sequence_[static_cast<std::size_t>(k)]});
+      return level2_.standardise(scored_.back().score);
+    }
+  }
+  std::int64_t short_sum = quantise(level1_, similarity(descriptor, store.view(frame), metric));
+  std::int64_t long_sum = short_sum;
+  const int steps = std::max(options_.frames, options_.long_frames);
+  for (int t = 1; t < steps && frame - t >= 0; ++t) {
+    const std::int32_t z = stored_z(store, i - t, frame - t, metric);
+    if (t < options_.frames) short_sum += z;
+    long_sum += z;
+  }
+  scored_.push_back({frame, sequence_mean(short_sum, long_sum)});
+  return level2_.standardise(scored_.back().score);
+}
+
+void AppearanceEvidence::best_places(int top_n, std::vector<Candidate>& out) const {
+  out.clear();
+  if (!options_.enabled || sample_ || !level2_.valid()) return;
+  const std::int64_t n = static_cast<std::int64_t>(sequence_.size());
+  const std::int64_t radius = 2 * static_cast<std::int64_t>(options_.tolerance) + 1;
+  const std::int64_t newest = last_query_ - min_gap_ - 1;  // frame of slot 0
+  // A place is a local maximum of A within `radius` (ties: the older frame);
+  // two such maxima are never closer than radius + 1.
+  const auto beats = [&](std::int64_t k, std::int64_t m) {
+    const double a = sequence_[static_cast<std::size_t>(k)], b = sequence_[static_cast<std::size_t>(m)];
+    return a != b ? a > b : k > m;  // higher slot = older frame
+  };
+  for (std::int64_t k = 0; k < n; ++k) {
+    bool peak = true;
+    for (std::int64_t m = std::max<std::int64_t>(0, k - radius); m <= std::min(n - 1, k + radius) && peak; ++m) {
+      if (m != k && beats(m, k)) peak = false;
+    }
+    if (peak) out.push_back({newest - k, sequence_[static_cast<std::size_t>(k)]});
+  }
+  const std::size_t keep = std::min(out.size(), static_cast<std::size_t>(std::max(top_n, 0)));
+  std::partial_sort(out.begin(), out.begin() + static_cast<std::ptrdiff_t>(keep), out.end(), better);
+  out.resize(keep);
+  for (Candidate& c : out) c.score = level2_.standardise(c.score);
+}
+
+void AppearanceEvidence::realign(const FrameStore& store, const DescriptorView& descriptor,
+                                 const std::vector<Candidate>& raw, SimilarityMetric metric,
+                                 int top_n, std::vector<Candidate>& out) {
+  out.clear();
+  if (!level2_.valid()) return;
+  const std::int64_t limit = last_query_ - min_gap_;  // candidates j < limit
+  for (const Candidate& c : raw) {
+    Candidate aligned{-1, -std::numeric_limits<double>::infinity()};
+    const std::int64_t lo = std::max<std::int64_t>(0, c.frame - options_.tolerance);
+    const std::int64_t hi = std::min(limit - 1, c.frame + options_.tolerance);
+    for (std::int64_t j = lo; j <= hi; ++j) {
+      const Candidate s{j, sequence(store, descriptor, j, metric)};
+      if (aligned.frame < 0 || better(s, aligned)) aligned = s;
+    }
+    const bool seen = std::any_of(out.begin(), out.end(),
+                                  [&](const Candidate& o) { return o.frame == aligned.frame; });
+    if (aligned.frame >= 0 && !seen) out.push_back(aligned);
+  }
+  std::sort(out.begin(), out.end(), better);
+  if (out.size() > static_cast<std::size_t>(top_n)) out.resize(static_cast<std::size_t>(top_n));
+}
+
+void AppearanceEvidence::rebuild(const FrameStore& store, SimilarityMetric metric) {
+  ring_.clear();
+  short_sum_.clear();
+  long_sum_.clear();
+  sequence_.clear();
+  pairs_.clear();
+  scored_.clear();
+  level1_ = level2_ = ScoreStatistics{};
+  last_query_ = store.size() - 1;
+  if (!options_.enabled || store.empty()) return;
+  const std::int64_t first = std::max<std::int64_t>(0, store.size() - span_);
+  std::vector<double> row;
+  // Rows in the current stride: the ring holds only the last span_ queries,
+  // so a stride change within them would be undone by halving anyway.
+  const std::int64_t last = store.size() - 1;
+  const std::int64_t s_last = stride(last);
+  for (std::int64_t q = first; q <= last; ++q) {
+    diagonal_similarities(store, store.view(q), q, metric, nullptr, scratch_);
+    // In the stride of the last query (the ring was halved when it doubled).
+    const std::int64_t ratio = s_last / stride(q);
+    Row r;
+    r.query = q;
+    r.stats = statistics(scratch_.data(), scratch_.size());
+    for (std::size_t k = 0; k < scratch_.size(); k += static_cast<std::size_t>(ratio)) {
+      r.z.push_back(quantise(r.stats, scratch_[k]));
+    }
+    ring_.push_back(std::move(r));
+  }
+  // Sums over the windows ending at the last query.
+  const std::size_t n = ring_.back().z.size();
+  short_sum_.assign(n, 0);
+  long_sum_.assign(n, 0);
+  for (const Row& r : ring_) {
+    const std::int64_t age = last - r.query;
+    for (std::size_t k = 0; k < r.z.size() && k < n; ++k) {
+      if (age < options_.frames) short_sum_[k] += r.z[k];
+      if (options_.long_frames > 0 && age < options_.long_frames) long_sum_[k] += r.z[k];
+    }
+  }
+}
+
+}  // namespace lsgd

@@ -1,0 +1,307 @@
+// Tests of the appearance evidence (include/lsgd/evidence.h) against a
+// brute-force reference of its definition: standardised similarities,
+// sequence sums padded to their full length (no edge effect), the second
+// standardisation, the sampled diagonals of dynamic nodes, and a rebuild from
+// the store that matches an uninterrupted run bit for bit.
+#include "lsgd/evidence.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <limits>
+#include <map>
+
+#include "lsgd/error.h"
+#include "test_util.h"
+
+namespace lsgd {
+namespace {
+
+// 2-cell frames whose histograms drift along a route and repeat it: frame i
+// shows place i % period with a little per-frame noise.
+Descriptor frame(int i, int period) {
+  std::uint64_t state = 77 + static_cast<std::uint64_t>(i);
+  const int p = i % period;
+  Descriptor d;
+  d.grid = {1, 2};
+  d.hist.assign(2 * kBins, 0);
+  for (int c = 0; c < 2; ++c) {
+    for (int k = 0; k < 12; ++k) {
+      const int bin = (p * 5 + k * 17 + c * 101) % kBins;
+      d.hist[static_cast<std::size_t>(c * kBins + bin)] =
+          static_cast<Bin>(20 + (p * 7 + k * 3) % 30 + static_cast<int>(test::splitmix64(state) % 4));
+    }
+  }
+  for (int c = 0; c < 2; ++c) {
+    Count sum = 0;
+    for (int b = 0; b < kBins; ++b) sum += d.hist[static_cast<std::size_t>(c * kBins + b)];
+    d.pixels.push_back(sum);
+  }
+  return d;
+}
+
+constexpr double kScale = 1024.0;
+
+// The definition, computed directly: every similarity, every statistic.
+struct Reference {
+  std::vector<Descriptor> frames;
+  std::int64_t min_gap;
+  SequenceOptions options;
+  bool sample;
+  AppearanceEvidence stride_of{{}, 0, false};  // only for stride() / diagonals()
+
+  Reference(std::vector<Descriptor> f, std::int64_t w, SequenceOptions o, bool s)
+      : frames(std::move(f)), min_gap(w), options(o), sample(s), stride_of(o, w, s) {}
+
+  double sim(std::int64_t a, std::int64_t b) const {
+    return similarity(frames[a].view(), frames[b].view(), SimilarityMetric::kReference);
+  }
+  // Frames of the kept diagonals of query q.
+  std::vector<std::int64_t> kept(std::int64_t q) const {
+    std::vector<std::int64_t> out;
+    const std::int64_t s = stride_of.stride(q);
+    for (std::int64_t d = min_gap + 1; d <= q; d += s) out.push_back(q - d);
+    return out;
+  }
+  ScoreStatistics level1(std::int64_t q) const {
+    std::vector<double> v;
+    for (std::int64_t j : kept(q)) v.push_back(sim(q, j));
+    return statistics(v.data(), v.size());
+  }
+  std::int64_t z(std::int64_t a, std::int64_t b) const {
+    if (a < 0 || b < 0) return 0;
+    const ScoreStatistics s = level1(a);
+    if (!s.valid()) return 0;
+    const double v = std::clamp(s.standardise(sim(a, b)), -64.0, 64.0);
+    return std::lround(v * kScale);
+  }
+  // A(q, j): terms that do not exist count as 0, the divisor is the full length.
+  double sequence_mean(std::int64_t q, std::int64_t j) const {
+    std::int64_t a = 0, b = 0;
+    const int steps = std::max(options.frames, options.long_frames);
+    for (int t = 0; t < steps; ++t) {
+      const std::int64_t v = z(q - t, j - t);
+      if (t < options.frames) a += v;
+      b += v;
+    }
+    const double short_mean = a / (kScale * options.frames);
+    if (options.long_frames == 0) return short_mean;
+    return 0.5 * (short_mean + b / (kScale * options.long_frames));
+  }
+  // Sequence evidence R(q, j), NaN when not calibrated.
+  double evidence(std::int64_t q, std::int64_t j) const {
+    if (!level1(q).valid()) return std::numeric_limits<double>::quiet_NaN();
+    std::vector<double> all;
+    for (std::int64_t f : kept(q)) all.push_back(sequence_mean(q, f));
+    const ScoreStatistics s = statistics(all.data(), all.size());
+    if (!s.valid()) return std::numeric_limits<double>::quiet_NaN();
+    return s.standardise(sequence_mean(q, j));
+  }
+};
+
+struct EvidenceRun {
+  FrameStore store;
+  AppearanceEvidence evidence;
+  EvidenceRun(const SequenceOptions& o, std::int64_t w, bool s) : evidence(o, w, s) {}
+  // Adds query q = store.size() (exhaustive: with its similarity row).
+  void add(const Descriptor& d, std::int64_t w, bool with_row) {
+    const std::int64_t q = store.size();
+    std::vector<double> row;
+    for (std::int64_t j = 0; j < q - w; ++j) {
+      row.push_back(similarity(d.view(), store.view(j), SimilarityMetric::kReference));
+    }
+    evidence.add_query(store, d.view(), q, SimilarityMetric::kReference, with_row ? &row : nullptr);
+  }
+};
+
+TEST(Statistics, MeanAndPopulationSd) {
+  const double v[] = {1, 2, 3, 4};
+  const ScoreStatistics s = statistics(v, 4);
+  EXPECT_DOUBLE_EQ(s.mean, 2.5);
+  EXPECT_DOUBLE_EQ(s.sd, std::sqrt(1.25));
+  EXPECT_EQ(s.count, 4);
+  EXPECT_FALSE(s.valid());  // fewer than kMinCalibration values
+  EXPECT_EQ(statistics(v, 0).count, 0);
+}
+
+TEST(AppearanceEvidence, NotCalibratedBeforeEnoughCandidates) {
+  const std::int64_t w = 5;
+  EvidenceRun run({}, w, false);
+  for (int i = 0; i < w + kMinCalibration; ++i) {
+    const Descriptor d = frame(i, 1000);
+    run.add(d, w, true);
+    EXPECT_FALSE(run.evidence.similarity_statistics().valid()) << i;
+    EXPECT_TRUE(std::isnan(run.evidence.single_frame(0.5)));
+    std::vector<Candidate> out;
+    run.evidence.best_places(10, out);
+    EXPECT_TRUE(out.empty());
+    run.store.add(d);
+  }
+  const Descriptor d = frame(w + kMinCalibration, 1000);
+  run.add(d, w, true);
+  EXPECT_TRUE(run.evidence.similarity_statistics().valid());
+}
+
+// Every candidate's evidence equals the definition, in particular the
+// candidates near the start of the map, whose sequences lack frames: their
+// missing terms count as the mean (0), so they are not noisier than others.
+TEST(AppearanceEvidence, ExhaustiveMatchesTheDefinitionIncludingTheMapStart) {
+  SequenceOptions o;
+  o.frames = 4;
+  o.long_frames = 12;
+  const std::int64_t w = 3;
+  std::vector<Descriptor> frames;
+  for (int i = 0; i < 120; ++i) frames.push_back(frame(i, 50));
+  const Reference ref(frames, w, o, false);
+  EvidenceRun run(o, w, false);
+  for (std::int64_t q = 0; q < 120; ++q) {
+    run.add(frames[q], w, true);
+    if (q >= 60 && q % 7 == 0) {
+      SCOPED_TRACE(q);
+      for (std::int64_t j : {std::int64_t{0}, std::int64_t{1}, std::int64_t{2}, q / 2, q - w - 1}) {
+        const double want = ref.evidence(q, j);
+        const double got = run.evidence.sequence(run.store, frames[q].view(), j,
+                                                 SimilarityMetric::kReference);
+        EXPECT_NEAR(got, want, 1e-9) << "frame " << j;
+      }
+      // The single-frame score is the standardised similarity.
+      const ScoreStatistics s = ref.level1(q);
+      EXPECT_NEAR(run.evidence.single_frame(0.7), (0.7 - s.mean) / s.sd, 1e-12);
+    }
+    run.store.add(frames[q]);
+  }
+}
+
+TEST(AppearanceEvidence, SampledDiagonalsMatchTheDefinition) {
+  SequenceOptions o;
+  o.frames = 3;
+  o.long_frames = 8;
+  const std::int64_t w = 2;
+  const int n = static_cast<int>(2 * kMaxSampledDiagonals + 90);  // the stride doubles twice
+  std::vector<Descriptor> frames;
+  for (int i = 0; i < n; ++i) frames.push_back(frame(i, 300));
+  const Reference ref(frames, w, o, true);
+  EvidenceRun run(o, w, true);
+  for (std::int64_t q = 0; q < n; ++q) {
+    run.add(frames[q], w, false);
+    EXPECT_LE(run.evidence.diagonals(q), kMaxSampledDiagonals);
+    if (q > 2 * kMaxSampledDiagonals) EXPECT_GE(run.evidence.diagonals(q), kMaxSampledDiagonals / 2);
+    if (q == 200 || q == kMaxSampledDiagonals + 10 || q == n - 1) {
+      SCOPED_TRACE(q);
+      // On a kept diagonal and off them (computed from the stored frames).
+      const std::int64_t s = run.evidence.stride(q);
+      for (std::int64_t j : {q - w - 1, q - w - 1 - s, q - w - 2, std::int64_t{1}, q / 3}) {
+        const double want = ref.evidence(q, j);
+        const double got = run.evidence.sequence(run.store, frames[q].view(), j,
+                                                 SimilarityMetric::kReference);
+        EXPECT_NEAR(got, want, 1e-9) << "frame " << j << " stride " << s;
+      }
+    }
+    run.store.add(frames[q]);
+  }
+  EXPECT_EQ(run.evidence.stride(n - 1), 4);
+}
+
+// A detector restored from storage rebuilds its evidence from the stored
+// frames; from then on it must score exactly as one that never stopped.
+TEST(AppearanceEvidence, RebuildContinuesBitForBit) {
+  for (const bool sample : {false, true}) {
+    SequenceOptions o;
+    o.frames = 5;
+    o.long_frames = 9;
+    const std::int64_t w = 4;
+    const int n = sample ? static_cast<int>(kMaxSampledDiagonals + 60) : 150;
+    std::vector<Descriptor> frames;
+    for (int i = 0; i < n; ++i) frames.push_back(frame(i, 70));
+    // Stops early (a partial ring), mid-run and, sampled, right after the
+    // stride doubled (the rebuilt ring mixes two strides).
+    for (const int stop : {3, 60, static_cast<int>(kMaxSampledDiagonals + w + 3)}) {
+      if (stop >= n - 5) continue;
+      SCOPED_TRACE(testing::Message() << (sample ? "sampled" : "exhaustive") << " stop " << stop);
+      EvidenceRun live(o, w, sample), fresh(o, w, sample);
+      for (int q = 0; q < n; ++q) {
+        live.add(frames[q], w, !sample);
+        if (q >= stop) {
+          if (q == stop) fresh.evidence.rebuild(fresh.store, SimilarityMetric::kReference);
+          fresh.add(frames[q], w, !sample);
+          ASSERT_EQ(fresh.evidence.last_query(), q);
+          EXPECT_EQ(fresh.evidence.sequence_statistics().mean,
+                    live.evidence.sequence_statistics().mean);
+          if (!sample) {
+            std::vector<Candidate> a, b;
+            fresh.evidence.best_places(10, a);
+            live.evidence.best_places(10, b);
+            ASSERT_EQ(a.size(), b.size());
+            for (std::size_t k = 0; k < a.size(); ++k) {
+              EXPECT_EQ(a[k].frame, b[k].frame);
+              EXPECT_EQ(a[k].score, b[k].score);  // bit for bit
+            }
+          }
+          for (const std::int64_t j : {std::int64_t{0}, std::int64_t{q / 2}, std::int64_t{q - w - 1}}) {
+            if (j < 0 || j >= q - w) continue;
+            const double a = fresh.evidence.sequence(fresh.store, frames[q].view(), j,
+                                                     SimilarityMetric::kReference);
+            const double b = live.evidence.sequence(live.store, frames[q].view(), j,
+                                                    SimilarityMetric::kReference);
+            if (std::isnan(b)) {
+              EXPECT_TRUE(std::isnan(a));
+            } else {
+              EXPECT_EQ(a, b) << q << " " << j;
+            }
+          }
+        }
+        live.store.add(frames[q]);
+        fresh.store.add(frames[q]);
+      }
+    }
+  }
+}
+
+TEST(AppearanceEvidence, BestPlacesAreDistinctLocalMaximaBestFirst) {
+  SequenceOptions o;
+  o.frames = 4;
+  o.long_frames = 0;
+  o.tolerance = 2;
+  const std::int64_t w = 3;
+  std::vector<Descriptor> frames;
+  for (int i = 0; i < 160; ++i) frames.push_back(frame(i, 40));  // every place 3 times
+  EvidenceRun run(o, w, false);
+  const Reference ref(frames, w, o, false);
+  for (std::int64_t q = 0; q < 160; ++q) {
+    run.add(frames[q], w, true);
+    if (q == 150) {
+      std::vector<Candidate> out;
+      run.evidence.best_places(6, out);
+      ASSERT_EQ(out.size(), 6u);
+      // The revisits of place 150 % 40 = 30 come first.
+      EXPECT_TRUE(out[0].frame == 110 || out[0].frame == 70 || out[0].frame == 30) << out[0].frame;
+      for (std::size_t a = 0; a < out.size(); ++a) {
+        EXPECT_NEAR(out[a].score, ref.evidence(q, out[a].frame), 1e-9);
+        if (a > 0) EXPECT_FALSE(better(out[a], out[a - 1]));
+        for (std::size_t b = 0; b < a; ++b) {
+          EXPECT_GT(std::llabs(out[a].frame - out[b].frame), 2 * o.tolerance + 1);
+        }
+        // A local maximum within 2 * tolerance + 1 frames.
+        for (std::int64_t j = out[a].frame - 5; j <= out[a].frame + 5; ++j) {
+          if (j < 0 || j >= q - w || j == out[a].frame) continue;
+          EXPECT_LE(ref.evidence(q, j), out[a].score + 1e-9) << j;
+        }
+      }
+    }
+    run.store.add(frames[q]);
+  }
+}
+
+TEST(AppearanceEvidence, QueriesMustComeInOrder) {
+  EvidenceRun run({}, 2, false);
+  const Descriptor d = frame(0, 10);
+  EXPECT_THROW(run.evidence.add_query(run.store, d.view(), 3, SimilarityMetric::kReference, nullptr),
+               InvalidArgument);
+  std::vector<double> wrong(5, 0.5);  // query 0 has no candidates
+  EXPECT_THROW(run.evidence.add_query(run.store, d.view(), 0, SimilarityMetric::kReference, &wrong),
+               InvalidArgument);
+  EXPECT_THROW(AppearanceEvidence({}, -1, false), InvalidArgument);
+}
+
+}  // namespace
+}  // namespace lsgd

@@ -115,7 +115,8 @@ TEST_F(SyntheticCli, RunWritesOneRowPerFrame) {
                      csv.string() + "'");
   ASSERT_EQ(r.code, 0) << r.err;
   const std::string text = slurp(csv);
-  EXPECT_EQ(text.rfind("frame,image,loop_frame,candidate_frame,score,ms\n", 0), 0u);
+  EXPECT_EQ(text.rfind("frame,image,loop_frame,candidate_frame,score,ms,appearance,inliers\n", 0),
+            0u);
   EXPECT_EQ(lines_of(text), frames_ + 1);
   EXPECT_NE(text.find("\n0,"), std::string::npos);
   EXPECT_NE(text.find("images/000000.png"), std::string::npos);

@@ -56,6 +56,10 @@ TEST_F(DetectionsTest, ReadsQueryMatchScoreWithoutHeader) {
   EXPECT_TRUE(records[6].candidates.empty());
   EXPECT_EQ(records[7].reported.frame, 2);
   EXPECT_EQ(records[0].reported.frame, -1);  // no row: no loop
+  // Another system's reported matches are its declared loops.
+  EXPECT_TRUE(records[5].loop);
+  EXPECT_FALSE(records[6].loop);
+  EXPECT_FALSE(records[0].loop);
 }
 
 TEST_F(DetectionsTest, HeaderNamesColumnsInAnyOrder) {
@@ -89,6 +93,22 @@ TEST_F(DetectionsTest, ReadsLsgdRunCsvUsingTheCandidateFrame) {
   EXPECT_DOUBLE_EQ(records[1].timings.total_ms, 2.5);
   EXPECT_EQ(records[2].reported.frame, 0);
   EXPECT_DOUBLE_EQ(records[2].reported.score, 0.95);
+  // loop_frame says what lsgd declared: frame 2 only.
+  EXPECT_FALSE(records[1].loop);
+  EXPECT_TRUE(records[2].loop);
+}
+
+TEST_F(DetectionsTest, LsgdRunLoopFrameMustBeTheCandidateOrNone) {
+  expect_line_error(
+      "frame,image,loop_frame,candidate_frame,score,ms,appearance,inliers\n0,a.png,3,1,7.5,1,4,30\n",
+      2, "loop_frame '3'");
+  const std::string path = write(
+      "new.csv",
+      "frame,image,loop_frame,candidate_frame,score,ms,appearance,inliers\n0,a.png,-1,-1,0,1,0,-1\n"
+      "1,b.png,0,0,7.5,1,4.0,30\n");
+  const auto records = read_detections(path, 2);
+  EXPECT_TRUE(records[1].loop);
+  EXPECT_EQ(records[1].reported.frame, 0);
 }
 
 TEST_F(DetectionsTest, ScoresLikeHandComputation) {

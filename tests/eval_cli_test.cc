@@ -111,6 +111,58 @@ TEST_F(ShortStreet, RunCsvScoredAsDetectionsMatchesEval) {
             x["stage_ms_median"]["segment"].get<double>());
   EXPECT_GT(x["peak_rss_mb"].get<double>(), 1.0);
   EXPECT_NE(b.out.find("no detector run"), std::string::npos) << b.out;
+  // The operating point: the loops lsgd declared, the same from the run and
+  // from its CSV, next to R@100P everywhere.
+  for (const char* key : {"declared_loops", "declared_true", "declared_false",
+                          "precision_at_decision", "recall_at_decision"}) {
+    ASSERT_TRUE(x.contains(key)) << key;
+    EXPECT_EQ(x[key], y[key]) << key;
+  }
+  EXPECT_GT(x["declared_loops"].get<int>(), 5);
+  EXPECT_EQ(x["declared_false"].get<int>(), 0);  // defaults: no false loop on the street
+  EXPECT_EQ(x["declared_true"].get<int>() + x["declared_false"].get<int>(),
+            x["declared_loops"].get<int>());
+  EXPECT_NEAR(x["recall_at_decision"].get<double>(),
+              x["declared_true"].get<double>() / x["positives"].get<double>(), 1e-12);
+  EXPECT_NE(a.out.find("loops declared " + std::to_string(x["declared_loops"].get<int>())),
+            std::string::npos)
+      << a.out;
+  EXPECT_TRUE(x["warnings"].empty()) << x["warnings"];
+}
+
+// A setup the method cannot work in is said on stderr and in the JSON: frames
+// of 64x32 give one grid cell at the default superpixel size, are too small
+// for geometry, and the ground-truth loop comes before scores are calibrated.
+TEST(EvalCli, DegenerateSetupIsWarnedAbout) {
+  const fs::path dir = kTmp / "tiny";
+  fs::remove_all(dir);
+  std::string list;
+  for (int i = 0; i < 50; ++i) {
+    const std::string name = std::to_string(i) + ".png";
+    fs::create_directories(dir);
+    cv::Mat m(32, 64, CV_8UC1);
+    cv::randu(m, 0, 255);
+    ASSERT_TRUE(cv::imwrite((dir / name).string(), m));
+    list += name + "\n";
+  }
+  write_text(dir / "sequence.txt", list);
+  write_text(dir / "gt.txt", "35 5\n");
+  const fs::path json = kTmp / "tiny.json";
+  const CmdResult r = lsgd("eval --sequence " + q(dir / "sequence.txt") + " --gt " +
+                           q(dir / "gt.txt") + " --min-gap 10 --json " + q(json));
+  ASSERT_EQ(r.code, 0) << r.err;
+  const auto j = read_json(json);
+  ASSERT_EQ(j["warnings"].size(), 3u) << j["warnings"];
+  EXPECT_NE(j["warnings"][0].get<std::string>().find("1x1 grid"), std::string::npos)
+      << j["warnings"][0];
+  EXPECT_NE(j["warnings"][0].get<std::string>().find("superpixel_size <= 16"), std::string::npos);
+  EXPECT_NE(j["warnings"][1].get<std::string>().find("too small for geometric"),
+            std::string::npos);
+  EXPECT_NE(j["warnings"][2].get<std::string>().find("1 of 1 ground-truth loop queries"),
+            std::string::npos)
+      << j["warnings"][2];
+  EXPECT_NE(r.err.find("lsgd: warning: frames of 64x32 give a 1x1 grid"), std::string::npos)
+      << r.err;
 }
 
 TEST_F(ShortStreet, LenientProtocolSaysSoAndIsNeverStricter) {

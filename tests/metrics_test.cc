@@ -111,6 +111,41 @@ TEST(Evaluate, RecallAtNLooksAtTheNBestCandidates) {
   EXPECT_DOUBLE_EQ(m.recall_at_10, 1.0);
 }
 
+// The operating point scores only what the system declared, under the same
+// rules: a declared loop on a loop-free query is a false one; an undeclared
+// report, however well scored, counts for nothing there.
+TEST(Evaluate, OperatingPointScoresTheDeclaredLoops) {
+  const GroundTruth gt = small_gt();
+  std::vector<FrameRecord> records;
+  for (int i = 0; i < 10; ++i) records.push_back(report(i, {}));
+  records[5] = report(5, {{0, 9.0}});  // true, declared
+  records[5].loop = true;
+  records[6] = report(6, {{1, 8.0}});  // true, not declared
+  records[8] = report(8, {{3, 7.5}});  // false (no loop at 8), declared
+  records[8].loop = true;
+  records[9] = report(9, {{4, 1.0}});  // false, not declared
+  const auto m = lsgd::eval::evaluate(records, gt, 2);
+  EXPECT_EQ(m.declared_loops, 2);
+  EXPECT_EQ(m.declared_true, 1);
+  EXPECT_EQ(m.declared_false, 1);
+  EXPECT_DOUBLE_EQ(m.precision_at_decision, 0.5);
+  EXPECT_DOUBLE_EQ(m.recall_at_decision, 1.0 / 3.0);
+  // R@100P chooses its own threshold with the ground truth: 9 and 8, before 7.5.
+  EXPECT_DOUBLE_EQ(m.recall_at_100_precision, 2.0 / 3.0);
+  // Nothing declared: precision 0, recall 0.
+  for (auto& r : records) r.loop = false;
+  const auto none = lsgd::eval::evaluate(records, gt, 2);
+  EXPECT_EQ(none.declared_loops, 0);
+  EXPECT_EQ(none.precision_at_decision, 0.0);
+  EXPECT_EQ(none.recall_at_decision, 0.0);
+  // The lenient protocol scores the declared loops by its own rules: the
+  // false loop on loop-free query 8 is invisible there.
+  records[5].loop = records[8].loop = true;
+  const auto lenient = lsgd::eval::evaluate_lsgddn_reference(records, gt, {2, 3, false});
+  EXPECT_EQ(lenient.declared_loops, 1);
+  EXPECT_EQ(lenient.declared_false, 0);
+}
+
 TEST(Evaluate, TimingsAndPrt) {
   std::vector<FrameRecord> r;
   for (int i = 0; i < 10; ++i) r.push_back(report(i, {}, i + 1.0));  // 1..10 ms

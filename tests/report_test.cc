@@ -333,6 +333,39 @@ TEST(Report, SmallSequenceIsNotSampledAndDecisionThresholdMarksFalsePositives) {
   EXPECT_NE(html.find(std::to_string(wrong) + " FP"), std::string::npos);
 }
 
+// The loops a detector declared (its operating point) are what the charts
+// mark, with the operating point's numbers and the setup's warnings on top.
+TEST(Report, DeclaredLoopsAndWarningsAreShown) {
+  const StreetRun& r = run();
+  std::vector<FrameRecord> records = r.records;
+  // Declare two reports: one true, one false (a loop-free query).
+  std::int64_t marked_true = -1, marked_false = -1;
+  for (FrameRecord& f : records) {
+    f.loop = false;
+    if (f.reported.frame < 0) continue;
+    const bool ok = f.reported.frame < f.frame - kMinGap &&
+                    r.world.ground_truth().is_loop(f.frame, f.reported.frame);
+    if (ok && marked_true < 0) marked_true = f.frame, f.loop = true;
+    if (!ok && marked_false < 0) marked_false = f.frame, f.loop = true;
+  }
+  ASSERT_GE(marked_true, 0);
+  ASSERT_GE(marked_false, 0);
+  const Metrics m = evaluate(records, r.world.ground_truth(), kMinGap);
+  ReportInput in = r.input();
+  in.records = &records;
+  in.metrics = &m;
+  in.declared = true;
+  in.warnings = {"frames of 64x32 give a 1x1 grid <&>"};
+  const std::string html = render_report(in);
+  EXPECT_EQ(tag_balance_error(html), "");
+  EXPECT_EQ(count(html, "<circle class='fp'"), 1u);
+  EXPECT_EQ(count(html, "<circle class='tp'"), 1u);
+  EXPECT_NE(html.find("loops declared by the system"), std::string::npos);
+  EXPECT_NE(html.find("false loops declared"), std::string::npos);
+  EXPECT_NE(html.find("1x1 grid &lt;&amp;&gt;"), std::string::npos);
+  EXPECT_NE(html.find("class='warning'"), std::string::npos);
+}
+
 TEST(Report, WithoutSimilarityTheHeatmapIsReplacedByANote) {
   ReportInput in = run().input();
   in.similarity = nullptr;

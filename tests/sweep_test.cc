@@ -270,6 +270,11 @@ const Strings kHeader = {"dataset",
                          "min_gap",
                          "frames",
                          "positives",
+                         "declared_loops",
+                         "declared_true",
+                         "declared_false",
+                         "precision_at_decision",
+                         "recall_at_decision",
                          "recall_at_100_precision",
                          "threshold_at_100_precision",
                          "precision_at_100_recall",
@@ -282,7 +287,7 @@ const Strings kHeader = {"dataset",
                          "ms_per_frame_p95",
                          "nodes",
                          "bytes_per_frame"};
-constexpr std::size_t kFirstTimeColumn = 14;  // ms_per_frame_median, ms_per_frame_p95
+constexpr std::size_t kFirstTimeColumn = 19;  // ms_per_frame_median, ms_per_frame_p95
 
 TEST_F(SweepCli, FourCellsMatchDirectEvals) {
   const fs::path csv = kTmp / "grid.csv", md = kTmp / "grid.md", json = kTmp / "grid.json";
@@ -304,8 +309,9 @@ TEST_F(SweepCli, FourCellsMatchDirectEvals) {
     EXPECT_EQ(rows[i][3], std::to_string(kWindow));
     EXPECT_EQ(rows[i][4], std::to_string(frames_));
     EXPECT_GT(std::stoll(rows[i][5]), 20);                      // positives
-    EXPECT_GT(std::stod(rows[i][14]), 0.0);                     // ms/frame median
-    EXPECT_EQ(rows[i][16] == "0", rows[i][2] == "exhaustive");  // nodes only in nodes mode
+    EXPECT_GT(std::stod(rows[i][kFirstTimeColumn]), 0.0);       // ms/frame median
+    EXPECT_EQ(rows[i][kFirstTimeColumn + 2] == "0",
+              rows[i][2] == "exhaustive");  // nodes only in nodes mode
   }
   // The Markdown: protocol, window, a header and 4 rows, on stdout and in the file.
   const std::string table = slurp(md);

@@ -82,9 +82,11 @@ std::optional<double> parse_double(const std::string& s) {
 }
 
 // Which field holds what; -1: absent.
+// `loop`: lsgd run's loop_frame (the loop it declared, -1 for none); other
+// systems' files have none and every reported match counts as declared.
 struct Columns {
-  int query = 0, match = 1, score = 2, ms = -1;
-  int needed() const { return std::max({query, match, score, ms}) + 1; }
+  int query = 0, match = 1, score = 2, ms = -1, loop = -1;
+  int needed() const { return std::max({query, match, score, ms, loop}) + 1; }
 };
 
 int find_column(const std::vector<std::string>& header, std::initializer_list<const char*> names) {
@@ -104,6 +106,7 @@ Columns columns_from_header(std::vector<std::string> header) {
     c.match = find_column(header, {"candidate_frame"});
     c.score = find_column(header, {"score"});
     c.ms = find_column(header, {"ms"});
+    c.loop = find_column(header, {"loop_frame"});
   } else {
     const int q = find_column(header, {"query", "frame"});
     const int m = find_column(header, {"match"});
@@ -162,6 +165,7 @@ struct Row {
   std::int64_t match = -1;
   double score = 0;
   double ms = 0;
+  bool declared = false;
 };
 
 Row parse_row(const std::vector<std::string>& f, const Columns& c, const std::string& where) {
@@ -189,6 +193,15 @@ Row parse_row(const std::vector<std::string>& f, const Columns& c, const std::st
       throw FormatError(concat(where, ": score '", score, "' is not a finite number"));
     }
     row.score = *s;
+  }
+  row.declared = row.match >= 0;
+  if (c.loop >= 0) {
+    const auto loop = parse_int(f[static_cast<std::size_t>(c.loop)]);
+    if (!loop || (*loop != -1 && *loop != row.match)) {
+      throw FormatError(concat(where, ": loop_frame '", f[static_cast<std::size_t>(c.loop)],
+                               "' is neither -1 nor the candidate_frame"));
+    }
+    row.declared = *loop >= 0;
   }
   if (c.ms >= 0) {
     const auto ms = parse_double(f[static_cast<std::size_t>(c.ms)]);
@@ -251,6 +264,7 @@ std::vector<FrameRecord> read_detections(const std::string& path, std::int64_t f
     if (r.match >= 0) {
       out.reported = Candidate{r.match, r.score};
       out.candidates = {out.reported};
+      out.loop = r.declared;
     }
   }
   return records;

@@ -14,7 +14,22 @@ struct Report {
   double score;
   bool correct;
   bool recalled;  // counts towards recall (strict: iff correct)
+  bool declared;  // the system declared it a loop
 };
+
+// The operating point: the declared reports alone.
+void operating_point(const std::vector<Report>& reports, Metrics& m) {
+  std::int64_t recalled = 0;
+  for (const Report& r : reports) {
+    if (!r.declared) continue;
+    ++m.declared_loops;
+    (r.correct ? m.declared_true : m.declared_false) += 1;
+    recalled += r.recalled ? 1 : 0;
+  }
+  m.precision_at_decision =
+      m.declared_loops > 0 ? static_cast<double>(m.declared_true) / m.declared_loops : 0.0;
+  m.recall_at_decision = m.positives > 0 ? static_cast<double>(recalled) / m.positives : 0.0;
+}
 
 bool correct_loop(const GroundTruth& gt, std::int64_t query, const Candidate& c,
                   std::int64_t min_gap) {
@@ -158,9 +173,10 @@ Metrics evaluate(const std::vector<FrameRecord>& records, const GroundTruth& gt,
     if (gt.has_loop(r.frame, min_gap)) ++m.positives;
     if (r.reported.frame >= 0) {
       const bool correct = correct_loop(gt, r.frame, r.reported, min_gap);
-      reports.push_back({r.reported.score, correct, correct});
+      reports.push_back({r.reported.score, correct, correct, r.loop});
     }
   }
+  operating_point(reports, m);
   sweep(std::move(reports), m);
   fill_recall_at_n(
       records, gt, min_gap,
@@ -194,8 +210,9 @@ Metrics evaluate_lsgddn_reference(const std::vector<FrameRecord>& records, const
     const std::int64_t j = r.reported.frame;
     if (j < 0 || std::abs(r.frame - j) <= options.min_gap) continue;
     const bool ok = correct(r.frame, r.reported);
-    reports.push_back({r.reported.score, ok, ok || options.recall_counts_any_report});
+    reports.push_back({r.reported.score, ok, ok || options.recall_counts_any_report, r.loop});
   }
+  operating_point(reports, m);
   sweep(std::move(reports), m);
   fill_recall_at_n(records, gt, options.min_gap, correct, m);
   fill_timings(records, m);

@@ -223,7 +223,9 @@ bool correct_loop(const GroundTruth& gt, std::int64_t query, std::int64_t match,
 Operating operating_point(const ReportInput& in) {
   Operating op;
   const Metrics& m = *in.metrics;
-  if (in.threshold) {
+  if (in.declared) {
+    op.label = "loops declared by the system with its own settings (no ground truth involved)";
+  } else if (in.threshold) {
     op.threshold = *in.threshold;
     op.label = escape(in.threshold_name) + " " + num(op.threshold, 4);
   } else if (m.recall_at_100_precision > 0) {
@@ -233,10 +235,15 @@ Operating operating_point(const ReportInput& in) {
     op.label = "none (no threshold reaches precision 1, so no loop is marked)";
   }
   for (const FrameRecord& r : *in.records) {
-    if (r.reported.frame < 0 || !(r.reported.score >= op.threshold)) continue;
+    if (r.reported.frame < 0) continue;
+    if (in.declared ? !r.loop : !(r.reported.score >= op.threshold)) continue;
     const bool ok = correct_loop(*in.gt, r.frame, r.reported.frame, m.min_gap);
     op.loops.push_back({r.frame, r.reported.frame, r.reported.score, ok});
     (ok ? op.tp : op.fp) += 1;
+  }
+  // Declared loops: the charts mark the lowest score declared.
+  if (in.declared) {
+    for (const Loop& l : op.loops) op.threshold = std::min(op.threshold, l.score);
   }
   return op;
 }
@@ -259,8 +266,16 @@ void header(std::ostream& html, const ReportInput& in, const Operating& op) {
        << in.gt->pairs() << " GT pairs</td></tr>"
        << "<tr><th>Loops marked</th><td>at the " << op.label << ": <b style='color:" << kTpColour
        << "'>" << op.tp << " TP</b>, <b style='color:" << kFpColour << "'>" << op.fp
-       << " FP</b></td></tr></table>\n<div class='cards'>";
+       << " FP</b></td></tr></table>\n";
+  for (const std::string& w : in.warnings) {
+    html << "<p class='warning'><b>Warning:</b> " << escape(w) << "</p>\n";
+  }
+  html << "<div class='cards'>";
   const std::pair<const char*, std::string> cards[] = {
+      {"loops declared", std::to_string(m.declared_loops)},
+      {"false loops declared", std::to_string(m.declared_false)},
+      {"precision (declared)", percent(m.precision_at_decision)},
+      {"recall (declared)", percent(m.recall_at_decision)},
       {"R@100P", percent(m.recall_at_100_precision)},
       {"P@100R", percent(m.precision_at_100_recall)},
       {"AP", percent(m.average_precision)},
@@ -661,6 +676,7 @@ h1{font-size:22px;margin:0 0 10px;word-break:break-all}h2{font-size:16px;margin:
 .cards{display:flex;flex-wrap:wrap;gap:10px;margin:6px 0 16px}
 .card{border:1px solid #e5e7eb;border-radius:8px;padding:8px 14px;min-width:96px}
 .card{background:#f9fafb}
+.warning{background:#fef3c7;border-left:4px solid #d97706;padding:6px 10px;max-width:760px}
 .card .value{font-size:22px;font-weight:600}.card .name{color:#6b7280;font-size:12px}
 .row{display:flex;flex-wrap:wrap;gap:20px;margin-bottom:18px}figure{margin:0;width:560px}
 figcaption,.caption,.note{color:#4b5563;font-size:13px;max-width:760px}.note{font-style:italic}

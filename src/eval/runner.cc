@@ -1,6 +1,8 @@
 #include "lsgd/eval/runner.h"
 
+#include <algorithm>
 #include <chrono>
+#include <cmath>
 #include <memory>
 
 #include <opencv2/core.hpp>
@@ -29,6 +31,50 @@ FrameSource sequence_source(const io::Sequence& sequence) {
   source.load = [images](std::int64_t i) { return io::read_image(images->at(i)); };
   source.name = [images](std::int64_t i) { return images->at(i); };
   return source;
+}
+
+std::vector<std::string> setup_warnings(const Detector& detector, const GroundTruth& gt) {
+  std::vector<std::string> out;
+  const DetectorOptions& o = detector.options();
+  const std::int64_t min_gap = o.search.min_gap;
+  const int w = detector.width(), h = detector.height();
+  if (w > 0 && h > 0) {
+    const int sp = o.segmentation.superpixel_size;
+    const GridSize grid = grid_size(w, h, sp);
+    if (grid.cells() < 4) {
+      out.push_back(internal::concat(
+          "frames of ", w, "x", h, " give a ", grid.rows, "x", grid.cols,
+          " grid at segmentation.superpixel_size ", sp, " (", grid.cells(),
+          " cell", grid.cells() == 1 ? "" : "s", ", fewer than 4): the descriptor is almost a "
+          "whole-image histogram and cannot tell places apart; use superpixel_size <= ",
+          std::max(2, std::min(w, h) / 2)));
+    }
+    if (o.verification.geometric && std::min(w, h) < 100) {
+      out.push_back(internal::concat(
+          "frames of ", w, "x", h, " are too small for geometric verification (ORB works on them "
+          "upscaled ", std::lround(detector.geometric_verifier().working_scale(w, h)),
+          "x): it will confirm few loops"));
+    }
+  }
+  const std::int64_t calibrated = min_gap + kMinCalibration;
+  std::int64_t early = 0, positives = 0;
+  for (std::int64_t q = 0; q < gt.frames(); ++q) {
+    if (!gt.has_loop(q, min_gap)) continue;
+    ++positives;
+    early += q < calibrated ? 1 : 0;
+  }
+  if (gt.frames() <= calibrated) {
+    out.push_back(internal::concat("the sequence has ", gt.frames(),
+                                   " frames: the detector calibrates its scores from frame ",
+                                   calibrated, " (search.min_gap + ", kMinCalibration,
+                                   " candidates) and cannot report a loop before"));
+  } else if (early > 0) {
+    out.push_back(internal::concat(early, " of ", positives,
+                                   " ground-truth loop queries come before frame ", calibrated,
+                                   ", where the detector starts reporting (search.min_gap + ",
+                                   kMinCalibration, " candidates to calibrate its scores)"));
+  }
+  return out;
 }
 
 std::vector<FrameRecord> run_detector(Detector& detector, const FrameSource& source,
@@ -74,7 +120,14 @@ std::vector<FrameRecord> run_detector(Detector& detector, const FrameSource& sou
     for (Candidate& c : result.candidates) c.frame = to_source(c.frame);
     for (StageVerdict& v : result.verification) v.candidate = to_source(v.candidate);
     if (on_frame) on_frame(result, load_ms);
-    records.push_back({result.frame, result.best, result.candidates, result.timings, load_ms});
+    FrameRecord record;
+    record.frame = result.frame;
+    record.reported = result.best;
+    record.loop = result.loop;
+    record.candidates = result.candidates;
+    record.timings = result.timings;
+    record.load_ms = load_ms;
+    records.push_back(std::move(record));
   }
   return records;
 }

@@ -185,6 +185,7 @@ void evaluate_detections(const EvalArgs& args, const io::SequenceOptions& option
   if (!args.report.empty()) {
     eval::ReportInput input = report_input(args, metrics, records, gt);
     input.sequence = args.detections + " (detections of another system)";
+    input.declared = true;
     eval::write_report(input, args.report);
     std::cout << "report: " << args.report << "\n";
   }
@@ -210,8 +211,11 @@ void evaluate_sequence(const EvalArgs& args, const io::SequenceOptions& options)
   const auto records =
       run_with_progress(detector, source, "eval", csv.get(), !args.layout.strict);
   const eval::Metrics metrics = score(args, records, gt, detector_options.search.min_gap);
+  const std::vector<std::string> warnings = eval::setup_warnings(detector, gt);
+  for (const std::string& w : warnings) std::cerr << "lsgd: warning: " << w << "\n";
 
   nlohmann::json json = metrics_json(metrics);
+  json["warnings"] = warnings;
   json["mode"] = to_string(detector_options.search.mode);
   json["verification"] = verification_stages(detector_options.verification);
   json["nodes"] = detector.nodes();
@@ -239,7 +243,8 @@ void evaluate_sequence(const EvalArgs& args, const io::SequenceOptions& options)
     };
     input.nodes = detector.nodes();
     input.bytes_per_frame = detector.bytes_per_frame();
-    input.threshold = detector_options.decision.threshold;  // false positives show
+    input.declared = true;  // the loops the detector declared; false ones show
+    input.warnings = warnings;
     eval::write_report(input, args.report);
     std::cout << "report: " << args.report << "\n";
   }

@@ -127,7 +127,9 @@ class SweepOutput {
     if (csv_) {
       *csv_ << "dataset";
       for (const auto& k : keys_) *csv_ << ',' << csv_field(k);
-      *csv_ << ",min_gap,frames,positives,recall_at_100_precision,threshold_at_100_precision,"
+      *csv_ << ",min_gap,frames,positives,declared_loops,declared_true,declared_false,"
+               "precision_at_decision,recall_at_decision,recall_at_100_precision,"
+               "threshold_at_100_precision,"
                "precision_at_100_recall,average_precision,recall_at_1,recall_at_5,recall_at_10,"
                "prt,ms_per_frame_median,ms_per_frame_p95,nodes,bytes_per_frame\n"
             << std::flush;
@@ -148,10 +150,10 @@ class SweepOutput {
                      "rows or with single-thread runs (use --jobs 1 for timings).\n\n")
        << "| dataset |";
     for (const auto& k : keys_) md << ' ' << k << " |";
-    md << " frames | positives | R@100P | P@100R | AP | R@1 | R@5 | R@10 | PRT | ms/frame median |"
-          " ms/frame p95 | nodes | bytes/frame |\n|---|";
+    md << " frames | positives | declared (TP / FP) | recall at decision | R@100P | P@100R | AP |"
+          " R@1 | R@5 | R@10 | PRT | ms/frame median | ms/frame p95 | nodes | bytes/frame |\n|---|";
     for (std::size_t i = 0; i < keys_.size(); ++i) md << "---|";
-    md << "---|---|---|---|---|---|---|---|---|---|---|---|---|\n";
+    md << "---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n";
     markdown(md.str());
   }
 
@@ -222,7 +224,9 @@ class SweepOutput {
     std::ostringstream md;
     md << "| " << cell.dataset->spec.name << " |";
     for (const auto& v : cell.point->values) md << ' ' << v << " |";
-    md << ' ' << m.frames << " | " << m.positives << " | " << fixed(m.recall_at_100_precision, 3)
+    md << ' ' << m.frames << " | " << m.positives << " | " << m.declared_loops << " ("
+       << m.declared_true << " / " << m.declared_false << ") | " << fixed(m.recall_at_decision, 3)
+       << " | " << fixed(m.recall_at_100_precision, 3)
        << " | " << fixed(m.precision_at_100_recall, 3) << " | " << fixed(m.average_precision, 3)
        << " | " << fixed(m.recall_at_1, 3) << " | " << fixed(m.recall_at_5, 3) << " | "
        << fixed(m.recall_at_10, 3) << " | " << fixed(m.prt, 3) << " | "
@@ -233,6 +237,8 @@ class SweepOutput {
     *csv_ << csv_field(cell.dataset->spec.name);
     for (const auto& v : cell.point->values) *csv_ << ',' << csv_field(v);
     *csv_ << ',' << m.min_gap << ',' << m.frames << ',' << m.positives << ','
+          << m.declared_loops << ',' << m.declared_true << ',' << m.declared_false << ','
+          << exact(m.precision_at_decision) << ',' << exact(m.recall_at_decision) << ','
           << exact(m.recall_at_100_precision) << ',' << exact(m.threshold_at_100_precision) << ','
           << exact(m.precision_at_100_recall) << ',' << exact(m.average_precision) << ','
           << exact(m.recall_at_1) << ',' << exact(m.recall_at_5) << ',' << exact(m.recall_at_10)

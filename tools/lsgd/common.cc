@@ -123,7 +123,7 @@ CsvWriter::CsvWriter(const std::string& path) : out_(&std::cout) {
     if (!*file_) throw IoError("cannot write output file '" + path + "'");
     out_ = file_.get();
   }
-  *out_ << "frame,image,loop_frame,candidate_frame,score,ms\n" << std::flush;
+  *out_ << "frame,image,loop_frame,candidate_frame,score,ms,appearance,inliers\n" << std::flush;
 }
 
 void CsvWriter::write(const Result& r, const std::string& image) {
@@ -134,8 +134,9 @@ void CsvWriter::write(const Result& r, const std::string& image) {
     quoted = escaped + "\"";
   }
   *out_ << r.frame << ',' << quoted << ',' << (r.loop ? r.best.frame : -1) << ',' << r.best.frame
-        << ',' << std::setprecision(9) << r.best.score << ',' << std::setprecision(4)
-        << r.timings.total_ms << '\n'
+        << ',' << std::setprecision(9) << (r.best.frame >= 0 ? r.best.score : 0.0) << ','
+        << std::setprecision(4) << r.timings.total_ms << ',' << std::setprecision(6)
+        << (r.best.frame >= 0 ? r.evidence.appearance : 0.0) << ',' << r.evidence.inliers << '\n'
         << std::flush;
   if (!*out_) throw IoError("error while writing the CSV output");
   loops_ += r.loop ? 1 : 0;
@@ -181,6 +182,11 @@ nlohmann::json metrics_json(const eval::Metrics& m) {
   j["frames"] = m.frames;
   j["positives"] = m.positives;
   j["min_gap"] = m.min_gap;
+  j["declared_loops"] = m.declared_loops;
+  j["declared_true"] = m.declared_true;
+  j["declared_false"] = m.declared_false;
+  j["precision_at_decision"] = m.precision_at_decision;
+  j["recall_at_decision"] = m.recall_at_decision;
   j["recall_at_100_precision"] = m.recall_at_100_precision;
   j["threshold_at_100_precision"] = m.threshold_at_100_precision;
   j["precision_at_100_recall"] = m.precision_at_100_recall;
@@ -213,8 +219,11 @@ void print_metrics(const eval::Metrics& m, std::int64_t nodes, std::ostream& out
   out << std::fixed << std::setprecision(3);
   out << "frames " << m.frames << ", positives " << m.positives << ", min gap " << m.min_gap << " ("
       << m.protocol << " protocol)\n"
+      << "  loops declared " << m.declared_loops << ": " << m.declared_true << " true, "
+      << m.declared_false << " false (precision " << m.precision_at_decision << ", recall "
+      << m.recall_at_decision << ")" << (m.declared_false > 0 ? "  <- FALSE LOOPS" : "") << "\n"
       << "  R@100P " << m.recall_at_100_precision << "  (threshold "
-      << m.threshold_at_100_precision << ")\n"
+      << m.threshold_at_100_precision << ", chosen with the ground truth)\n"
       << "  AP     " << m.average_precision << "\n"
       << "  R@1    " << m.recall_at_1 << "   R@5 " << m.recall_at_5 << "   R@10 " << m.recall_at_10
       << "\n"

@@ -66,7 +66,8 @@ class Progress {
   std::int64_t last_draw_ns_ = 0;
 };
 
-// Writes `lsgd run` rows: frame,image,loop_frame,candidate_frame,score,ms.
+// Writes `lsgd run` rows:
+// frame,image,loop_frame,candidate_frame,score,ms,appearance,inliers.
 // Each row is flushed, so an error later in the run loses nothing written.
 class CsvWriter {
  public:

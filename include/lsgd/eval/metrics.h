@@ -18,6 +18,9 @@ namespace lsgd::eval {
 struct FrameRecord {
   std::int64_t frame = -1;
   Candidate reported;                 // the reported loop and its score; frame -1: none
+  // The system declared `reported` a loop (Result::loop; for detections of
+  // another system, every reported match). The operating point scores these.
+  bool loop = false;
   std::vector<Candidate> candidates;  // ranked candidates, best first (for Recall@N)
   Timings timings;                    // zeros when unknown (detections from another system)
   double load_ms = 0;                 // reading and decoding the image (outside process())
@@ -39,6 +42,14 @@ struct Metrics {
   std::int64_t frames = 0;     // query frames evaluated
   std::int64_t positives = 0;  // queries with a GT match j < i - min_gap
   std::int64_t min_gap = 0;    // temporal window w, frames
+  // The operating point: the loops the system declared with its own settings
+  // (FrameRecord::loop), scored under the same protocol. No ground truth
+  // chose them, unlike R@100P's threshold.
+  std::int64_t declared_loops = 0;
+  std::int64_t declared_true = 0;
+  std::int64_t declared_false = 0;
+  double precision_at_decision = 0;  // declared_true / declared_loops (0 when none)
+  double recall_at_decision = 0;     // recalled positives / positives
   // Largest recall reached at precision exactly 1 (0 when the best-scored
   // report is already false), and the threshold that reaches it.
   double recall_at_100_precision = 0;

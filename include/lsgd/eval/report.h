@@ -50,12 +50,17 @@ struct ReportInput {
   // trajectory; otherwise exactly gt->frames() entries.
   std::vector<std::array<double, 2>> trajectory;
 
-  // Operating threshold for the loops marked on the matrix and the trajectory
-  // (reported loops with score >= threshold). Empty: the R@100P threshold
-  // (metrics->threshold_at_100_precision), where every marked loop is a true
-  // positive by construction; no loop is marked when R@100P is 0.
+  // The loops marked on the matrix and the trajectory. `declared`: the loops
+  // the system declared (FrameRecord::loop, the operating point of the
+  // metrics). Else the reported loops with score >= threshold; an empty
+  // threshold is the R@100P threshold (metrics->threshold_at_100_precision),
+  // where every marked loop is a true positive by construction; no loop is
+  // marked when R@100P is 0.
+  bool declared = false;
   std::optional<double> threshold;
   std::string threshold_name = "decision threshold";  // what `threshold` is, when given
+  // Warnings about the setup (eval::setup_warnings), shown at the top.
+  std::vector<std::string> warnings;
 
   // Throws InvalidArgument naming the first missing or inconsistent field.
   void check() const;

@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "lsgd/detector.h"
+#include "lsgd/eval/groundtruth.h"
 #include "lsgd/eval/metrics.h"
 #include "lsgd/io/sequence.h"
 
@@ -48,6 +49,15 @@ struct RunOptions {
 // Feeds every frame to the detector in order. Frames already processed were
 // passed to `on_frame` (a CSV writer keeps them) before any error. Throws
 // InvalidArgument for an empty source.
+// Warnings about a setup in which the method cannot work as intended, for
+// `lsgd eval` to print (stderr), store (JSON) and show (HTML report): a grid of
+// fewer than 4 cells (the descriptor is nearly a whole-image histogram),
+// frames too small for geometric verification, and ground-truth loops before
+// the detector calibrates its scores (frame min_gap + kMinCalibration) or a
+// sequence too short to reach that frame. `detector` has run over the
+// sequence (its frame size is known); empty when all is well.
+std::vector<std::string> setup_warnings(const Detector& detector, const GroundTruth& gt);
+
 std::vector<FrameRecord> run_detector(Detector& detector, const FrameSource& source,
                                       const FrameCallback& on_frame = {},
                                       const RunOptions& options = {},

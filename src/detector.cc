@@ -239,7 +239,9 @@ void Detector::verify(Result& result) {
   if (result.best.frame < 0 && first < n) {
     const Candidate& c = result.candidates[first];
     double score = c.score;
-    if (first_rejected) score = std::min(score, std::nextafter(d.threshold, -1.0));
+    // Rejected by geometry, or appearance alone on a degenerate grid: never a loop.
+    const bool untrusted = !v.geometric && descriptor_.grid.cells() < kMinAppearanceCells;
+    if (first_rejected || untrusted) score = std::min(score, std::nextafter(d.threshold, -1.0));
     result.best = {c.frame, score};
     result.evidence.appearance = c.score;
     result.evidence.inliers = first_inliers;

@@ -185,7 +185,9 @@ TEST(AppearanceEvidence, SampledDiagonalsMatchTheDefinition) {
   for (std::int64_t q = 0; q < n; ++q) {
     run.add(frames[q], w, false);
     EXPECT_LE(run.evidence.diagonals(q), kMaxSampledDiagonals);
-    if (q > 2 * kMaxSampledDiagonals) EXPECT_GE(run.evidence.diagonals(q), kMaxSampledDiagonals / 2);
+    if (q > 2 * kMaxSampledDiagonals) {
+      EXPECT_GE(run.evidence.diagonals(q), kMaxSampledDiagonals / 2);
+    }
     if (q == 200 || q == kMaxSampledDiagonals + 10 || q == n - 1) {
       SCOPED_TRACE(q);
       // On a kept diagonal and off them (computed from the stored frames).
@@ -277,7 +279,9 @@ TEST(AppearanceEvidence, BestPlacesAreDistinctLocalMaximaBestFirst) {
       EXPECT_TRUE(out[0].frame == 110 || out[0].frame == 70 || out[0].frame == 30) << out[0].frame;
       for (std::size_t a = 0; a < out.size(); ++a) {
         EXPECT_NEAR(out[a].score, ref.evidence(q, out[a].frame), 1e-9);
-        if (a > 0) EXPECT_FALSE(better(out[a], out[a - 1]));
+        if (a > 0) {
+          EXPECT_FALSE(better(out[a], out[a - 1]));
+        }
         for (std::size_t b = 0; b < a; ++b) {
           EXPECT_GT(std::llabs(out[a].frame - out[b].frame), 2 * o.tolerance + 1);
         }

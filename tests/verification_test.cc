@@ -250,11 +250,41 @@ TEST(DetectorVerification, GeometryOnlyAddsToTheTemporalRanking) {
       continue;
     }
     EXPECT_EQ(both[i].best.frame, temporal[i].best.frame) << i;
-    if (both[i].evidence.inliers < 0) EXPECT_EQ(both[i].best.score, temporal[i].best.score) << i;
+    if (both[i].evidence.inliers < 0) {
+      EXPECT_EQ(both[i].best.score, temporal[i].best.score) << i;
+    }
     EXPECT_LE(both[i].best.score, temporal[i].best.score) << i;
     EXPECT_EQ(both[i].candidates.size(), temporal[i].candidates.size());
   }
   EXPECT_GT(confirmed, 0);
+}
+
+// Appearance alone on a grid of fewer than kMinAppearanceCells cells (a
+// whole-image histogram) never declares a loop; the same frames with a finer
+// grid do.
+TEST(DetectorVerification, AppearanceAloneNeedsAGridOfFourCells) {
+  for (const int sp : {80, 20}) {  // 160x120: 1x1 and 4x5 cells
+    SCOPED_TRACE(sp);
+    DetectorOptions options = route_options("temporal");
+    options.segmentation.superpixel_size = sp;
+    options.decision.threshold = 2.0;
+    int loops = 0, reported = 0;
+    for (const Result& r : run(options)) {
+      loops += r.loop;
+      if (r.best.frame >= 0) {
+        ++reported;
+        if (sp == 80) {
+          EXPECT_LT(r.best.score, 2.0);
+        }
+      }
+    }
+    EXPECT_GT(reported, 0);
+    if (sp == 80) {
+      EXPECT_EQ(loops, 0);
+    } else {
+      EXPECT_GT(loops, 0);
+    }
+  }
 }
 
 TEST(DetectorVerification, GeometricOnlyChecksCandidatesThatCouldBeLoops) {
@@ -273,7 +303,9 @@ TEST(DetectorVerification, GeometricOnlyChecksCandidatesThatCouldBeLoops) {
     for (const auto& v : r.verification) {
       // Only candidates whose score plus the bonus reached the threshold.
       for (const Candidate& c : r.candidates) {
-        if (c.frame == v.candidate) EXPECT_GE(c.score + 3.5, 7.0);
+        if (c.frame == v.candidate) {
+          EXPECT_GE(c.score + 3.5, 7.0);
+        }
       }
     }
   }

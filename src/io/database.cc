@@ -375,13 +375,13 @@ void Database::Impl::load_header() {
   if (types["format_version"] != SQLITE_INTEGER) {
     format_error(path, "format_version '", version->second, "' is not an integer");
   }
-  const long long format = std::stoll(version->second);
-  if (format > kDatabaseFormatVersion) {
-    format_error(path, "format version ", format, " is newer than this lsgd (", LSGD_VERSION,
+  const long long stored_format = std::stoll(version->second);
+  if (stored_format > kDatabaseFormatVersion) {
+    format_error(path, "format version ", stored_format, " is newer than this lsgd (", LSGD_VERSION,
                  ") reads (", kDatabaseFormatVersion, "): use a newer lsgd");
   }
-  if (format < 1) format_error(path, "unknown format version ", format);
-  this->format = static_cast<int>(format);
+  if (stored_format < 1) format_error(path, "unknown format version ", stored_format);
+  format = static_cast<int>(stored_format);
   for (const char* key :
        {"library_version", "options", "width", "height", "grid_rows", "grid_cols", "checksum"}) {
     if (meta.find(key) == meta.end()) format_error(path, "meta has no ", key);

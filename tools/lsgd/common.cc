@@ -31,7 +31,9 @@ void DetectorFlags::add_to(CLI::App& command) {
       ->check(CLI::IsMember({"exhaustive", "nodes"}));
   command.add_option("--min-gap", min_gap,
                      "temporal window in frames: only frames j < i - W are candidates");
-  command.add_option("--threshold", threshold, "loop decision threshold on the score, in [0, 1]");
+  command.add_option("--threshold", threshold,
+                     "loop decision threshold on the loop score, standard deviations (default 7; "
+                     "overrides decision.threshold)");
   command.add_option("--verify", verify,
                      "verification stages: none, temporal, geometric or temporal,geometric "
                      "(overrides verification.stages)");

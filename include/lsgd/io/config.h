@@ -14,14 +14,19 @@
 //     min_gap: 50              # frames
 //     top_n: 10
 //     nodes: {threshold_0: 0.9, alpha: 0.8, beta: 1.0}
+//   descriptor:
+//     storage: exact           # exact | compact
 //   verification:
-//     stages: temporal         # none | temporal | geometric | temporal,geometric
+//     stages: temporal,geometric  # none | temporal | geometric | temporal,geometric
 //     max_candidates: 3
-//     temporal: {frames: 16, long_frames: 48, tolerance: 2, agree: 1}
-//     geometric: {max_features: 500, min_side: 240, ratio: 0.8, ransac_threshold: 3.0,
-//                 min_inliers: 20, min_inlier_ratio: 0.25}
-//   decision:
-//     threshold: 0.841
+//     temporal: {frames: 16, long_frames: 48, tolerance: 2, agree: 0}
+//     geometric: {max_features: 500, min_side: 240, max_side: 240, ratio: 0.8,
+//                 ransac_threshold: 3.0, min_inliers: 20, min_inlier_ratio: 0.25}
+//   decision:                  # standard deviations (decision.h)
+//     threshold: 7.0
+//     geometric_bonus: 3.5
+//     continuity_bonus: 2.5
+//     continuity_inliers: 0.2
 #pragma once
 
 #include <string>

@@ -1,0 +1,80 @@
+#!/usr/bin/python3
+# Leave-one-sequence-out choice of defaults from the CSV of `lsgd sweep` (one
+# row per dataset and grid point). docs/results.md runs it.
+#
+#   scripts/loso.py SWEEP.csv KEY1,KEY2,... [DEFAULT1,DEFAULT2,...]
+#
+# For each held-out sequence: among the grid points that declare no false loop
+# on any other sequence, the one with the highest mean declared-loop recall
+# over the others; ties keep the most shipped values, then the most
+# conservative (smaller bonuses and tolerance, larger min_inliers and
+# continuity_inliers). The held-out sequence is reported at that point. Then
+# the same rule on all sequences (the default), and a stricter "margin" rule
+# (the point and its grid neighbours all free of false loops) for comparison.
+# Standard library only (/usr/bin/python3).
+import csv, sys, collections
+path = sys.argv[1]
+keys = sys.argv[2].split(',')          # grid columns
+default = tuple(sys.argv[3].split(',')) if len(sys.argv) > 3 else None  # shipped values: ties keep them
+rows = list(csv.DictReader(open(path)))
+grid = collections.defaultdict(dict)
+for r in rows:
+    g = tuple(r[k] for k in keys)
+    grid[g][r['dataset']] = r
+seqs = sorted({r['dataset'] for r in rows})
+def fp(g, s): return int(grid[g][s]['declared_false'])
+def rec(g, s): return float(grid[g][s]['recall_at_decision'])
+def conservative(g):
+    d = dict(zip(keys, g)); out = []
+    if default is not None:
+        out.append(sum(float(a) == float(b) for a, b in zip(g, default)))
+    for k in keys:
+        v = float(d[k])
+        # larger is more conservative for min_inliers / continuity_inliers; smaller for bonuses and tolerance
+        out.append(-v if ('bonus' in k or 'tolerance' in k) else v)
+    return tuple(out)
+def choose(train):
+    ok = [g for g in grid if all(s in grid[g] for s in train) and all(fp(g, s) == 0 for s in train)]
+    if not ok: return None
+    return max(ok, key=lambda g: (sum(rec(g, s) for s in train) / len(train), conservative(g)))
+print('| held out | chosen (' + ', '.join(keys) + ') | declared on the held-out sequence (TP / FP) | recall at decision | R@100P |')
+print('|---|---|---|---|---|')
+for held in seqs:
+    g = choose([s for s in seqs if s != held])
+    if g is None:
+        print(f'| {held} | no grid point is safe |  |  |  |'); continue
+    r = grid[g][held]
+    print(f"| {held} | {', '.join(g)} | {r['declared_loops']} ({r['declared_true']} / {r['declared_false']}) | {float(r['recall_at_decision']):.3f} | {float(r['recall_at_100_precision']):.3f} |")
+g = choose(seqs)
+print('\nall sequences:', dict(zip(keys, g)))
+for s in seqs:
+    r = grid[g][s]
+    print(f"  {s}: {r['declared_loops']} ({r['declared_true']} / {r['declared_false']}) recall {float(r['recall_at_decision']):.3f} R@100P {float(r['recall_at_100_precision']):.3f}")
+# neighbours of the choice: zero-FP margin
+print('\ngrid points with no false loop anywhere:', sum(1 for x in grid if all(fp(x, s) == 0 for s in seqs)), 'of', len(grid))
+
+# Margin rule: a point is safe when it and every grid neighbour (one step in
+# one parameter) declare no false loop on the training sequences.
+values = [sorted({g[i] for g in grid}, key=float) for i in range(len(keys))]
+def neighbours(g):
+    out = []
+    for i in range(len(keys)):
+        k = values[i].index(g[i])
+        for d in (-1, 1):
+            if 0 <= k + d < len(values[i]):
+                out.append(g[:i] + (values[i][k + d],) + g[i + 1:])
+    return out
+def choose_safe(train):
+    ok = [g for g in grid if all(fp(x, s) == 0 for x in [g] + neighbours(g) for s in train)]
+    if not ok: return None
+    return max(ok, key=lambda g: (sum(rec(g, s) for s in train) / len(train), conservative(g)))
+print('\nmargin rule')
+print('| held out | chosen (' + ', '.join(keys) + ') | declared on the held-out sequence (TP / FP) | recall at decision | R@100P |')
+print('|---|---|---|---|---|')
+for held in seqs:
+    g = choose_safe([s for s in seqs if s != held])
+    if g is None:
+        print(f'| {held} | no grid point is safe |  |  |  |'); continue
+    r = grid[g][held]
+    print(f"| {held} | {', '.join(g)} | {r['declared_loops']} ({r['declared_true']} / {r['declared_false']}) | {float(r['recall_at_decision']):.3f} | {float(r['recall_at_100_precision']):.3f} |")
+print('all:', choose_safe(seqs))

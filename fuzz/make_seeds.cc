@@ -104,7 +104,7 @@ int main(int argc, char** argv) {
       "segmentation:\n  superpixel_size: 40\n  iterations: 10\n  intensity_scale: 2.3\n"
       "similarity:\n  metric: reference\nsearch:\n  min_gap: 50\n"
       "  nodes: {threshold_0: 0.9, alpha: 0.8, beta: 1.0}\nverification:\n  stages: none\n"
-      "decision:\n  threshold: 0.87\n");
+      "decision: {threshold: 7.0, geometric_bonus: 3.5, continuity_bonus: 2.5}\n");
   put(out / "config" / "bad.yaml", "search: {min_gap: -3}\nunknown_key: 1\n");
 
   // pairs: first byte = expected frames (255: -1).

@@ -3,6 +3,7 @@
 #include <iostream>
 
 #include <CLI/CLI.hpp>
+#include <opencv2/core.hpp>
 
 #include "commands.h"
 #include "lsgd/error.h"
@@ -17,6 +18,11 @@ int main(int argc, char** argv) {
   lsgd::cli::register_bench(app);
   lsgd::cli::register_gt(app);
   lsgd::cli::register_db(app);
+  // The detector runs on the calling thread; OpenCV's own thread pool (ORB,
+  // RANSAC and resizing in the geometric stage) is off too, so that every
+  // time the tool reports is single-thread and runs are repeatable. `lsgd
+  // sweep --jobs N` runs cells on its own threads.
+  cv::setNumThreads(0);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

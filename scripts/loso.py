@@ -33,30 +33,9 @@ def conservative(g):
         # larger is more conservative for min_inliers / continuity_inliers; smaller for bonuses and tolerance
         out.append(-v if ('bonus' in k or 'tolerance' in k) else v)
     return tuple(out)
-def choose(train):
-    ok = [g for g in grid if all(s in grid[g] for s in train) and all(fp(g, s) == 0 for s in train)]
-    if not ok: return None
-    return max(ok, key=lambda g: (sum(rec(g, s) for s in train) / len(train), conservative(g)))
-print('| held out | chosen (' + ', '.join(keys) + ') | declared on the held-out sequence (TP / FP) | recall at decision | R@100P |')
-print('|---|---|---|---|---|')
-for held in seqs:
-    g = choose([s for s in seqs if s != held])
-    if g is None:
-        print(f'| {held} | no grid point is safe |  |  |  |'); continue
-    r = grid[g][held]
-    print(f"| {held} | {', '.join(g)} | {r['declared_loops']} ({r['declared_true']} / {r['declared_false']}) | {float(r['recall_at_decision']):.3f} | {float(r['recall_at_100_precision']):.3f} |")
-g = choose(seqs)
-print('\nall sequences:', dict(zip(keys, g)))
-for s in seqs:
-    r = grid[g][s]
-    print(f"  {s}: {r['declared_loops']} ({r['declared_true']} / {r['declared_false']}) recall {float(r['recall_at_decision']):.3f} R@100P {float(r['recall_at_100_precision']):.3f}")
-# neighbours of the choice: zero-FP margin
-print('\ngrid points with no false loop anywhere:', sum(1 for x in grid if all(fp(x, s) == 0 for s in seqs)), 'of', len(grid))
-
-# Margin rule: a point is safe when it and every grid neighbour (one step in
-# one parameter) declare no false loop on the training sequences.
 values = [sorted({g[i] for g in grid}, key=float) for i in range(len(keys))]
 def neighbours(g):
+    """The grid points one step away from g in one parameter."""
     out = []
     for i in range(len(keys)):
         k = values[i].index(g[i])
@@ -64,17 +43,30 @@ def neighbours(g):
             if 0 <= k + d < len(values[i]):
                 out.append(g[:i] + (values[i][k + d],) + g[i + 1:])
     return out
-def choose_safe(train):
-    ok = [g for g in grid if all(fp(x, s) == 0 for x in [g] + neighbours(g) for s in train)]
+def choose(train, margin=False):
+    """The rule; with margin, every grid neighbour must be free of false loops too."""
+    def safe(g):
+        points = [g] + neighbours(g) if margin else [g]
+        return all(s in grid[x] and fp(x, s) == 0 for x in points for s in train)
+    ok = [g for g in grid if safe(g)]
     if not ok: return None
     return max(ok, key=lambda g: (sum(rec(g, s) for s in train) / len(train), conservative(g)))
-print('\nmargin rule')
-print('| held out | chosen (' + ', '.join(keys) + ') | declared on the held-out sequence (TP / FP) | recall at decision | R@100P |')
-print('|---|---|---|---|---|')
-for held in seqs:
-    g = choose_safe([s for s in seqs if s != held])
-    if g is None:
-        print(f'| {held} | no grid point is safe |  |  |  |'); continue
-    r = grid[g][held]
-    print(f"| {held} | {', '.join(g)} | {r['declared_loops']} ({r['declared_true']} / {r['declared_false']}) | {float(r['recall_at_decision']):.3f} | {float(r['recall_at_100_precision']):.3f} |")
-print('all:', choose_safe(seqs))
+def folds(margin):
+    print('| held out | chosen (' + ', '.join(keys) + ') | declared on the held-out sequence (TP / FP) | recall at decision | R@100P |')
+    print('|---|---|---|---|---|')
+    for held in seqs:
+        g = choose([s for s in seqs if s != held], margin)
+        if g is None:
+            print(f'| {held} | no grid point is safe |  |  |  |'); continue
+        r = grid[g][held]
+        print(f"| {held} | {', '.join(g)} | {r['declared_loops']} ({r['declared_true']} / {r['declared_false']}) | {float(r['recall_at_decision']):.3f} | {float(r['recall_at_100_precision']):.3f} |")
+folds(False)
+g = choose(seqs)
+print('\nall sequences:', dict(zip(keys, g)))
+for s in seqs:
+    r = grid[g][s]
+    print(f"  {s}: {r['declared_loops']} ({r['declared_true']} / {r['declared_false']}) recall {float(r['recall_at_decision']):.3f} R@100P {float(r['recall_at_100_precision']):.3f}")
+print('\ngrid points with no false loop anywhere:', sum(1 for x in grid if all(fp(x, s) == 0 for s in seqs)), 'of', len(grid))
+print('\nmargin rule (the point and its grid neighbours free of false loops)')
+folds(True)
+print('all:', choose(seqs, True))

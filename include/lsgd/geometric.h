@@ -29,7 +29,7 @@ struct GeometricOptions {
   // The working size: ORB runs on the image scaled so that its shorter side
   // is within [min_side, max_side]. Small frames (160x120) are upscaled
   // (bilinear) so they still yield keypoints; large ones are downscaled (area
-  // average), so ORB costs the same ~2-4 ms on every camera and inlier counts
+  // average), so ORB costs about the same (1.5-5 ms) on every camera and inlier counts
   // mean the same on every camera. Pixels, [0, 4096]; min_side 0: never
   // upscale; max_side 0: never downscale; else min_side <= max_side.
   int min_side = 240;

@@ -53,7 +53,7 @@ struct VerificationOptions {
   bool temporal = true;
   // ORB + RANSAC: on by default. Appearance alone cannot separate a revisit
   // from a look-alike place on every camera; geometry can (docs/results.md).
-  // Costs ORB on every frame (~2-4 ms at the default working size) and a
+  // Costs ORB on every frame (~1.5-5 ms at the default working size) and a
   // check (~0.5 ms) for each candidate that could become a loop.
   bool geometric = true;
   // Candidates examined best first; the first one that no enabled stage

@@ -1,4 +1,5 @@
 // lsgd: the command-line front end of the LSGDDN-LCD loop-closure detector.
+#include <cstdlib>
 #include <exception>
 #include <iostream>
 
@@ -9,6 +10,11 @@
 #include "lsgd/error.h"
 
 int main(int argc, char** argv) {
+  // The tool computes on the CPU: OpenCV must not load an OpenCL runtime for
+  // ORB (the ICD loader it may dlopen brings dynamic TLS that crashed
+  // LeakSanitizer's exit check, and nothing here runs on a GPU). A value the
+  // user set is kept.
+  ::setenv("OPENCV_OPENCL_RUNTIME", "disabled", 0);
   CLI::App app{"lsgd: training-free visual loop closure detection (LSGDDN-LCD)"};
   app.require_subcommand(1);
   lsgd::cli::register_run(app);

@@ -18,6 +18,7 @@
 #include "bench_support.h"
 #include "commands.h"
 #include "common.h"
+#include "files.h"
 #include "lsgd/descriptor.h"
 #include "lsgd/error.h"
 #include "lsgd/eval/synthetic.h"
@@ -166,6 +167,10 @@ void bench_command(const BenchArgs& args) {
                           " (no frame would be measured)");
   }
   const DetectorOptions options = args.detector.resolve();
+  CommandFiles files;
+  files.input(args.detector.config, "--config");
+  files.output(args.json, "--json");
+  files.check();
   cv::setNumThreads(0);  // sequential, like the detector
   bench::RunData d;
   d.machine = bench::describe_machine();

@@ -13,6 +13,7 @@
 
 #include "commands.h"
 #include "common.h"
+#include "files.h"
 #include "lsgd/error.h"
 #include "lsgd/eval/runner.h"
 #include "lsgd/eval/synthetic.h"
@@ -42,6 +43,14 @@ void print_route(const eval::SyntheticWorld& world) {
 
 void demo(const DemoArgs& args) {
   DetectorOptions options = args.detector.resolve();
+  // --output DIR: a new or empty folder, or one this command wrote before.
+  CommandFiles files;
+  files.input(args.detector.config, "--config");
+  files.output_folder(args.output, "--output",
+                      {"images", "sequence.txt", "groundtruth.txt", "results-exhaustive.csv",
+                       "results-nodes.csv", "metrics.json"},
+                      "metrics.json");
+  files.check();
   eval::SyntheticOptions world_options;
   world_options.seed = args.seed;
   const eval::SyntheticWorld world(world_options);

@@ -11,6 +11,7 @@
 
 #include "commands.h"
 #include "common.h"
+#include "files.h"
 #include "lsgd/error.h"
 #include "lsgd/eval/detections.h"
 #include "lsgd/eval/groundtruth.h"
@@ -164,7 +165,23 @@ eval::ReportInput report_input(const EvalArgs& args, const eval::Metrics& metric
   return input;
 }
 
+// Nothing the command writes may be something it reads.
+void check_files(const EvalArgs& args, const std::vector<std::string>& images) {
+  CommandFiles files;
+  files.input(args.detector.config, "--config");
+  files.input(args.sequence, "--sequence");
+  files.inputs(images, "--sequence", "input image");
+  files.input(args.detections, "--detections");
+  files.input(args.gt, "--gt");
+  files.input(args.poses, "--poses");
+  files.output(args.json, "--json");
+  files.output(args.output, "--output");
+  files.output(args.report, "--report");
+  files.check();
+}
+
 void evaluate_detections(const EvalArgs& args, const io::SequenceOptions& options) {
+  check_files(args, {});
   eval::GroundTruth gt =
       evaluated_groundtruth(args, options, options.layout, args.frames ? *args.frames : -1);
   // A pairs file only implies frames up to its largest id; when frame ids map
@@ -196,6 +213,7 @@ void evaluate_sequence(const EvalArgs& args, const io::SequenceOptions& options)
   const io::Layout layout = io::detect_layout(args.sequence, options);
   const io::Sequence all = io::open_layout(args.sequence, options);
   const io::Sequence sequence = io::subsample(all, options.selection);
+  check_files(args, all.images);
   // Read the ground truth before the (long) run so a wrong file fails at once.
   const auto frames = static_cast<std::int64_t>(all.images.size());
   std::int64_t rows = frames;

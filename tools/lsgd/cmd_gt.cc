@@ -7,6 +7,7 @@
 
 #include "commands.h"
 #include "common.h"
+#include "files.h"
 #include "lsgd/error.h"
 #include "lsgd/eval/gt_formats.h"
 
@@ -68,6 +69,10 @@ eval::GtOptions resolve(const GtArgs& a, bool min_gap_is_poses_only) {
 
 void convert(const GtArgs& a) {
   const eval::GtOptions o = resolve(a, true);
+  CommandFiles files;
+  files.input(a.source, "SOURCE");
+  files.output(a.output, "--output");
+  files.check();
   const eval::GroundTruth gt = eval::load_groundtruth(a.source, o);
   eval::write_pairs(gt, a.output);
   std::cout << "wrote " << gt.pairs() << " pairs over " << gt.frames() << " frames to " << a.output
@@ -76,6 +81,10 @@ void convert(const GtArgs& a) {
 
 void stats(const GtArgs& a) {
   const eval::GtOptions o = resolve(a, false);
+  CommandFiles files;
+  files.input(a.source, "SOURCE");
+  files.output(a.json, "--json");
+  files.check();
   const eval::GroundTruth gt = eval::load_groundtruth(a.source, o);
   const eval::GtStats s = eval::gt_stats(gt, a.min_gap.value_or(0));
   std::cout << "ground truth: " << a.source << " (" << eval::to_string(o.format) << ")\n"

@@ -10,6 +10,7 @@
 
 #include "commands.h"
 #include "common.h"
+#include "files.h"
 #include "lsgd/error.h"
 #include "lsgd/eval/runner.h"
 #include "lsgd/io/config.h"
@@ -32,7 +33,19 @@ struct RunArgs {
 // frame (one transaction each). Resuming takes the stored options; flags and
 // --config must agree with them except --threshold. Frame ids (CSV column
 // frame) continue after the stored frames.
+// The command's files: nothing it writes may be something it reads.
+void check_files(const RunArgs& args, const io::Sequence& sequence) {
+  CommandFiles files;
+  files.input(args.detector.config, "--config");
+  files.input(args.sequence, "--sequence");
+  files.inputs(sequence.images, "--sequence", "input image");
+  files.database(args.database, "--database", true);
+  files.output(args.output, "--output");
+  files.check();
+}
+
 void run_database(const RunArgs& args, const io::Sequence& sequence) {
+  check_files(args, sequence);
   const DetectorFlags& flags = args.detector;
   const bool exists = std::ifstream(args.database).good();
   std::optional<io::Database> db;
@@ -92,6 +105,7 @@ void run(const RunArgs& args) {
   }
   const DetectorOptions options = args.detector.resolve();
   const io::Sequence sequence = io::open_sequence(args.sequence, args.layout.resolve());
+  check_files(args, sequence);
   const eval::FrameSource source = eval::sequence_source(sequence);
   CsvWriter csv(args.output);
   Detector detector(options);

@@ -20,6 +20,7 @@
 
 #include "commands.h"
 #include "common.h"
+#include "files.h"
 #include "lsgd/error.h"
 #include "lsgd/eval/groundtruth.h"
 #include "lsgd/eval/sweep.h"
@@ -49,6 +50,7 @@ struct Dataset {
   eval::FrameSource source;
   eval::GroundTruth gt;
   std::int64_t positives = 0;
+  std::vector<std::string> images;
 };
 
 // Opens the sequence, decodes its first image and reads the ground truth, so
@@ -58,8 +60,9 @@ Dataset prepare(const eval::SweepDataset& spec) {
   io::read_image(sequence.images.front());
   Dataset d{spec, eval::sequence_source(sequence),
             load_ground_truth(spec.ground_truth, static_cast<std::int64_t>(sequence.images.size())),
-            0};
+            0, {}};
   for (std::int64_t q = 0; q < d.gt.frames(); ++q) d.positives += d.gt.has_loop(q, spec.min_gap);
+  d.images = sequence.images;
   return d;
 }
 
@@ -340,6 +343,17 @@ void sweep(const SweepArgs& args) {
       }
     }
   }
+  CommandFiles files;
+  files.input(args.detector.config, "--config");
+  for (const Dataset& d : datasets) {
+    files.input(d.spec.sequence, "--dataset " + d.spec.name);
+    files.inputs(d.images, "--dataset " + d.spec.name, "input image");
+    files.input(d.spec.ground_truth, "--dataset " + d.spec.name);
+  }
+  files.output(args.csv, "--csv");
+  files.output(args.markdown, "--markdown");
+  files.output(args.json, "--json");
+  files.check();
   std::vector<Cell> cells;
   for (const Dataset& d : datasets) {
     for (const eval::SweepPoint& p : points) {

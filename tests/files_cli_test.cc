@@ -1,0 +1,179 @@
+// End-to-end tests of what the lsgd commands may write (tools/lsgd/files.h):
+// no output is ever an input or another output (by inode, whatever the
+// spelling: other paths, hard links, symbolic links), and an output that
+// cannot be written stops the command before any work. Each refusal leaves
+// every file as it was.
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include <filesystem>
+#include <fstream>
+#include <string>
+#include <vector>
+
+#include <gtest/gtest.h>
+#include <opencv2/core.hpp>
+#include <opencv2/imgcodecs.hpp>
+
+#include "cli_util.h"
+
+namespace fs = std::filesystem;
+
+namespace {
+
+const fs::path kTmp = fs::path(LSGD_TEST_TMP) / ("files-cli-" + std::to_string(getpid()));
+
+using lsgd::test::CmdResult;
+using lsgd::test::slurp;
+
+CmdResult lsgd(const std::string& args) { return lsgd::test::run_command(LSGD_CLI, args, kTmp); }
+
+std::string q(const fs::path& p) { return "'" + p.string() + "'"; }
+
+// A small sequence: 60 noise images, a list file, a pairs ground truth and a
+// config, written once.
+class Files : public ::testing::Test {
+ protected:
+  static void SetUpTestSuite() {
+    fs::remove_all(kTmp);
+    dir_ = kTmp / "seq";
+    fs::create_directories(dir_ / "images");
+    std::ofstream list(dir_ / "sequence.txt");
+    cv::Mat m(48, 64, CV_8UC1);
+    for (int i = 0; i < 60; ++i) {
+      cv::randu(m, 0, 255);
+      const std::string name = "images/" + std::to_string(1000 + i) + ".png";
+      ASSERT_TRUE(cv::imwrite((dir_ / name).string(), m));
+      list << name << "\n";
+    }
+    list.close();
+    std::ofstream(dir_ / "gt.txt") << "50 5\n55 8\n";
+    std::ofstream(dir_ / "config.yaml") << "search: {min_gap: 5}\n";
+  }
+  static void TearDownTestSuite() { fs::remove_all(kTmp); }
+
+  // Runs `args` and expects a refusal naming `part`, with `guarded` unchanged.
+  static void expect_refused(const std::string& args, const std::string& part,
+                             const std::vector<fs::path>& guarded) {
+    std::vector<std::string> before;
+    for (const fs::path& p : guarded) before.push_back(slurp(p));
+    const CmdResult r = lsgd(args);
+    EXPECT_NE(r.code, 0) << args;
+    EXPECT_NE(r.err.find(part), std::string::npos) << args << "\n" << r.err;
+    EXPECT_NE(r.err.find("nothing was run"), std::string::npos) << r.err;
+    for (std::size_t i = 0; i < guarded.size(); ++i) {
+      EXPECT_EQ(slurp(guarded[i]), before[i]) << guarded[i] << " changed by " << args;
+    }
+  }
+
+  static fs::path dir_;
+};
+fs::path Files::dir_;
+
+TEST_F(Files, AnOutputIsNeverAnInput) {
+  const fs::path seq = dir_ / "sequence.txt", gt = dir_ / "gt.txt", config = dir_ / "config.yaml";
+  const fs::path image = dir_ / "images" / "1005.png";
+  expect_refused("run --sequence " + q(seq) + " --output " + q(image), "it is input image 5",
+                 {image});
+  expect_refused("run --sequence " + q(dir_ / "images") + " --output " + q(image),
+                 "it is input image 5", {image});
+  expect_refused("run --sequence " + q(seq) + " --output " + q(seq), "given by --sequence", {seq});
+  expect_refused("run --sequence " + q(seq) + " --config " + q(config) + " --output " + q(config),
+                 "given by --config", {config});
+  const std::string eval = "eval --sequence " + q(seq) + " --gt " + q(gt) + " --min-gap 5";
+  expect_refused(eval + " --json " + q(gt), "given by --gt", {gt});
+  expect_refused(eval + " --json " + q(kTmp / "j.json") + " --output " + q(gt), "given by --gt",
+                 {gt});
+  expect_refused(eval + " --json " + q(kTmp / "j.json") + " --report " + q(image), "input image",
+                 {image});
+  expect_refused("gt convert " + q(gt) + " --output " + q(gt), "given by SOURCE", {gt});
+  expect_refused("gt stats " + q(gt) + " --json " + q(gt), "given by SOURCE", {gt});
+  expect_refused("bench --frames 30 --warmup 1 --opencv-frames 0 --config " + q(config) +
+                     " --json " + q(config),
+                 "given by --config", {config});
+  expect_refused("sweep --dataset s=" + seq.string() + "," + gt.string() + ",5 --csv " + q(gt),
+                 "--dataset s", {gt});
+  // Other spellings of the same file: a path through '..', a hard link, a
+  // symbolic link.
+  expect_refused(eval + " --json " + q(dir_ / "images" / ".." / "gt.txt"), "given by --gt", {gt});
+  const fs::path hard = kTmp / "hard.txt", soft = kTmp / "soft.txt";
+  fs::remove(hard);
+  fs::remove(soft);
+  fs::create_hard_link(gt, hard);
+  fs::create_symlink(gt, soft);
+  expect_refused(eval + " --json " + q(hard), "given by --gt", {gt});
+  expect_refused(eval + " --json " + q(soft), "given by --gt", {gt});
+}
+
+TEST_F(Files, TwoOutputsAreNeverTheSameFile) {
+  const std::string eval = "eval --sequence " + q(dir_ / "sequence.txt") + " --gt " +
+                           q(dir_ / "gt.txt") + " --min-gap 5";
+  const fs::path out = kTmp / "both.json";
+  fs::remove(out);
+  expect_refused(eval + " --json " + q(out) + " --output " + q(kTmp / "." / "both.json"),
+                 "they are the same file", {});
+  EXPECT_FALSE(fs::exists(out));  // nothing written, not even the CSV header
+  expect_refused(eval + " --json " + q(out) + " --report " + q(out), "they are the same file", {});
+}
+
+// The database is the run's input and output: no other output may be it or
+// one of the SQLite files beside it, which hold committed frames.
+TEST_F(Files, TheDatabaseAndItsCompanionsAreNeverOverwritten) {
+  const fs::path db = kTmp / "x.db";
+  fs::remove(db);
+  const std::string run = "run --sequence " + q(dir_ / "sequence.txt") + " --min-gap 5";
+  ASSERT_EQ(lsgd(run + " --database " + q(db) + " --output " + q(kTmp / "first.csv")).code, 0);
+  const auto size = fs::file_size(db);
+  expect_refused(run + " --database " + q(db) + " --output " + q(db), "same file", {db});
+  expect_refused(run + " --database " + q(db) + " --output " + q(db.string() + "-wal"),
+                 "SQLite wal file", {db});
+  // A database about to be created is an output as well.
+  const fs::path fresh = kTmp / "new.db";
+  fs::remove(fresh);
+  expect_refused(run + " --database " + q(fresh) + " --output " + q(fresh), "same file", {});
+  EXPECT_FALSE(fs::exists(fresh));
+  EXPECT_EQ(fs::file_size(db), size);
+}
+
+// Results are never lost at the end of a long run: an output that cannot be
+// written stops the command before it starts.
+TEST_F(Files, UnwritableOutputsStopTheCommandFirst) {
+  const std::string eval = "eval --sequence " + q(dir_ / "sequence.txt") + " --gt " +
+                           q(dir_ / "gt.txt") + " --min-gap 5";
+  const fs::path missing = kTmp / "no" / "such" / "folder" / "m.json";
+  CmdResult r = lsgd(eval + " --json " + q(missing));
+  EXPECT_NE(r.code, 0);
+  EXPECT_NE(r.err.find("folder '" + (kTmp / "no" / "such" / "folder").string() + "' does not exist"),
+            std::string::npos)
+      << r.err;
+  EXPECT_EQ(r.out, "");  // no frame was processed, nothing printed
+  r = lsgd(eval + " --json " + q(kTmp / "j.json") + " --output " + q(dir_));
+  EXPECT_NE(r.code, 0);
+  EXPECT_NE(r.err.find("it is a folder"), std::string::npos) << r.err;
+  // A stream the user chose is fine.
+  r = lsgd(eval + " --json /dev/null");
+  EXPECT_EQ(r.code, 0) << r.err;
+  if (::geteuid() != 0) {  // root may write read-only files
+    const fs::path ro = kTmp / "ro.json";
+    std::ofstream(ro) << "{}";
+    fs::permissions(ro, fs::perms::owner_read);
+    r = lsgd(eval + " --json " + q(ro));
+    EXPECT_NE(r.code, 0);
+    EXPECT_NE(r.err.find("read-only"), std::string::npos) << r.err;
+  }
+}
+
+// lsgd demo --output DIR writes frames and files there: a folder it did not
+// write (here a dataset with the same file names) is refused.
+TEST_F(Files, DemoNeverWritesIntoAForeignFolder) {
+  const fs::path foreign = kTmp / "foreign";
+  fs::create_directories(foreign / "images");
+  std::ofstream(foreign / "sequence.txt") << "images/a.png\n";
+  expect_refused("demo --mode exhaustive --output " + q(foreign), "has no metrics.json",
+                 {foreign / "sequence.txt"});
+  std::ofstream(foreign / "notes.txt") << "mine\n";
+  expect_refused("demo --mode exhaustive --output " + q(foreign), "it holds 'notes.txt'",
+                 {foreign / "notes.txt"});
+}
+
+}  // namespace

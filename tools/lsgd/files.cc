@@ -1,0 +1,183 @@
+#include "files.h"
+
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <cerrno>
+#include <cstring>
+#include <filesystem>
+#include <map>
+#include <utility>
+
+#include "internal/check.h"
+#include "lsgd/error.h"
+
+namespace lsgd::cli {
+namespace {
+
+namespace fs = std::filesystem;
+using internal::concat;
+
+using FileId = std::pair<dev_t, ino_t>;
+
+bool identify(const std::string& path, FileId& id, struct stat& st) {
+  if (::stat(path.c_str(), &st) != 0) return false;
+  id = {st.st_dev, st.st_ino};
+  return true;
+}
+
+// The absolute, normalised spelling of a path that may not exist yet.
+std::string spelling(const std::string& path) {
+  std::error_code ec;
+  const fs::path p = fs::weakly_canonical(fs::absolute(path, ec), ec);
+  return ec ? fs::absolute(path).lexically_normal().string() : p.string();
+}
+
+std::string folder_of(const std::string& path) {
+  const fs::path parent = fs::path(path).parent_path();
+  return parent.empty() ? std::string(".") : parent.string();
+}
+
+[[noreturn]] void unwritable(const std::string& flag, const std::string& path,
+                             const std::string& why) {
+  throw IoError(concat("cannot write ", flag, " '", path, "': ", why, " (nothing was run)"));
+}
+
+// The folder an output goes to must exist and be writable.
+void check_folder(const std::string& flag, const std::string& path, const std::string& folder) {
+  struct stat st {};
+  if (::stat(folder.c_str(), &st) != 0) {
+    unwritable(flag, path, concat("folder '", folder, "' does not exist"));
+  }
+  if (!S_ISDIR(st.st_mode)) unwritable(flag, path, concat("'", folder, "' is not a folder"));
+  if (::access(folder.c_str(), W_OK | X_OK) != 0) {
+    unwritable(flag, path, concat("folder '", folder, "' is not writable (", std::strerror(errno), ")"));
+  }
+}
+
+}  // namespace
+
+void CommandFiles::input(const std::string& path, const std::string& flag) {
+  if (!path.empty()) inputs_.push_back({path, flag, "the file given by " + flag});
+}
+
+void CommandFiles::inputs(const std::vector<std::string>& paths, const std::string& flag,
+                          const std::string& what) {
+  for (std::size_t i = 0; i < paths.size(); ++i) {
+    inputs_.push_back({paths[i], flag, concat(what, " ", i, " of ", flag)});
+  }
+}
+
+void CommandFiles::database(const std::string& path, const std::string& flag, bool also_output) {
+  if (path.empty()) return;
+  inputs_.push_back({path, flag, "the database given by " + flag});
+  for (const char* suffix : {"-wal", "-shm", "-journal"}) {
+    inputs_.push_back({path + suffix, flag,
+                       concat("the database's SQLite ", suffix + 1, " file (", flag, ")")});
+  }
+  if (also_output) outputs_.push_back({path, flag, ""});
+}
+
+void CommandFiles::output(const std::string& path, const std::string& flag) {
+  if (!path.empty()) outputs_.push_back({path, flag, ""});
+}
+
+void CommandFiles::output_folder(const std::string& path, const std::string& flag,
+                                 const std::vector<std::string>& own, const std::string& marker) {
+  if (path.empty()) return;
+  folders_.push_back({path, flag, ""});
+  folder_names_.push_back(own);
+  folder_markers_.push_back(marker);
+}
+
+void CommandFiles::check() const {
+  // Output folders: missing (created below a writable folder) or holding only
+  // what the command writes there itself.
+  for (std::size_t f = 0; f < folders_.size(); ++f) {
+    const File& d = folders_[f];
+    struct stat st {};
+    if (::stat(d.path.c_str(), &st) != 0) {
+      check_folder(d.flag, d.path, folder_of(fs::path(d.path).lexically_normal().string()));
+      continue;
+    }
+    if (!S_ISDIR(st.st_mode)) unwritable(d.flag, d.path, "it exists and is not a folder");
+    std::error_code ec;
+    bool empty = true, marked = false;
+    for (const auto& entry : fs::directory_iterator(d.path, ec)) {
+      const std::string name = entry.path().filename().string();
+      const auto& own = folder_names_[f];
+      empty = false;
+      marked = marked || name == folder_markers_[f];
+      if (std::find(own.begin(), own.end(), name) == own.end()) {
+        throw InvalidArgument(concat("refusing to write into ", d.flag, " '", d.path,
+                                     "': it holds '", name, "', which this command did not "
+                                     "write; give a new or empty folder (nothing was run)"));
+      }
+    }
+    if (!empty && !marked) {
+      throw InvalidArgument(concat("refusing to write into ", d.flag, " '", d.path, "': it is not "
+                                   "empty and has no ", folder_markers_[f], ", so this command "
+                                   "did not write it; give a new or empty folder (nothing was "
+                                   "run)"));
+    }
+    if (::access(d.path.c_str(), W_OK | X_OK) != 0) {
+      unwritable(d.flag, d.path, concat("the folder is not writable (", std::strerror(errno), ")"));
+    }
+  }
+
+  // Every output: writable where it goes, a regular file when it exists.
+  std::map<FileId, const File*> existing;
+  std::map<std::string, const File*> spelled;
+  for (const File& out : outputs_) {
+    FileId id{};
+    struct stat st {};
+    if (identify(out.path, id, st)) {
+      if (S_ISDIR(st.st_mode)) unwritable(out.flag, out.path, "it is a folder");
+      // A character device (/dev/null, a terminal) or a pipe is a stream the
+      // user chose; a disk or a socket is not a place for a result.
+      if (!S_ISREG(st.st_mode) && !S_ISCHR(st.st_mode) && !S_ISFIFO(st.st_mode)) {
+        unwritable(out.flag, out.path, "it is not a regular file (a block device or a socket)");
+      }
+      if (!S_ISREG(st.st_mode)) continue;  // a stream: writing it destroys nothing
+      if (::access(out.path.c_str(), W_OK) != 0) {
+        unwritable(out.flag, out.path, concat("it is read-only (", std::strerror(errno), ")"));
+      }
+      const auto [it, fresh] = existing.emplace(id, &out);
+      if (!fresh && it->second->flag != out.flag) {
+        throw InvalidArgument(concat("refusing to write ", out.flag, " '", out.path, "' and ",
+                                     it->second->flag, " '", it->second->path,
+                                     "': they are the same file (nothing was run)"));
+      }
+    } else {
+      check_folder(out.flag, out.path, folder_of(out.path));
+    }
+    const auto [spelled_it, new_spelling] = spelled.emplace(spelling(out.path), &out);
+    if (!new_spelling && spelled_it->second->flag != out.flag) {
+      throw InvalidArgument(concat("refusing to write ", out.flag, " '", out.path, "' and ",
+                                   spelled_it->second->flag, " '", spelled_it->second->path,
+                                   "': they are the same file (nothing was run)"));
+    }
+  }
+
+  // No output is an input: by inode when the input exists, by spelling when
+  // it does not (a database's -wal file comes and goes).
+  for (const File& in : inputs_) {
+    FileId id{};
+    struct stat st {};
+    const File* out = nullptr;
+    if (identify(in.path, id, st)) {
+      const auto it = existing.find(id);
+      if (it != existing.end()) out = it->second;
+    } else {
+      const auto it = spelled.find(spelling(in.path));
+      if (it != spelled.end()) out = it->second;
+    }
+    if (out == nullptr || out->flag == in.flag) continue;  // a database is its own output
+    throw InvalidArgument(concat("refusing to write ", out->flag, " '", out->path, "': it is ",
+                                 in.what, " ('", in.path, "'); choose another file (nothing "
+                                 "was run)"));
+  }
+}
+
+}  // namespace lsgd::cli

@@ -9,6 +9,7 @@
 #include <iterator>
 #include <opencv2/core.hpp>
 #include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
 #include <string>
 #include <vector>
 
@@ -257,6 +258,40 @@ TEST_F(SequenceTest, TruncatedPngIsFormatError) {
   ASSERT_GT(bytes.size(), 100u);
   const std::string truncated = write("truncated.png", bytes.substr(0, bytes.size() / 2));
   expect_error<FormatError>([&] { read_image(truncated); }, {truncated});
+}
+
+// A cut JPEG decodes without an error (the decoder fills the rest with gray
+// and only warns): cut anywhere from 1 % to 99.9 %, it must be refused, while
+// baseline, progressive and restart-marker JPEGs and one with bytes after its
+// end stay readable.
+TEST_F(SequenceTest, TruncatedJpegIsFormatErrorAtEveryLength) {
+  cv::Mat image(120, 160, CV_8UC3);
+  cv::randu(image, 0, 255);
+  cv::GaussianBlur(image, image, cv::Size(5, 5), 2);  // compressible, like a photo
+  struct Variant {
+    const char* name;
+    std::vector<int> params;
+  };
+  const Variant variants[] = {{"baseline", {}},
+                              {"progressive", {cv::IMWRITE_JPEG_PROGRESSIVE, 1}},
+                              {"restarts", {cv::IMWRITE_JPEG_RST_INTERVAL, 4}}};
+  for (const Variant& v : variants) {
+    SCOPED_TRACE(v.name);
+    std::vector<uchar> encoded;
+    ASSERT_TRUE(cv::imencode(".jpg", image, encoded, v.params));
+    const std::string bytes(encoded.begin(), encoded.end());
+    const std::string full = write(std::string(v.name) + ".jpg", bytes);
+    EXPECT_EQ(read_image(full).cols, 160);
+    EXPECT_EQ(read_image(write(std::string(v.name) + "-tail.jpg", bytes + "trailing")).cols, 160);
+    for (std::size_t cut = bytes.size() / 100; cut < bytes.size(); cut += bytes.size() / 37) {
+      const std::string truncated = write("cut.jpg", bytes.substr(0, cut));
+      expect_error<FormatError>([&] { read_image(truncated); },
+                                {truncated, "truncated or damaged JPEG"});
+    }
+    // One byte short: the end-of-image marker itself is cut.
+    const std::string last = write("last.jpg", bytes.substr(0, bytes.size() - 1));
+    expect_error<FormatError>([&] { read_image(last); }, {last, "end-of-image marker"});
+  }
 }
 
 TEST_F(SequenceTest, SixteenBitPngIsFormatError) {

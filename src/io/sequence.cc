@@ -193,6 +193,40 @@ std::vector<unsigned char> read_bytes(const std::string& path) {
   return bytes;
 }
 
+// JPEG decoders fill a truncated file with gray and only warn, so a cut JPEG
+// would decode as a plausible frame. Walks the marker segments and the
+// entropy-coded data of every scan up to the end-of-image marker (EOI);
+// returns false when the bytes end before it.
+bool jpeg_reaches_eoi(const std::vector<unsigned char>& b) {
+  const std::size_t n = b.size();
+  std::size_t p = 2;  // after SOI
+  while (true) {
+    if (p >= n || b[p] != 0xFF) return false;
+    while (p < n && b[p] == 0xFF) ++p;  // fill bytes
+    if (p >= n) return false;
+    const unsigned char marker = b[p++];
+    if (marker == 0xD9) return true;                                    // EOI
+    if (marker == 0x01 || (marker >= 0xD0 && marker <= 0xD7)) continue;  // no length
+    if (p + 2 > n) return false;
+    const std::size_t length = static_cast<std::size_t>(b[p]) << 8 | b[p + 1];
+    if (length < 2 || p + length > n) return false;
+    p += length;
+    if (marker != 0xDA) continue;  // not a scan
+    // Entropy-coded data: ends at an 0xFF that is neither stuffing (0xFF00)
+    // nor a restart marker.
+    while (true) {
+      while (p < n && b[p] != 0xFF) ++p;
+      if (p + 1 >= n) return false;
+      const unsigned char next = b[p + 1];
+      if (next == 0x00 || (next >= 0xD0 && next <= 0xD7) || next == 0xFF) {
+        p += next == 0xFF ? 1 : 2;
+        continue;
+      }
+      break;  // p is at the next marker
+    }
+  }
+}
+
 void check_decoded(const cv::Mat& image, const std::string& path) {
   if (image.depth() != CV_8U) {
     throw FormatError(concat("image '", path, "' has ", depth_name(image.depth()),
@@ -240,6 +274,11 @@ Sequence open_sequence(const std::string& path) {
 cv::Mat read_image(const std::string& path) {
   const std::vector<unsigned char> bytes = read_bytes(path);
   if (bytes.empty()) throw FormatError(concat("image '", path, "' is an empty file (0 bytes)"));
+  if (bytes.size() >= 3 && bytes[0] == 0xFF && bytes[1] == 0xD8 && bytes[2] == 0xFF &&
+      !jpeg_reaches_eoi(bytes)) {
+    throw FormatError(concat("image '", path, "' is a truncated or damaged JPEG: its ",
+                             bytes.size(), " bytes end before the end-of-image marker"));
+  }
   cv::Mat image;
   try {
     // IMREAD_UNCHANGED keeps gray/BGR/BGRA and the stored depth; it does not

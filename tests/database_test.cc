@@ -671,6 +671,21 @@ TEST(Database, Format1IsReadAndUpgradedInPlace) {
   EXPECT_EQ(d.continuity().query, 19);
 }
 
+// A frame size claimed by the meta table is bounded before any memory is
+// committed for it (the checksum is valid: a file written that way).
+TEST(DatabaseDamage, HugeFrameSizeInMetaIsAFormatError) {
+  const std::string path = temp_path("huge_meta");
+  fs::copy_file(small_database(), path);
+  sqlite3* db = nullptr;
+  ASSERT_EQ(sqlite3_open(path.c_str(), &db), SQLITE_OK);
+  sqlite3_exec(db, "UPDATE meta SET value = 1048576 WHERE key IN ('width', 'height')", nullptr,
+               nullptr, nullptr);
+  sqlite3_close(db);
+  rewrite_options(path, [](std::string&) {});  // re-signs the meta table
+  const std::string m = load(path);
+  EXPECT_NE(m.find("meta width = 1048576 is out of range"), std::string::npos) << m;
+}
+
 TEST(DatabaseDamage, EditedRowsAndMeta) {
   expect_edit_detected("UPDATE frames SET histogram = zeroblob(10) WHERE id = 3",
                        "frame 3: histogram blob has 10 bytes");

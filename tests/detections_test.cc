@@ -98,6 +98,14 @@ TEST_F(DetectionsTest, ReadsLsgdRunCsvUsingTheCandidateFrame) {
   EXPECT_TRUE(records[2].loop);
 }
 
+// Frame ids are bounded before the records are allocated.
+TEST_F(DetectionsTest, HugeFrameIdsAreFormatErrors) {
+  expect_line_error("10000000000,0,0.5\n", 1, "implausibly large");
+  expect_line_error("5,99999999,0.5\n", 1, "99999999");
+  EXPECT_THROW(read_detections(write("ok.csv", "1,0,0.5\n"), lsgd::kMaxFrames + 1),
+               lsgd::InvalidArgument);
+}
+
 TEST_F(DetectionsTest, LsgdRunLoopFrameMustBeTheCandidateOrNone) {
   expect_line_error(
       "frame,image,loop_frame,candidate_frame,score,ms,appearance,inliers\n0,a.png,3,1,7.5,1,4,30\n",

@@ -5,6 +5,7 @@
 #include "lsgd/eval/gt_formats.h"
 
 #include <gtest/gtest.h>
+#include <sys/stat.h>
 #include <matio.h>
 #include <unistd.h>
 
@@ -564,6 +565,33 @@ TEST(LoadGroundtruth, DispatchesAndTakesFramesFromTheFile) {
   o = {};
   o.poses_distance = -1;
   EXPECT_THROW(lsgd::eval::load_groundtruth(li.string(), o), lsgd::InvalidArgument);
+}
+
+// A frame id or count from a file is bounded before memory is committed: a
+// 12-byte file naming frame 199,999,999 is a FormatError naming the file and
+// the id, not an allocation of gigabytes; a pipe is refused, not waited on.
+TEST(LoadGroundtruth, HugeIdsAndSpecialFilesAreRefused) {
+  lsgd::eval::GtOptions o;
+  const fs::path huge = write_file("huge.txt", "199999999 0\n");
+  const std::string m = message_of<lsgd::FormatError>(
+      [&] { lsgd::eval::load_groundtruth(huge.string(), o); });
+  EXPECT_NE(m.find(huge.string()), std::string::npos) << m;
+  EXPECT_NE(m.find("199999999"), std::string::npos) << m;
+  o.frames = lsgd::kMaxFrames + 1;
+  EXPECT_THROW(lsgd::eval::load_groundtruth(huge.string(), o), lsgd::InvalidArgument);
+  // Up to the limit a ground truth costs what its pairs cost, not its frames.
+  const fs::path far = write_file("far.txt", "9999999 3\n");
+  o = {};
+  const GroundTruth gt = lsgd::eval::load_groundtruth(far.string(), o);
+  EXPECT_EQ(gt.frames(), lsgd::kMaxFrames);
+  EXPECT_EQ(gt.queries(), (std::vector<std::int64_t>{9999999}));
+  EXPECT_EQ(lsgd::eval::gt_stats(gt, 0).frames_in_loops, 2);
+  const fs::path fifo = fs::path(write_file("dummy", "")).parent_path() / "pipe.txt";
+  fs::remove(fifo);
+  ASSERT_EQ(::mkfifo(fifo.c_str(), 0600), 0);
+  EXPECT_NE(message_of<lsgd::IoError>([&] { lsgd::eval::load_groundtruth(fifo.string(), o); })
+                .find("not a regular file"),
+            std::string::npos);
 }
 
 TEST(GtStats, CountsPairsPositivesAndGaps) {

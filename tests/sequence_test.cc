@@ -1,6 +1,7 @@
 #include "lsgd/io/sequence.h"
 
 #include <gtest/gtest.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
 #include <algorithm>
@@ -14,6 +15,7 @@
 #include <vector>
 
 #include "lsgd/error.h"
+#include "lsgd/limits.h"
 #include "test_util.h"
 
 namespace lsgd::io {
@@ -292,6 +294,46 @@ TEST_F(SequenceTest, TruncatedJpegIsFormatErrorAtEveryLength) {
     const std::string last = write("last.jpg", bytes.substr(0, bytes.size() - 1));
     expect_error<FormatError>([&] { read_image(last); }, {last, "end-of-image marker"});
   }
+}
+
+// What cannot be a frame is refused before it is opened: a pipe would block
+// forever, a device never ends, a huge file would be read into memory.
+TEST_F(SequenceTest, SpecialAndHugeFilesAreRefusedBeforeReading) {
+  const std::string fifo = path("pipe.jpg");
+  ASSERT_EQ(::mkfifo(fifo.c_str(), 0600), 0);
+  expect_error<IoError>([&] { read_image(fifo); }, {fifo, "not a regular file"});
+  expect_error<IoError>([&] { read_image("/dev/zero"); }, {"/dev/zero", "not a regular file"});
+  const std::string huge = path("huge.jpg");
+  {
+    std::ofstream f(huge);  // sparse: no disk space used
+  }
+  fs::resize_file(huge, static_cast<std::uintmax_t>(kMaxImageFileBytes) + 1);
+  expect_error<FormatError>([&] { read_image(huge); }, {huge, "bytes, more than"});
+  expect_error<IoError>([&] { check_input_file(fifo, "list file"); }, {"list file", fifo});
+  const std::string list = path("list.txt");
+  ASSERT_EQ(::mkfifo(list.c_str(), 0600), 0);
+  expect_error<IoError>([&] { open_sequence(list); }, {list, "neither a folder nor a regular file"});
+  expect_error<IoError>([&] { read_image_list(list); }, {list, "not a regular file"});
+  EXPECT_NO_THROW(check_input_file(huge, "anything"));  // no size limit asked
+}
+
+// A dangling or looping link with an image name is a frame that cannot be
+// read (reported, skipped), not a gap that shifts every later frame id.
+TEST_F(SequenceTest, BrokenLinksStayInTheFolderListing) {
+  const fs::path folder = fs::path(path("links"));
+  fs::create_directories(folder);
+  ASSERT_TRUE(cv::imwrite((folder / "1.png").string(), random_image(CV_8UC1)));
+  fs::create_symlink(folder / "missing.png", folder / "2.png");  // dangling
+  fs::create_symlink(folder / "4.png", folder / "3.png");        // a loop
+  fs::create_symlink(folder / "3.png", folder / "4.png");
+  ASSERT_TRUE(cv::imwrite((folder / "5.png").string(), random_image(CV_8UC1)));
+  fs::create_directories(folder / "6.png");  // a folder with an image name is not a frame
+  const auto images = list_images(folder.string());
+  ASSERT_EQ(images.size(), 5u);
+  EXPECT_EQ(fs::path(images[4]).filename(), "5.png");
+  expect_error<IoError>([&] { read_image(images[1]); }, {images[1], "does not exist"});
+  expect_error<IoError>([&] { read_image(images[2]); }, {images[2], "cannot be accessed"});
+  EXPECT_EQ(read_image(images[4]).cols, random_image(CV_8UC1).cols);
 }
 
 TEST_F(SequenceTest, SixteenBitPngIsFormatError) {

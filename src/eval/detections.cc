@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "internal/check.h"
+#include "lsgd/io/sequence.h"
 #include "lsgd/error.h"
 
 namespace lsgd::eval {
@@ -121,7 +122,8 @@ Columns columns_from_header(std::vector<std::string> header) {
 // Reads records one at a time; a quoted field may continue on the next line.
 class RecordReader {
  public:
-  explicit RecordReader(const std::string& path) : path_(path), in_(path) {
+  explicit RecordReader(const std::string& path)
+      : path_(path), in_((io::check_input_file(path, "detections file"), path)) {
     if (!in_) throw IoError(concat("cannot read detections file '", path, "'"));
   }
   // Next non-blank, non-comment record; false at the end. line() is where it starts.
@@ -184,6 +186,11 @@ Row parse_row(const std::vector<std::string>& f, const Columns& c, const std::st
     throw FormatError(concat(where, ": match '", f[static_cast<std::size_t>(c.match)],
                              "' is not a frame id or -1 (no loop)"));
   }
+  if (*query >= kMaxFrames || *match >= kMaxFrames) {
+    throw FormatError(concat(where, ": frame id ", std::max(*query, *match),
+                             " is implausibly large (at most ", kMaxFrames,
+                             " frames are supported)"));
+  }
   row.query = *query;
   row.match = *match;
   const std::string& score = f[static_cast<std::size_t>(c.score)];
@@ -217,7 +224,10 @@ Row parse_row(const std::vector<std::string>& f, const Columns& c, const std::st
 }  // namespace
 
 std::vector<FrameRecord> read_detections(const std::string& path, std::int64_t frames) {
-  if (frames < -1) internal::throw_invalid("read_detections: frames = ", frames, " must be >= -1");
+  if (frames < -1 || frames > kMaxFrames) {
+    internal::throw_invalid("read_detections: frames = ", frames, " must be in [-1, ", kMaxFrames,
+                            "]");
+  }
   RecordReader reader(path);
   Columns columns;
   std::vector<Row> rows;

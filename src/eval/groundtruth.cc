@@ -6,14 +6,16 @@
 
 #include "internal/check.h"
 #include "lsgd/error.h"
+#include "lsgd/io/sequence.h"
 
 namespace lsgd::eval {
 
 using internal::concat;
 
-GroundTruth::GroundTruth(std::int64_t frames) {
-  if (frames < 0) internal::throw_invalid("ground truth frames = ", frames, ": must be >= 0");
-  matches_.resize(static_cast<std::size_t>(frames));
+GroundTruth::GroundTruth(std::int64_t frames) : frames_(frames) {
+  if (frames < 0 || frames > kMaxFrames) {
+    internal::throw_invalid("ground truth frames = ", frames, ": must be in [0, ", kMaxFrames, "]");
+  }
 }
 
 void GroundTruth::add(std::int64_t a, std::int64_t b) {
@@ -23,7 +25,7 @@ void GroundTruth::add(std::int64_t a, std::int64_t b) {
   }
   if (a == b) return;
   const std::int64_t q = std::max(a, b), m = std::min(a, b);
-  auto& list = matches_[static_cast<std::size_t>(q)];
+  auto& list = matches_[q];
   auto it = std::lower_bound(list.begin(), list.end(), m);
   if (it != list.end() && *it == m) return;
   list.insert(it, m);
@@ -33,15 +35,24 @@ void GroundTruth::add(std::int64_t a, std::int64_t b) {
 bool GroundTruth::is_loop(std::int64_t a, std::int64_t b) const {
   const std::int64_t q = std::max(a, b), m = std::min(a, b);
   if (m < 0 || q >= frames() || q == m) return false;
-  const auto& list = matches_[static_cast<std::size_t>(q)];
-  return std::binary_search(list.begin(), list.end(), m);
+  const auto it = matches_.find(q);
+  return it != matches_.end() && std::binary_search(it->second.begin(), it->second.end(), m);
 }
 
 const std::vector<std::int64_t>& GroundTruth::matches(std::int64_t q) const {
   if (q < 0 || q >= frames()) {
     internal::throw_invalid("frame ", q, " is outside the ground truth's ", frames(), " frames");
   }
-  return matches_[static_cast<std::size_t>(q)];
+  static const std::vector<std::int64_t> kNone;
+  const auto it = matches_.find(q);
+  return it == matches_.end() ? kNone : it->second;
+}
+
+std::vector<std::int64_t> GroundTruth::queries() const {
+  std::vector<std::int64_t> out;
+  out.reserve(matches_.size());
+  for (const auto& [q, list] : matches_) out.push_back(q);
+  return out;
 }
 
 bool GroundTruth::has_loop(std::int64_t q, std::int64_t min_gap) const {
@@ -50,6 +61,7 @@ bool GroundTruth::has_loop(std::int64_t q, std::int64_t min_gap) const {
 }
 
 GroundTruth read_pairs(const std::string& path, std::int64_t frames) {
+  io::check_input_file(path, "ground-truth file");
   std::ifstream in(path);
   if (!in) throw IoError(concat("cannot open ground-truth file '", path, "'"));
   GroundTruth gt(frames);
@@ -80,7 +92,7 @@ void write_pairs(const GroundTruth& gt, const std::string& path) {
   if (!out) throw IoError(concat("cannot write ground-truth file '", path, "'"));
   out << "# lsgd pairs: frames=" << gt.frames() << " pairs=" << gt.pairs()
       << "; one line per loop: q m (0-based, q > m)\n";
-  for (std::int64_t q = 0; q < gt.frames(); ++q) {
+  for (const std::int64_t q : gt.queries()) {
     for (std::int64_t m : gt.matches(q)) out << q << ' ' << m << '\n';
   }
   if (!out) throw IoError(concat("error while writing '", path, "'"));

@@ -19,6 +19,7 @@
 
 #include "internal/check.h"
 #include "lsgd/error.h"
+#include "lsgd/io/sequence.h"
 
 namespace lsgd::eval {
 
@@ -37,6 +38,7 @@ constexpr std::array<std::pair<GtFormat, const char*>, 5> kFormatNames = {{
 }};
 
 std::ifstream open_text(const std::string& path, const char* what) {
+  io::check_input_file(path, what);
   std::ifstream in(path, std::ios::binary);
   if (!in) throw IoError(concat("cannot open ", what, " '", path, "'"));
   return in;
@@ -143,8 +145,9 @@ GroundTruth read_pairs_counted(const std::string& path, std::int64_t frames) {
       max_id = std::max({max_id, a, b});
     }
   }
-  if (max_id >= 1'000'000'000) {
-    throw FormatError(concat(path, ": frame id ", max_id, " is implausibly large (limit 1e9)"));
+  if (max_id >= kMaxFrames) {
+    throw FormatError(concat(path, ": frame id ", max_id, " is implausibly large (at most ",
+                             kMaxFrames, " frames are supported)"));
   }
   // Malformed lines are left to read_pairs, which names them.
   return read_pairs(path, max_id + 1);
@@ -601,7 +604,7 @@ std::string to_string(GtFormat format) {
 }
 
 void GtOptions::check() const {
-  internal::check_range<std::int64_t>("ground truth frames", frames, -1, 1'000'000'000);
+  internal::check_range<std::int64_t>("ground truth frames", frames, -1, kMaxFrames);
   internal::check_range_open_low("ground truth poses_distance", poses_distance, 0.0, 1e6, "metres");
   internal::check_range<std::int64_t>("ground truth poses_min_gap", poses_min_gap, 0, 1'000'000'000,
                                       "frames");
@@ -709,6 +712,7 @@ void check_v4_name_length(const std::string& path) {
 GroundTruth read_mat(const std::string& path, std::int64_t frames, const std::string& variable) {
   static std::once_flag log_once;
   std::call_once(log_once, [] { Mat_LogInitFunc("lsgd", matio_log); });
+  io::check_input_file(path, "MAT file");
   if (!std::ifstream(path)) throw IoError(concat("cannot open MAT file '", path, "'"));
   check_v4_name_length(path);
   matio_last_message.clear();
@@ -883,20 +887,21 @@ GtStats gt_stats(const GroundTruth& gt, std::int64_t min_gap) {
   s.min_gap = min_gap;
   std::vector<std::int64_t> gaps;
   gaps.reserve(static_cast<std::size_t>(gt.pairs()));
-  std::vector<bool> in_loop(static_cast<std::size_t>(gt.frames()), false);
-  for (std::int64_t q = 0; q < gt.frames(); ++q) {
+  std::vector<std::int64_t> in_loop;  // every frame of every pair, then made unique
+  for (const std::int64_t q : gt.queries()) {
     const auto& matches = gt.matches(q);
-    if (matches.empty()) continue;
     ++s.positives;
     if (gt.has_loop(q, min_gap)) ++s.window_positives;
-    in_loop[static_cast<std::size_t>(q)] = true;
+    in_loop.push_back(q);
     for (std::int64_t m : matches) {
-      in_loop[static_cast<std::size_t>(m)] = true;
+      in_loop.push_back(m);
       gaps.push_back(q - m);
       if (q - m > min_gap) ++s.window_pairs;
     }
   }
-  s.frames_in_loops = std::count(in_loop.begin(), in_loop.end(), true);
+  std::sort(in_loop.begin(), in_loop.end());
+  s.frames_in_loops =
+      std::unique(in_loop.begin(), in_loop.end()) - in_loop.begin();
   if (!gaps.empty()) {
     std::sort(gaps.begin(), gaps.end());
     const std::size_t h = gaps.size() / 2;

@@ -20,7 +20,7 @@ GroundTruth select_rows(const GroundTruth& gt, const std::vector<std::int64_t>& 
     frames_of[static_cast<std::size_t>(rows[f])].push_back(static_cast<std::int64_t>(f));
   }
   GroundTruth out(static_cast<std::int64_t>(rows.size()));
-  for (std::int64_t q = 0; q < gt.frames(); ++q) {
+  for (std::int64_t q = 0; q < gt.frames(); ++q) {  // frames_of spans every row: bounded
     const auto& fq = frames_of[static_cast<std::size_t>(q)];
     if (fq.empty()) continue;
     for (std::size_t i = 0; i < fq.size(); ++i) {  // one row, several frames: one place

@@ -18,6 +18,8 @@
 
 #include "internal/check.h"
 #include "lsgd/error.h"
+#include "lsgd/io/sequence.h"
+#include "lsgd/limits.h"
 
 namespace lsgd::io {
 namespace {
@@ -426,9 +428,7 @@ DetectorOptions parse_config(const std::string& yaml_text, const std::string& so
 
 DetectorOptions load_config(const std::string& path, const DetectorOptions& base) {
   std::error_code ec;
-  if (std::filesystem::is_directory(path, ec)) {
-    throw IoError(concat("cannot read config '", path, "': it is a folder"));
-  }
+  check_input_file(path, "config", kMaxConfigBytes);
   std::ifstream in(path, std::ios::binary);
   if (!in) {
     const bool missing = !std::filesystem::exists(path, ec);

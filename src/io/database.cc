@@ -415,10 +415,10 @@ void Database::Impl::load_header() {
     if (v < lo || v > hi) format_error(path, "meta ", key, " = ", v, " is out of range");
     return static_cast<int>(v);
   };
-  width = integer("width", 0, 1 << 20);
-  height = integer("height", 0, 1 << 20);
-  grid.rows = integer("grid_rows", 0, 1 << 20);
-  grid.cols = integer("grid_cols", 0, 1 << 20);
+  width = integer("width", 0, kMaxImageSide);
+  height = integer("height", 0, kMaxImageSide);
+  grid.rows = integer("grid_rows", 0, kMaxImageSide);
+  grid.cols = integer("grid_cols", 0, kMaxImageSide);
   const bool sized = width > 0 && height > 0;
   if ((width > 0) != (height > 0) ||
       (sized && grid != grid_size(width, height, options.segmentation.superpixel_size)) ||
@@ -646,12 +646,18 @@ void Database::restore(Detector& detector) const {
   descriptor.grid = m.grid;
   descriptor.storage = o.descriptor.storage;
   if (compact) {
-    descriptor.compact.resize(cells * kCompactBins);
     descriptor.cell_pixels = static_cast<double>(m.width) * m.height / static_cast<double>(cells);
-  } else {
-    descriptor.hist.resize(cells * kBins);
-    descriptor.pixels.resize(cells);
   }
+  // The descriptor's memory is committed when the first row shows a blob of
+  // its size, so the meta's frame size alone never makes an allocation.
+  const auto allocate = [&] {
+    if (compact) {
+      descriptor.compact.resize(cells * kCompactBins);
+    } else {
+      descriptor.hist.resize(cells * kBins);
+      descriptor.pixels.resize(cells);
+    }
+  };
   std::vector<float> points;
   std::vector<std::uint8_t> orb;
   std::vector<std::vector<std::int64_t>> nodes;
@@ -689,6 +695,7 @@ void Database::restore(Detector& detector) const {
     if (row.pixels_size != static_cast<std::int64_t>(pixel_bytes)) {
       bad("pixels blob has ", row.pixels_size, " bytes, expected ", pixel_bytes);
     }
+    if (id == 0) allocate();
     if (nodes_mode) {
       if (type(5) != SQLITE_INTEGER) bad("node is not an integer (search mode nodes)");
       row.node = sqlite3_column_int64(s, 5);

@@ -79,6 +79,7 @@ std::string kitti_sequence_name(const std::string& nn) {
 
 // Non-blank lines of times.txt, each a number; FormatError naming file:line.
 std::int64_t count_timestamps(const fs::path& times) {
+  check_input_file(times.string(), "KITTI times file");
   std::ifstream in(times);
   if (!in) throw IoError(concat("cannot read '", times.string(), "'"));
   std::int64_t count = 0;

@@ -1,8 +1,12 @@
 #include "lsgd/io/sequence.h"
 
+#include <sys/stat.h>
+
 #include <algorithm>
 #include <array>
 #include <cctype>
+#include <cerrno>
+#include <cstring>
 #include <cstddef>
 #include <filesystem>
 #include <fstream>
@@ -15,6 +19,7 @@
 
 #include "internal/check.h"
 #include "lsgd/error.h"
+#include "lsgd/limits.h"
 
 namespace lsgd::io {
 namespace {
@@ -107,9 +112,16 @@ std::vector<std::string> list_images(const std::string& path, NameOrder order) {
   if (ec) throw IoError(concat("cannot read folder '", path, "': ", ec.message()));
   std::vector<std::string> names;
   for (const fs::directory_iterator end; it != end; it.increment(ec)) {
+    // Everything with an image name but a folder is a frame: a dangling or
+    // looping link too, so that it is reported when read (and skipped) instead
+    // of vanishing and shifting every later frame id.
     std::error_code type_ec;
-    if (!it->is_regular_file(type_ec) || type_ec) continue;  // subfolders, broken links
+    if (it->is_directory(type_ec) && !type_ec) continue;
     if (has_image_extension(it->path())) names.push_back(it->path().filename().string());
+    if (static_cast<std::int64_t>(names.size()) > kMaxFrames) {
+      throw FormatError(concat("folder '", path, "' holds more than ", kMaxFrames,
+                               " images, the most a sequence may have"));
+    }
   }
   if (ec) throw IoError(concat("cannot read folder '", path, "': ", ec.message()));
   if (names.empty()) {
@@ -128,6 +140,7 @@ std::vector<std::string> list_images(const std::string& path, NameOrder order) {
 }
 
 std::vector<std::string> read_image_list(const std::string& path) {
+  check_input_file(path, "list file");
   std::ifstream in(path, std::ios::binary);
   if (!in) throw IoError(concat("cannot read list file '", path, "'"));
   const fs::path folder = fs::path(path).parent_path();
@@ -141,6 +154,10 @@ std::vector<std::string> read_image_list(const std::string& path) {
     if (entry.empty() || entry[0] == '#') continue;
     const fs::path image(entry);
     images.push_back(image.is_absolute() ? image.string() : (folder / image).string());
+    if (static_cast<std::int64_t>(images.size()) > kMaxFrames) {
+      throw FormatError(concat("list file '", path, "' lists more than ", kMaxFrames,
+                               " images, the most a sequence may have"));
+    }
   }
   if (in.bad()) throw IoError(concat("cannot read list file '", path, "'"));
   if (images.empty()) {
@@ -176,15 +193,7 @@ const char* depth_name(int depth) {
 
 // Reads the whole file; IoError when it is missing or unreadable.
 std::vector<unsigned char> read_bytes(const std::string& path) {
-  std::error_code ec;
-  const fs::file_status status = fs::status(path, ec);
-  if (!fs::exists(status)) {
-    throw IoError(concat("image '", path, "' does not exist",
-                         ec && ec != std::errc::no_such_file_or_directory
-                             ? concat(" or cannot be accessed: ", ec.message())
-                             : std::string()));
-  }
-  if (fs::is_directory(status)) throw IoError(concat("image '", path, "' is a folder"));
+  check_input_file(path, "image", kMaxImageFileBytes);
   std::ifstream in(path, std::ios::binary);
   if (!in) throw IoError(concat("cannot read image '", path, "'"));
   std::vector<unsigned char> bytes((std::istreambuf_iterator<char>(in)),
@@ -240,6 +249,26 @@ void check_decoded(const cv::Mat& image, const std::string& path) {
 }
 
 }  // namespace
+
+void check_input_file(const std::string& path, const std::string& what, std::int64_t max_bytes) {
+  struct stat st {};
+  if (::stat(path.c_str(), &st) != 0) {
+    const int error = errno;
+    throw IoError(concat(what, " '", path, "' ",
+                         error == ENOENT ? std::string("does not exist")
+                                         : concat("cannot be accessed: ", std::strerror(error))));
+  }
+  if (S_ISDIR(st.st_mode)) throw IoError(concat(what, " '", path, "' is a folder"));
+  if (!S_ISREG(st.st_mode)) {
+    throw IoError(concat(what, " '", path,
+                         "' is not a regular file (a pipe, device or socket), which could block "
+                         "or never end"));
+  }
+  if (max_bytes >= 0 && st.st_size > max_bytes) {
+    throw FormatError(concat(what, " '", path, "' has ", st.st_size, " bytes, more than the ",
+                             max_bytes, " this lsgd reads"));
+  }
+}
 
 bool natural_less(const std::string& a, const std::string& b) {
   int zeros = 0;

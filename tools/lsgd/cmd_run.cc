@@ -1,5 +1,6 @@
 // lsgd run --sequence PATH [--config FILE] [--output FILE] [--database FILE [--session N]]
 #include <algorithm>
+#include <cstdio>
 #include <fstream>
 #include <iostream>
 #include <memory>
@@ -71,6 +72,8 @@ void run_database(const RunArgs& args, const io::Sequence& sequence) {
   CsvWriter csv(args.output);
   Progress progress(source.frames, "run");
   double total_ms = 0;
+  std::int64_t processed = 0;
+  std::string first_skip;
   for (std::int64_t i = 0; i < source.frames; ++i) {
     Result result;
     try {
@@ -79,15 +82,27 @@ void run_database(const RunArgs& args, const io::Sequence& sequence) {
       const std::string where = "frame " + std::to_string(i) + " (" + source.name(i) + "): ";
       if (args.layout.strict) throw Error(where + e.what());
       std::cerr << "lsgd: skipped " << where << e.what() << " (--strict stops here instead)\n";
+      if (first_skip.empty()) first_skip = e.what();
       continue;  // nothing stored: the database only ever holds processed frames
     }
+    ++processed;
     db->append(detector, result, session, source.name(i));
     csv.write(result, source.name(i));
     total_ms += result.timings.total_ms;
-    progress.update(i + 1, total_ms / static_cast<double>(i + 1));
+    progress.update(i + 1, total_ms / static_cast<double>(processed));
   }
-  std::cerr << "processed " << source.frames << " frames, " << csv.loops() << " loops, "
-            << total_ms / static_cast<double>(std::max<std::int64_t>(source.frames, 1))
+  if (processed == 0) {
+    // A database this run created and left empty is not left behind.
+    if (!exists && db->frames() == 0) {
+      db.reset();
+      for (const char* suffix : {"", "-wal", "-shm"}) std::remove((args.database + suffix).c_str());
+    }
+    throw_no_frame(source.frames, first_skip);
+  }
+  const std::int64_t skipped = source.frames - processed;
+  std::cerr << "processed " << processed << " frames"
+            << (skipped > 0 ? " (" + std::to_string(skipped) + " skipped)" : std::string()) << ", "
+            << csv.loops() << " loops, " << total_ms / static_cast<double>(processed)
             << " ms/frame mean; " << args.database << " holds " << db->frames() << " frames"
             << (args.output.empty() ? "" : ", rows in " + args.output) << "\n";
 }

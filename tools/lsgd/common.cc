@@ -151,9 +151,10 @@ std::vector<eval::FrameRecord> run_with_progress(Detector& detector,
   Progress progress(source.frames, label);
   double total_ms = 0;
   std::int64_t done = 0;
+  std::string first_skip;
   eval::RunOptions options;
   options.skip_bad_frames = skip_bad_frames;
-  return eval::run_detector(
+  auto records = eval::run_detector(
       detector, source,
       [&](const Result& r, double) {
         if (csv) csv->write(r, source.name(r.frame));
@@ -162,10 +163,19 @@ std::vector<eval::FrameRecord> run_with_progress(Detector& detector,
         progress.update(r.frame + 1, total_ms / static_cast<double>(done));
       },
       options,
-      [](std::int64_t frame, const std::string& name, const std::string& error) {
+      [&](std::int64_t frame, const std::string& name, const std::string& error) {
         std::cerr << "lsgd: skipped frame " << frame << " (" << name << "): " << error
                   << " (--strict stops here instead)\n";
+        if (first_skip.empty()) first_skip = error;
       });
+  if (done == 0) throw_no_frame(source.frames, first_skip);
+  return records;
+}
+
+void throw_no_frame(std::int64_t images, const std::string& first_error) {
+  throw Error("no frame was processed: all " + std::to_string(images) +
+              " images were skipped (the first: " + first_error +
+              "); is --sequence a folder of images or a list of their paths?");
 }
 
 std::int64_t skipped_frames(const std::vector<eval::FrameRecord>& records) {

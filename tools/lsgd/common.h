@@ -84,11 +84,15 @@ class CsvWriter {
 // Runs the detector over the source with a progress bar labelled `label`,
 // writing each frame's CSV row to `csv` when given. With skip_bad_frames, an
 // unreadable or rejected image is reported on stderr ("skipped frame ...")
-// and the run goes on (eval::RunOptions).
+// and the run goes on (eval::RunOptions); when no frame at all could be
+// processed it throws (throw_no_frame).
 std::vector<eval::FrameRecord> run_with_progress(Detector& detector,
                                                  const eval::FrameSource& source,
                                                  const std::string& label, CsvWriter* csv,
                                                  bool skip_bad_frames = false);
+// A run in which every image was skipped is an error, not an empty success:
+// throws lsgd::Error saying so, with the first image's error.
+[[noreturn]] void throw_no_frame(std::int64_t images, const std::string& first_error);
 // Frames of `records` that were skipped.
 std::int64_t skipped_frames(const std::vector<eval::FrameRecord>& records);
 

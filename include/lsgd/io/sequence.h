@@ -3,6 +3,7 @@
 // and frame subsampling are in layouts.h.
 #pragma once
 
+#include <cstdint>
 #include <string>
 #include <vector>
 
@@ -11,6 +12,14 @@ class Mat;
 }
 
 namespace lsgd::io {
+
+// Checks, before it is opened, that `path` can be read as `what` ("image",
+// "list file", "config", ...): an existing regular file (a folder, a pipe or
+// a device would fail, block or never end) of at most max_bytes (-1: any
+// size). Throws IoError (missing, not a regular file) or FormatError (too
+// large), naming the file.
+void check_input_file(const std::string& path, const std::string& what,
+                      std::int64_t max_bytes = -1);
 
 struct Sequence {
   std::string source;               // the folder or list file it was opened from

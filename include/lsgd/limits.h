@@ -1,0 +1,19 @@
+// Bounds on what lsgd reads from outside: every size taken from a file is
+// checked against these before memory is committed, so a hostile or damaged
+// input ends in an error naming the file and the value, never in an
+// allocation the size of a number it holds.
+#pragma once
+
+#include <cstdint>
+
+namespace lsgd {
+
+// Frames of one sequence, ground truth, detections file or database: 10
+// million (four days at 30 frames per second; KITTI-00 has 4,541).
+constexpr std::int64_t kMaxFrames = 10'000'000;
+// An image file: 1 GiB (a 16384 x 16384 BGRA image uncompressed).
+constexpr std::int64_t kMaxImageFileBytes = std::int64_t{1} << 30;
+// A YAML configuration file: 1 MiB.
+constexpr std::int64_t kMaxConfigBytes = std::int64_t{1} << 20;
+
+}  // namespace lsgd

@@ -2,7 +2,8 @@
 # CI hardening (docs/reliability.md): (a) the whole test suite built with
 # AddressSanitizer + UndefinedBehaviorSanitizer (g++), (b) the libFuzzer
 # targets in fuzz/ (clang++), each run for a bounded time from its generated
-# seed corpus. Non-zero exit on any build failure, test failure, sanitizer
+# seed corpus, (c) the detector's tests under ThreadSanitizer (a Detector
+# shared by two threads refuses the overlapping call instead of racing). Non-zero exit on any build failure, test failure, sanitizer
 # report or fuzzer finding.
 #   FUZZ_RUNS      inputs per fuzz target (default 60000; fixed seed 1, so a
 #                  run is reproducible: same binary, same inputs, same verdict)
@@ -23,6 +24,12 @@ cmake -S . -B build-asan -DCMAKE_BUILD_TYPE=RelWithDebInfo -DCMAKE_CXX_FLAGS_REL
   -DLSGD_SANITIZE=address,undefined -DLSGD_BUILD_TESTS=ON -DLSGD_BUILD_TOOLS=ON -DLSGD_BUILD_BENCH=OFF
 cmake --build build-asan -j"$jobs"
 ctest --test-dir build-asan --output-on-failure -j"$jobs" -E "SyntheticCli|SyntheticDefaults"
+
+echo "ci-hardening: (c) ThreadSanitizer: detector_test in build-tsan"
+cmake -S . -B build-tsan -DCMAKE_BUILD_TYPE=RelWithDebInfo -DCMAKE_CXX_FLAGS_RELWITHDEBINFO="-O1 -g1" \
+  -DLSGD_SANITIZE=thread -DLSGD_BUILD_TESTS=ON -DLSGD_BUILD_TOOLS=OFF -DLSGD_BUILD_BENCH=OFF
+cmake --build build-tsan -j"$jobs" --target detector_test
+TSAN_OPTIONS=halt_on_error=1 build-tsan/tests/detector_test --gtest_filter='Detector.*'
 
 echo "ci-hardening: (b) libFuzzer targets in build-fuzz"
 cmake -S . -B build-fuzz -DCMAKE_CXX_COMPILER=clang++ -DCMAKE_BUILD_TYPE=RelWithDebInfo \

@@ -52,13 +52,35 @@ Detector::Detector(const DetectorOptions& options)
       temporal_(options.verification.temporal_options),
       geometric_(options.verification.geometric_options) {}
 
+// Marks the detector busy for one call that changes it; a second call while
+// one runs (another thread) throws instead of corrupting the state.
+class Detector::Exclusive {
+ public:
+  Exclusive(std::atomic<bool>& busy, const char* call) : busy_(busy) {
+    if (busy_.exchange(true, std::memory_order_acquire)) {
+      internal::throw_invalid(
+          "Detector::", call, " was called while another call on the same Detector was running "
+          "(from another thread): a Detector is used by one thread at a time (one detector per "
+          "thread, or a mutex around its calls)");
+    }
+  }
+  ~Exclusive() { busy_.store(false, std::memory_order_release); }
+  Exclusive(const Exclusive&) = delete;
+  Exclusive& operator=(const Exclusive&) = delete;
+
+ private:
+  std::atomic<bool>& busy_;
+};
+
 Result Detector::process(const cv::Mat& frame) {
+  const Exclusive exclusive(busy_, "process");
   const std::int64_t start = now_ns();
   to_gray(frame, gray_);
   return process_gray(ms_since(start), start);
 }
 
 Result Detector::process(const ImageView& frame) {
+  const Exclusive exclusive(busy_, "process");
   const std::int64_t start = now_ns();
   to_gray(frame, gray_);
   return process_gray(ms_since(start), start);
@@ -278,6 +300,7 @@ Candidate Detector::continuation_candidate(std::int64_t query) {
 void Detector::restore_frame(int width, int height, const Descriptor& descriptor,
                              const std::vector<float>& points, const std::vector<std::uint8_t>& orb,
                              std::int64_t node) {
+  const Exclusive exclusive(busy_, "restore_frame");
   const std::int64_t frame = store_.size();
   const std::int64_t max_node =
       options_.search.mode == SearchMode::kDynamicNodes ? store_.groups() : 0;
@@ -329,21 +352,43 @@ void Detector::restore_frame(int width, int height, const Descriptor& descriptor
 }
 
 void Detector::restore_nodes(std::vector<std::vector<std::int64_t>> nodes) {
+  const Exclusive exclusive(busy_, "restore_nodes");
   if (options_.search.mode != SearchMode::kDynamicNodes) {
     internal::throw_invalid("restore_nodes: the search mode is ", to_string(options_.search.mode));
   }
-  for (const auto& node : nodes) {
-    for (const std::int64_t id : node) {
-      if (id >= store_.size()) {
-        internal::throw_invalid("restore_nodes: frame ", id, " is not stored (", store_.size(),
-                                " frames)");
+  // As assign() builds them: every stored frame in exactly one node, nodes in
+  // the order their first frames were stored.
+  std::vector<std::int64_t> node_of(static_cast<std::size_t>(store_.size()), -1);
+  for (std::size_t k = 0; k < nodes.size(); ++k) {
+    for (const std::int64_t id : nodes[k]) {
+      if (id < 0 || id >= store_.size()) {
+        internal::throw_invalid("restore_nodes: frame ", id, " of node ", k,
+                                " is not stored (", store_.size(), " frames)");
       }
+      std::int64_t& owner = node_of[static_cast<std::size_t>(id)];
+      if (owner >= 0) {
+        internal::throw_invalid("restore_nodes: frame ", id, " is in node ", owner, " and in node ",
+                                k);
+      }
+      owner = static_cast<std::int64_t>(k);
+    }
+    if (k > 0 && !nodes[k].empty() && !nodes[k - 1].empty() &&
+        nodes[k].front() <= nodes[k - 1].front()) {
+      internal::throw_invalid("restore_nodes: node ", k, " starts at frame ", nodes[k].front(),
+                              ", not after node ", k - 1, "'s first frame ", nodes[k - 1].front());
+    }
+  }
+  for (std::size_t id = 0; id < node_of.size(); ++id) {
+    if (node_of[id] < 0) {
+      internal::throw_invalid("restore_nodes: frame ", id, " is in no node (every stored frame "
+                              "joined or created one)");
     }
   }
   nodes_.restore(std::move(nodes));
 }
 
 void Detector::restore_continuity(const ContinuityState& state) {
+  const Exclusive exclusive(busy_, "restore_continuity");
   if (state.query != store_.size() - 1 || state.loop < -1 || state.loop >= state.query ||
       !std::isfinite(state.inliers) || state.inliers < 0) {
     internal::throw_invalid("restore_continuity: frame ", state.query, " with loop ", state.loop,
@@ -354,6 +399,7 @@ void Detector::restore_continuity(const ContinuityState& state) {
 }
 
 void Detector::restore_temporal(std::int64_t last_query, std::vector<std::int64_t> places) {
+  const Exclusive exclusive(busy_, "restore_temporal");
   if (!options_.verification.temporal) {
     internal::throw_invalid("restore_temporal: temporal verification is off");
   }

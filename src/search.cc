@@ -136,6 +136,14 @@ DynamicNodes::Outcome DynamicNodes::assign(const FrameStore& store, const Descri
   return outcome;
 }
 
+const std::vector<std::int64_t>& DynamicNodes::members(std::int64_t node) const {
+  if (node < 0 || node >= size()) {
+    internal::throw_invalid("DynamicNodes::members: node ", node, " does not exist (", size(),
+                            " nodes)");
+  }
+  return nodes_[static_cast<std::size_t>(node)];
+}
+
 void DynamicNodes::restore(std::vector<std::vector<std::int64_t>> nodes) {
   for (std::size_t k = 0; k < nodes.size(); ++k) {
     if (nodes[k].empty()) internal::throw_invalid("DynamicNodes::restore: node ", k, " is empty");

@@ -276,6 +276,38 @@ TEST(CompactDetector, RestoreFramePlacesFramesByNode) {
 
 // restore_frame's node is only a placement: frames restored without it (all
 // in group 0) and nodes restored afterwards must still run.
+// Node membership that process() could not have built is refused, leaving
+// the detector unchanged: a frame in no node or in two, a node starting
+// before the one created earlier, a frame not stored. A node that does not
+// exist is an InvalidArgument, not std::out_of_range.
+TEST(CompactDetector, RestoredNodesMustCoverEveryFrameOnce) {
+  DetectorOptions o;
+  o.segmentation.superpixel_size = 16;
+  o.descriptor.storage = HistogramStorage::kCompact;
+  o.search.mode = SearchMode::kDynamicNodes;
+  const std::vector<Descriptor> exact = street(8, 40);
+  Detector d(o);
+  for (const Descriptor& e : exact) d.restore_frame(160, 120, compacted(e));
+  const auto refused = [&](std::vector<std::vector<std::int64_t>> nodes) {
+    return message_of<InvalidArgument>([&] { d.restore_nodes(std::move(nodes)); });
+  };
+  EXPECT_NE(refused({{0, 2, 4}, {1, 3}, {5}, {6}}).find("frame 7 is in no node"),
+            std::string::npos);
+  EXPECT_NE(refused({{0, 2, 4}, {1, 3, 4}, {5}, {6, 7}}).find("frame 4 is in node 0 and in node 1"),
+            std::string::npos);
+  EXPECT_NE(refused({{1, 3}, {0, 2, 4}, {5}, {6, 7}}).find("node 1 starts at frame 0"),
+            std::string::npos);
+  EXPECT_NE(refused({{0, 1, 2, 3, 4, 5, 6, 7, 8}}).find("frame 8 of node 0 is not stored"),
+            std::string::npos);
+  EXPECT_EQ(d.nodes(), 0);
+  EXPECT_NE(message_of<InvalidArgument>([&] { d.dynamic_nodes().members(5); })
+                .find("node 5 does not exist (0 nodes)"),
+            std::string::npos);
+  d.restore_nodes({{0, 2, 4}, {1, 3}, {5}, {6, 7}});
+  EXPECT_EQ(d.dynamic_nodes().members(1), (std::vector<std::int64_t>{1, 3}));
+  EXPECT_THROW(d.dynamic_nodes().members(-1), InvalidArgument);
+}
+
 TEST(CompactDetector, NodesRestoredWithoutPlacementStillRun) {
   DetectorOptions o;
   o.segmentation.superpixel_size = 16;

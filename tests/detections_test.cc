@@ -70,6 +70,13 @@ TEST_F(DetectionsTest, HeaderNamesColumnsInAnyOrder) {
   EXPECT_DOUBLE_EQ(records[4].reported.score, 0.5);
 }
 
+TEST_F(DetectionsTest, AByteOrderMarkBeforeTheHeaderIsSkipped) {
+  const std::string path = write("bom.csv", "\xEF\xBB\xBF" "query,match,score\n4,1,0.5\n");
+  const auto records = read_detections(path);
+  ASSERT_EQ(records.size(), 5u);
+  EXPECT_EQ(records[4].reported.frame, 1);
+}
+
 TEST_F(DetectionsTest, WhiteSpaceSeparatedRowsAreAccepted) {
   const std::string path = write("d.txt", "3 0 0.25\r\n4\t-1\t0\n");
   const auto records = read_detections(path, 5);

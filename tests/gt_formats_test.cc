@@ -713,6 +713,24 @@ TEST(LoadGroundtruth, DispatchesAndTakesFramesFromTheFile) {
   EXPECT_THROW(lsgd::eval::load_groundtruth(li.string(), o), lsgd::InvalidArgument);
 }
 
+// A UTF-8 byte-order mark (Windows editors) at the start of a text ground
+// truth is not part of its first number, in every text format.
+TEST(LoadGroundtruth, AByteOrderMarkIsSkippedInEveryTextFormat) {
+  const std::string bom = "\xEF\xBB\xBF";
+  lsgd::eval::GtOptions o;
+  const fs::path pairs = write_file("bom-pairs.txt", bom + "12 2\n13 3\n");
+  EXPECT_EQ(lsgd::eval::detect_gt_format(pairs.string()), GtFormat::kPairs);
+  EXPECT_EQ(pairs_of(lsgd::eval::load_groundtruth(pairs.string(), o)), (Pairs{{12, 2}, {13, 3}}));
+  EXPECT_EQ(pairs_of(lsgd::eval::read_pairs(pairs.string(), 20)), (Pairs{{12, 2}, {13, 3}}));
+  const fs::path li = write_file("bom-li.txt", bom + "0\t2\n1\t3\n2\t0\n3\t1\n");
+  o.format = GtFormat::kLoopinf;
+  EXPECT_EQ(pairs_of(lsgd::eval::load_groundtruth(li.string(), o)), (Pairs{{2, 0}, {3, 1}}));
+  const fs::path poses = write_file("bom-poses.txt", bom + pose_line(1, 2, 3, false));
+  const auto p = lsgd::eval::read_kitti_poses(poses.string());
+  ASSERT_EQ(p.size(), 1u);
+  EXPECT_DOUBLE_EQ(p[0].x, 1);
+}
+
 // A frame id or count from a file is bounded before memory is committed: a
 // 12-byte file naming frame 199,999,999 is a FormatError naming the file and
 // the id, not an allocation of gigabytes; a pipe is refused, not waited on.

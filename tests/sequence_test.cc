@@ -170,6 +170,16 @@ TEST_F(SequenceTest, ListFileResolvesRelativeAndAbsolutePaths) {
   EXPECT_EQ(seq.images, expected);
 }
 
+// A byte-order mark (Notepad's UTF-8) is not part of the first path.
+TEST_F(SequenceTest, ListFileWithAByteOrderMark) {
+  const std::string list = write("bom.txt", "\xEF\xBB\xBF" "10.png\n2.png\n");
+  const std::vector<std::string> expected = {path("10.png"), path("2.png")};
+  EXPECT_EQ(open_sequence(list).images, expected);
+  std::istringstream none("abc");
+  EXPECT_FALSE(skip_utf8_bom(none));
+  EXPECT_EQ(none.get(), 'a');
+}
+
 TEST_F(SequenceTest, ListFileKeepsItsOrderAndDoesNotCheckFiles) {
   const std::string list = write("seq.txt", "10.png\n2.png\nmissing.png\n");
   const Sequence seq = open_sequence(list);

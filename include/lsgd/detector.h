@@ -3,6 +3,7 @@
 // and per-stage timings.
 #pragma once
 
+#include <atomic>
 #include <cstdint>
 #include <memory>
 #include <vector>
@@ -65,6 +66,12 @@ struct Result {
   Timings timings;
 };
 
+// Threads: a Detector is used by one thread at a time, its const calls
+// included (process() changes what they read). Use one Detector per thread,
+// or a mutex around every call. process() and the restore_*() calls detect an
+// overlapping call on the same Detector and throw InvalidArgument instead of
+// corrupting it (the call already running completes normally). Different
+// Detectors share nothing and run in parallel freely. Not copyable.
 class Detector {
  public:
   // Validates the options (throws InvalidArgument naming the field).
@@ -113,8 +120,9 @@ class Detector {
   void restore_frame(int width, int height, const Descriptor& descriptor,
                      const std::vector<float>& points = {},
                      const std::vector<std::uint8_t>& orb = {}, std::int64_t node = 0);
-  // Node membership (DynamicNodes::restore); every id must be < size(). Only
-  // in nodes mode.
+  // Node membership (DynamicNodes::restore) as process() builds it: every
+  // stored frame in exactly one node, nodes in the order of their first
+  // frames. Only in nodes mode. InvalidArgument otherwise, detector unchanged.
   void restore_nodes(std::vector<std::vector<std::int64_t>> nodes);
   // Temporal places (TemporalVerifier::restore); last_query must be size() - 1.
   // Only with temporal verification.
@@ -151,6 +159,10 @@ class Detector {
   std::vector<Candidate> examined_;  // candidates verify() checks geometrically, in order
   std::vector<char> gated_;          // verify(): 1 for a candidate the agreement gate rejected
   std::vector<double> row_;     // exhaustive: the query's similarity to every candidate
+  // Set while process() or a restore_*() call runs: a second, overlapping
+  // call throws (class Exclusive in detector.cc).
+  std::atomic<bool> busy_{false};
+  class Exclusive;
 };
 
 }  // namespace lsgd

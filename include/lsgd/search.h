@@ -76,7 +76,9 @@ class DynamicNodes {
                  std::vector<Candidate>& scratch, std::vector<Candidate>& out);
 
   std::int64_t size() const { return static_cast<std::int64_t>(nodes_.size()); }
-  const std::vector<std::int64_t>& members(std::int64_t node) const { return nodes_.at(node); }
+  // Frame ids of `node`, first frame first; InvalidArgument for a node that
+  // does not exist.
+  const std::vector<std::int64_t>& members(std::int64_t node) const;
 
   // Persistence (lsgd::io::Database): replaces the nodes by `nodes` (frame ids
   // of each node, first frame first, in creation order), as assign() would

@@ -125,6 +125,7 @@ class RecordReader {
   explicit RecordReader(const std::string& path)
       : path_(path), in_((io::check_input_file(path, "detections file"), path)) {
     if (!in_) throw IoError(concat("cannot read detections file '", path, "'"));
+    io::skip_utf8_bom(in_);
   }
   // Next non-blank, non-comment record; false at the end. line() is where it starts.
   bool next(std::string& record) {

@@ -62,8 +62,9 @@ bool GroundTruth::has_loop(std::int64_t q, std::int64_t min_gap) const {
 
 GroundTruth read_pairs(const std::string& path, std::int64_t frames) {
   io::check_input_file(path, "ground-truth file");
-  std::ifstream in(path);
+  std::ifstream in(path, std::ios::binary);
   if (!in) throw IoError(concat("cannot open ground-truth file '", path, "'"));
+  io::skip_utf8_bom(in);
   GroundTruth gt(frames);
   std::string line;
   for (std::int64_t number = 1; std::getline(in, line); ++number) {

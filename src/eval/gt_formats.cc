@@ -41,6 +41,7 @@ std::ifstream open_text(const std::string& path, const char* what) {
   io::check_input_file(path, what);
   std::ifstream in(path, std::ios::binary);
   if (!in) throw IoError(concat("cannot open ", what, " '", path, "'"));
+  io::skip_utf8_bom(in);
   return in;
 }
 
@@ -911,6 +912,7 @@ GtFormat detect_gt_format(const std::string& path) {
   }
   in.clear();
   in.seekg(0);
+  io::skip_utf8_bom(in);
   const TextShape shape = text_shape(in, path);
   if (shape.lines == 0) {
     throw FormatError(concat("cannot tell the ground-truth format of '", path,

@@ -80,8 +80,9 @@ std::string kitti_sequence_name(const std::string& nn) {
 // Non-blank lines of times.txt, each a number; FormatError naming file:line.
 std::int64_t count_timestamps(const fs::path& times) {
   check_input_file(times.string(), "KITTI times file");
-  std::ifstream in(times);
+  std::ifstream in(times, std::ios::binary);
   if (!in) throw IoError(concat("cannot read '", times.string(), "'"));
+  skip_utf8_bom(in);
   std::int64_t count = 0;
   std::string line;
   for (std::int64_t number = 1; std::getline(in, line); ++number) {

@@ -143,6 +143,7 @@ std::vector<std::string> read_image_list(const std::string& path) {
   check_input_file(path, "list file");
   std::ifstream in(path, std::ios::binary);
   if (!in) throw IoError(concat("cannot read list file '", path, "'"));
+  skip_utf8_bom(in);
   const fs::path folder = fs::path(path).parent_path();
   std::vector<std::string> images;
   std::string line;
@@ -249,6 +250,15 @@ void check_decoded(const cv::Mat& image, const std::string& path) {
 }
 
 }  // namespace
+
+bool skip_utf8_bom(std::istream& in) {
+  const std::streampos start = in.tellg();
+  char bom[3] = {};
+  if (in.read(bom, 3) && bom[0] == '\xEF' && bom[1] == '\xBB' && bom[2] == '\xBF') return true;
+  in.clear();
+  in.seekg(start);
+  return false;
+}
 
 void check_input_file(const std::string& path, const std::string& what, std::int64_t max_bytes) {
   struct stat st {};

@@ -4,6 +4,7 @@
 #pragma once
 
 #include <cstdint>
+#include <istream>
 #include <string>
 #include <vector>
 
@@ -12,6 +13,11 @@ class Mat;
 }
 
 namespace lsgd::io {
+
+// Consumes a UTF-8 byte-order mark at the stream's position, if there is
+// one (editors on Windows write it at the start of text files); every text
+// reader of lsgd calls it after opening, so the mark never reaches a parser.
+bool skip_utf8_bom(std::istream& in);
 
 // Checks, before it is opened, that `path` can be read as `what` ("image",
 // "list file", "config", ...): an existing regular file (a folder, a pipe or

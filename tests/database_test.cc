@@ -18,7 +18,9 @@
 #include <fstream>
 #include <functional>
 #include <iterator>
+#include <cstring>
 #include <limits>
+#include <numeric>
 #include <map>
 #include <nlohmann/json.hpp>
 #include <opencv2/core.hpp>
@@ -263,9 +265,12 @@ TEST(Database, SessionsFindLoopsAcrossSessions) {
   EXPECT_GE(correct, cross * 9 / 10);
   const DatabaseInfo info = db.info();
   ASSERT_EQ(info.sessions.size(), 2u);
-  EXPECT_EQ(info.sessions[0], std::make_pair(std::int64_t{0}, session0));
-  EXPECT_EQ(info.sessions[1].first, 1);
-  EXPECT_EQ(info.sessions[1].second, last - first + 1);
+  EXPECT_EQ(info.sessions[0].session, 0);
+  EXPECT_EQ(info.sessions[0].frames, session0);
+  EXPECT_EQ(info.sessions[0].first_frame, 0);
+  EXPECT_EQ(info.sessions[0].last_frame, session0 - 1);
+  EXPECT_EQ(info.sessions[1].session, 1);
+  EXPECT_EQ(info.sessions[1].frames, last - first + 1);
   EXPECT_EQ(info.frames, db.frames());
   EXPECT_EQ(info.width, 160);
   EXPECT_EQ(info.height, 120);
@@ -576,12 +581,13 @@ TEST(Database, OptionsOfAnOlderVersionKeepTheirBehaviour) {
   EXPECT_EQ(resumed.size(), 12);
 }
 
-// A format 1 file (written before the loop decision kept its state): no loop
-// columns, row checksums without them, a decision threshold that was a raw
-// similarity. Made from a format 2 file with append_all (whose rows but the
-// last have no loop state), the last row's state dropped and re-signed.
-std::string format1_database() {
-  const std::string path = temp_path("format1");
+// A file of an older format: 1 (written before the loop decision kept its
+// state: no loop columns, a decision threshold that was a raw similarity) or
+// 2 (before frame ids: no frame column). Made from a current file with
+// append_all (whose rows but the last have no loop state): the newer columns
+// dropped, every row's checksum recomputed without them, the meta re-signed.
+std::string older_database(int format) {
+  const std::string path = temp_path("format" + std::to_string(format));
   {
     DetectorOptions o = options(SearchMode::kExhaustive, "temporal,geometric");
     o.search.min_gap = 2;
@@ -593,56 +599,76 @@ std::string format1_database() {
   }
   sqlite3* db = nullptr;
   EXPECT_EQ(sqlite3_open(path.c_str(), &db), SQLITE_OK);
-  // The last row's checksum without the loop columns (database.cc row_checksum).
-  sqlite3_stmt* st = nullptr;
-  EXPECT_EQ(sqlite3_prepare_v2(db,
-                               "SELECT id, session, node, place, name, histogram, pixels, "
-                               "features FROM frames WHERE id = 11",
-                               -1, &st, nullptr),
-            SQLITE_OK);
-  EXPECT_EQ(sqlite3_step(st), SQLITE_ROW);
-  uLong crc = crc32(0, Z_NULL, 0);
-  const auto add_int = [&](std::int64_t v) {
-    unsigned char b[8];
-    for (int i = 0; i < 8; ++i) b[i] = static_cast<unsigned char>(static_cast<std::uint64_t>(v) >> (8 * i));
-    crc = crc32(crc, b, 8);
-  };
-  for (int c = 0; c < 4; ++c) {
-    add_int(sqlite3_column_type(st, c) == SQLITE_NULL ? std::numeric_limits<std::int64_t>::min()
-                                                       : sqlite3_column_int64(st, c));
+  // Each row's checksum as that format computed it (database.cc row_checksum).
+  std::string sql;
+  for (int id = 0; id < 12; ++id) {
+    sqlite3_stmt* st = nullptr;
+    EXPECT_EQ(sqlite3_prepare_v2(db,
+                                 ("SELECT id, session, node, place, loop, loop_inliers, name, "
+                                  "histogram, pixels, features FROM frames WHERE id = " +
+                                  std::to_string(id))
+                                     .c_str(),
+                                 -1, &st, nullptr),
+              SQLITE_OK);
+    EXPECT_EQ(sqlite3_step(st), SQLITE_ROW);
+    uLong crc = crc32(0, Z_NULL, 0);
+    const auto add_int = [&](std::int64_t v) {
+      unsigned char b[8];
+      for (int i = 0; i < 8; ++i) b[i] = static_cast<unsigned char>(static_cast<std::uint64_t>(v) >> (8 * i));
+      crc = crc32(crc, b, 8);
+    };
+    for (int c = 0; c < 4; ++c) {
+      add_int(sqlite3_column_type(st, c) == SQLITE_NULL ? std::numeric_limits<std::int64_t>::min()
+                                                         : sqlite3_column_int64(st, c));
+    }
+    const bool loop_state = format >= 2 && sqlite3_column_type(st, 5) != SQLITE_NULL;
+    if (loop_state) {
+      add_int(sqlite3_column_int64(st, 4));
+      const double inliers = sqlite3_column_double(st, 5);
+      std::int64_t bits = 0;
+      std::memcpy(&bits, &inliers, sizeof bits);
+      add_int(bits);
+    }
+    for (int c = 6; c < 10; ++c) {
+      const bool null = sqlite3_column_type(st, c) == SQLITE_NULL;
+      const void* data = c == 6 ? static_cast<const void*>(sqlite3_column_text(st, c))
+                                : sqlite3_column_blob(st, c);
+      const int n = sqlite3_column_bytes(st, c);
+      add_int(null ? -1 : n);
+      if (n > 0) crc = crc32(crc, static_cast<const Bytef*>(data), static_cast<uInt>(n));
+    }
+    sqlite3_finalize(st);
+    sql += "UPDATE frames SET crc32 = " + std::to_string(crc) + " WHERE id = " +
+           std::to_string(id) + ";";
   }
-  for (int c = 4; c < 8; ++c) {
-    const bool null = sqlite3_column_type(st, c) == SQLITE_NULL;
-    const void* data = c == 4 ? static_cast<const void*>(sqlite3_column_text(st, c))
-                              : sqlite3_column_blob(st, c);
-    const int n = sqlite3_column_bytes(st, c);
-    add_int(null ? -1 : n);
-    if (n > 0) crc = crc32(crc, static_cast<const Bytef*>(data), static_cast<uInt>(n));
+  sql += "ALTER TABLE frames DROP COLUMN frame;";
+  if (format < 2) {
+    sql += "ALTER TABLE frames DROP COLUMN loop; ALTER TABLE frames DROP COLUMN loop_inliers;";
   }
-  sqlite3_finalize(st);
-  const std::string sql =
-      "UPDATE frames SET loop = NULL, loop_inliers = NULL, crc32 = " + std::to_string(crc) +
-      " WHERE id = 11; ALTER TABLE frames DROP COLUMN loop; "
-      "ALTER TABLE frames DROP COLUMN loop_inliers;";
+  sql += "DELETE FROM meta WHERE key IN ('writer', 'checkpoint_frames');";
   char* error = nullptr;
   EXPECT_EQ(sqlite3_exec(db, sql.c_str(), nullptr, nullptr, &error), SQLITE_OK) << error;
   sqlite3_close(db);
-  rewrite_options(path, [](std::string& yaml) {
+  rewrite_options(path, [&](std::string& yaml) {
+    if (format >= 2) return;
     const auto at = yaml.find("decision:");
     ASSERT_NE(at, std::string::npos);
     yaml = yaml.substr(0, at) + "decision:\n  threshold: 0.841\n";
   });
-  // format_version 1 (an integer meta key), re-signed.
+  // format_version (an integer meta key), re-signed.
   EXPECT_EQ(sqlite3_open(path.c_str(), &db), SQLITE_OK);
-  sqlite3_exec(db, "UPDATE meta SET value = 1 WHERE key = 'format_version'", nullptr, nullptr,
-               nullptr);
+  sqlite3_exec(db,
+               ("UPDATE meta SET value = " + std::to_string(format) +
+                " WHERE key = 'format_version'")
+                   .c_str(),
+               nullptr, nullptr, nullptr);
   sqlite3_close(db);
   rewrite_options(path, [](std::string&) {});
   return path;
 }
 
 TEST(Database, Format1IsReadAndUpgradedInPlace) {
-  const std::string path = format1_database();
+  const std::string path = older_database(1);
   {
     const Database ro = Database::open(path, Database::Mode::kReadOnly);
     EXPECT_EQ(ro.info().format_version, 1);
@@ -669,6 +695,42 @@ TEST(Database, Format1IsReadAndUpgradedInPlace) {
   again.restore(d);
   EXPECT_EQ(d.size(), 20);
   EXPECT_EQ(d.continuity().query, 19);
+  // Older rows have no frame column: their ids are their row ids.
+  std::vector<std::int64_t> ids(20);
+  std::iota(ids.begin(), ids.end(), 0);
+  EXPECT_EQ(again.frame_ids(), ids);
+}
+
+// A format 2 file (before frame ids) reads with frame id = row id, is
+// upgraded in place when opened for writing, and its frames then continue
+// with the caller's ids.
+TEST(Database, Format2IsReadAndUpgradedInPlace) {
+  const std::string path = older_database(2);
+  {
+    const Database ro = Database::open(path, Database::Mode::kReadOnly);
+    EXPECT_EQ(ro.info().format_version, 2);
+    EXPECT_EQ(ro.last_frame(), 11);
+    Detector d(ro.options());
+    ro.restore(d);
+    EXPECT_EQ(d.size(), 12);
+  }
+  {
+    Database db = Database::open(path);
+    EXPECT_EQ(db.info().format_version, kDatabaseFormatVersion);
+    Detector d(db.options());
+    db.restore(d);
+    const Result r = d.process(frame(12));
+    db.append(d, r, 1, "later", 40);
+  }
+  const Database again = Database::open(path, Database::Mode::kReadOnly);
+  std::vector<std::int64_t> ids(12);
+  std::iota(ids.begin(), ids.end(), 0);
+  ids.push_back(40);
+  EXPECT_EQ(again.frame_ids(), ids);
+  EXPECT_EQ(again.session_frames(1).first_id, 12);
+  ASSERT_EQ(again.session_frames(1).frames.size(), 1u);
+  EXPECT_EQ(again.session_frames(1).frames[0].frame, 40);
+  EXPECT_NO_THROW(again.verify());
 }
 
 // A frame size claimed by the meta table is bounded before any memory is
@@ -700,8 +762,8 @@ TEST(DatabaseDamage, EditedRowsAndMeta) {
   expect_edit_detected("DELETE FROM frames WHERE id = 6", "frame ids are not 0 .. 10");
   expect_edit_detected("UPDATE meta SET value = 'x1' WHERE key = 'format_version'",
                        "format_version 'x1' is not an integer");
-  expect_edit_detected("UPDATE meta SET value = 3 WHERE key = 'format_version'",
-                       "format version 3 is newer");
+  expect_edit_detected("UPDATE meta SET value = 4 WHERE key = 'format_version'",
+                       "format version 4 is newer");
   expect_edit_detected("UPDATE frames SET loop = 1 WHERE id = 11", "frame 11: checksum");
   expect_edit_detected("UPDATE frames SET loop_inliers = loop_inliers + 1 WHERE id = 11",
                        "frame 11: checksum");
@@ -716,6 +778,169 @@ TEST(DatabaseDamage, EditedRowsAndMeta) {
                        "meta checksum");
   expect_edit_detected("DELETE FROM meta WHERE key = 'width'", "meta has no width");
   expect_edit_detected("DROP TABLE frames", "not an lsgd database");
+}
+
+// ---- the write-ahead log
+
+// The files a writer killed after appending `frames` frames leaves behind:
+// the database file as of its last checkpoint and its write-ahead log,
+// copied while the writer is still open (its destructor would checkpoint).
+std::string crashed_database(const std::string& name, std::int64_t frames) {
+  const std::string live = temp_path(name + "_live"), copy = temp_path(name);
+  DetectorOptions o = options(SearchMode::kDynamicNodes, "temporal,geometric");
+  o.search.min_gap = 2;
+  o.verification.geometric_options.max_features = 32;
+  Database db = Database::create(live, o);
+  Detector d(o);
+  run(d, 0, frames, &db);
+  fs::copy_file(live, copy);
+  fs::copy_file(live + "-wal", copy + "-wal");
+  return copy;
+}
+
+std::int64_t be32_at(const std::string& bytes, std::size_t at) {
+  return (static_cast<std::int64_t>(static_cast<unsigned char>(bytes[at])) << 24) |
+         (static_cast<unsigned char>(bytes[at + 1]) << 16) |
+         (static_cast<unsigned char>(bytes[at + 2]) << 8) |
+         static_cast<unsigned char>(bytes[at + 3]);
+}
+
+// A writer that closes leaves every frame in the file itself: the log is
+// emptied, so damage to it (or its loss) cannot lose a frame; while it runs,
+// the log holds at most the frames since its last checkpoint (every 32).
+TEST(DatabaseWal, AClosedDatabaseHoldsEveryFrameInItsFile) {
+  const std::string path = temp_path("closed");
+  DetectorOptions o = options(SearchMode::kExhaustive, "temporal");
+  o.search.min_gap = 2;
+  {
+    Database db = Database::create(path, o);
+    Detector d(o);
+    run(d, 0, 40, &db);
+    const std::string copy = temp_path("closed_file_only");
+    fs::copy_file(path, copy);  // the file without its log, while the writer runs
+    const Database ro = Database::open(copy, Database::Mode::kReadOnly);
+    EXPECT_EQ(ro.frames(), 32);  // checkpointed at frame 32
+    EXPECT_NE(ro.note().find("stopped before closing"), std::string::npos) << ro.note();
+  }
+  EXPECT_TRUE(!fs::exists(path + "-wal") || fs::file_size(path + "-wal") == 0);
+  fs::remove(path + "-wal");
+  fs::remove(path + "-shm");
+  const Database ro = Database::open(path, Database::Mode::kReadOnly);
+  EXPECT_EQ(ro.frames(), 40);
+  EXPECT_EQ(ro.note(), "");
+  EXPECT_NO_THROW(ro.verify());
+}
+
+TEST(DatabaseWal, ACrashedWritersLogIsReplayedAndSaidSo) {
+  const std::string path = crashed_database("crashed", 20);
+  {
+    const Database ro = Database::open(path, Database::Mode::kReadOnly);
+    EXPECT_EQ(ro.frames(), 20);
+    EXPECT_NE(ro.note().find("stopped before closing"), std::string::npos) << ro.note();
+    EXPECT_NO_THROW(ro.verify());
+  }
+  Database db = Database::open(path);
+  EXPECT_EQ(db.frames(), 20);
+  EXPECT_NE(db.note().find("replayed: 20 frames"), std::string::npos) << db.note();
+}
+
+// SQLite would replay a damaged log up to the damage and drop every commit
+// after it without a word: lsgd reads the log first and refuses, changing
+// nothing, when a commit would be lost.
+TEST(DatabaseWal, DamageThatWouldLoseACommitIsAFormatError) {
+  const std::string clean = crashed_database("wal_clean", 20);
+  const std::string wal = read_bytes(clean + "-wal");
+  ASSERT_GT(wal.size(), 32u);
+  const std::size_t page = static_cast<std::size_t>(be32_at(wal, 8));
+  const std::size_t frame_bytes = 24 + page;
+  const std::size_t frames = (wal.size() - 32) / frame_bytes;
+  std::vector<std::size_t> commits;  // frame indices that end a transaction
+  for (std::size_t f = 0; f < frames; ++f) {
+    if (be32_at(wal, 32 + f * frame_bytes + 4) != 0) commits.push_back(f);
+  }
+  ASSERT_GE(commits.size(), 10u);
+  const std::string path = temp_path("wal_damaged");
+  int detected = 0;
+  // Bytes of frames before the second-to-last commit: page number, commit
+  // size, salts, checksums, page data.
+  for (std::size_t f = 0; f <= commits[commits.size() - 2]; f += 3) {
+    for (const std::size_t offset : {std::size_t{0}, std::size_t{5}, std::size_t{9},
+                                     std::size_t{17}, std::size_t{24}, std::size_t{24} + page / 2,
+                                     frame_bytes - 1}) {
+      std::string bad = wal;
+      const std::size_t at = 32 + f * frame_bytes + offset;
+      bad[at] = static_cast<char>(bad[at] ^ 0x10);
+      write_bytes(path, read_bytes(clean));
+      write_bytes(path + "-wal", bad);
+      const std::string before = read_bytes(path) + read_bytes(path + "-wal");
+      const std::string m = load(path);
+      const std::string mw = [&] {
+        try {
+          Database::open(path);
+          return std::string();
+        } catch (const FormatError& e) {
+          return std::string(e.what());
+        }
+      }();
+      EXPECT_NE(m.find("write-ahead log"), std::string::npos) << "byte " << at << ": " << m;
+      EXPECT_NE(mw.find("damaged at byte"), std::string::npos) << "byte " << at << ": " << mw;
+      EXPECT_EQ(read_bytes(path) + read_bytes(path + "-wal"), before) << "byte " << at;
+      detected += !m.empty() && !mw.empty();
+    }
+  }
+  EXPECT_GT(detected, 30);
+  // A damaged header hides every frame.
+  std::string bad = wal;
+  bad[20] = static_cast<char>(bad[20] ^ 1);
+  write_bytes(path, read_bytes(clean));
+  write_bytes(path + "-wal", bad);
+  EXPECT_NE(load(path).find("damaged header"), std::string::npos);
+}
+
+// What the log alone cannot show: the log deleted, or cut (its last
+// transactions look like ones never committed). The database opens as of
+// what remains, and says that its last writer was stopped; `lsgd run` also
+// compares with the rows of its CSV (tests/run_cli_test.cc).
+TEST(DatabaseWal, ALostOrCutLogOpensWhatRemainsAndSaysSo) {
+  const std::string path = crashed_database("wal_lost", 20);
+  const std::string wal = read_bytes(path + "-wal");
+  const std::string file = read_bytes(path);
+  fs::remove(path + "-wal");
+  {
+    Database db = Database::open(path);
+    EXPECT_EQ(db.frames(), 0);  // its last checkpoint, at open
+    EXPECT_NE(db.note().find("left no write-ahead log"), std::string::npos) << db.note();
+  }
+  write_bytes(path, file);
+  write_bytes(path + "-wal", wal.substr(0, wal.size() / 2));
+  Database db = Database::open(path);
+  EXPECT_GT(db.frames(), 0);
+  EXPECT_LT(db.frames(), 20);
+  EXPECT_NE(db.note().find("stopped before closing"), std::string::npos) << db.note();
+  Detector d(db.options());
+  EXPECT_NO_THROW(db.restore(d));
+}
+
+// One writer at a time; readers beside it.
+TEST(DatabaseWal, ASecondWriterIsToldAnotherProcessIsWriting) {
+  const std::string path = temp_path("two_writers");
+  DetectorOptions o = options(SearchMode::kExhaustive, "none");
+  Database first = Database::create(path, o);
+  const std::string m = [&] {
+    try {
+      Database::open(path);
+      return std::string();
+    } catch (const IoError& e) {
+      return std::string(e.what());
+    }
+  }();
+  EXPECT_NE(m.find("another process is writing to it"), std::string::npos) << m;
+  Detector d(o);
+  run(d, 0, 5, &first);
+  const Database reader = Database::open(path, Database::Mode::kReadOnly);
+  EXPECT_EQ(reader.frames(), 5);
+  EXPECT_NE(reader.note().find("a writer has it open"), std::string::npos) << reader.note();
+  EXPECT_NO_THROW(reader.verify());
 }
 
 // ---- the command line

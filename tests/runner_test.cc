@@ -48,7 +48,7 @@ TEST(RunDetector, StopsAtTheFirstBadFrameByDefault) {
   std::vector<std::int64_t> seen;
   const std::string e = test::message_of<FormatError>([&] {
     run_detector(detector, flawed_source(),
-                 [&](const Result& r, double) { seen.push_back(r.frame); });
+                 [&](const Result& r, const FrameTimes&) { seen.push_back(r.frame); });
   });
   EXPECT_NE(e.find("frame 2 (f2.png)"), std::string::npos) << e;
   EXPECT_EQ(seen, (std::vector<std::int64_t>{0, 1}));  // frames before the error were passed on

@@ -286,7 +286,8 @@ const Strings kHeader = {"dataset",
                          "ms_per_frame_median",
                          "ms_per_frame_p95",
                          "nodes",
-                         "bytes_per_frame"};
+                         "bytes_per_frame",
+                         "skipped_frames"};
 constexpr std::size_t kFirstTimeColumn = 19;  // ms_per_frame_median, ms_per_frame_p95
 
 TEST_F(SweepCli, FourCellsMatchDirectEvals) {
@@ -337,6 +338,7 @@ TEST_F(SweepCli, FourCellsMatchDirectEvals) {
     const auto cell = nlohmann::json::parse(slurp(out));
     for (std::size_t c = 5; c < kHeader.size(); ++c) {
       if (c == kFirstTimeColumn || c == kFirstTimeColumn + 1 || kHeader[c] == "prt") continue;
+      if (kHeader[c] == "bytes_per_frame") continue;
       EXPECT_DOUBLE_EQ(std::stod(rows[row][c]), cell[kHeader[c]].get<double>())
           << kHeader[c] << " row " << row;
     }
@@ -384,9 +386,12 @@ TEST_F(SweepCli, BadSetFailsBeforeAnyRunOrOutput) {
   EXPECT_NE(missing.err.find("nowhere"), std::string::npos) << missing.err;
 }
 
-TEST_F(SweepCli, AFailingCellKeepsTheRowsBefore) {
-  // A second dataset whose last image is corrupt: the sweep fails on it, after
-  // the first dataset's rows were written.
+// A second dataset whose last image is corrupt: sweep goes through the frame
+// loop of lsgd eval, so it skips the image (reported once per dataset, not
+// once per cell) and scores it as a frame without a report, exactly as eval
+// does; under --strict the sweep fails on it, after the first dataset's rows
+// were written.
+TEST_F(SweepCli, ABadImageIsSkippedAsByEvalOrStopsUnderStrict) {
   const fs::path broken = kTmp / "broken";
   fs::create_directories(broken);
   std::ofstream(broken / "bad.png") << "not a png";
@@ -397,16 +402,40 @@ TEST_F(SweepCli, AFailingCellKeepsTheRowsBefore) {
   list.close();
   std::ofstream(broken / "groundtruth.txt") << "25 1\n";
   const fs::path csv = kTmp / "partial.csv";
-  const CmdResult r =
-      lsgd_cli("sweep " + dataset() + " --dataset broken='" + broken.string() +
-               "',5 --set search.mode=exhaustive,nodes --csv '" + csv.string() + "'");
-  EXPECT_EQ(r.code, 1);
-  EXPECT_NE(r.err.find("bad.png"), std::string::npos) << r.err;
-  EXPECT_NE(r.err.find("broken"), std::string::npos) << r.err;
-  const auto rows = read_csv(csv);
+  const std::string args = "sweep " + dataset() + " --dataset broken='" + broken.string() +
+                           "',5 --set search.mode=exhaustive,nodes --csv '" + csv.string() + "'";
+  const CmdResult strict = lsgd_cli(args + " --strict");
+  EXPECT_EQ(strict.code, 1);
+  EXPECT_NE(strict.err.find("bad.png"), std::string::npos) << strict.err;
+  EXPECT_NE(strict.err.find("broken"), std::string::npos) << strict.err;
+  auto rows = read_csv(csv);
   ASSERT_EQ(rows.size(), 3u);  // header + the two rows of the good dataset
   EXPECT_EQ(rows[1][0], "street");
   EXPECT_EQ(rows[2][0], "street");
+
+  const CmdResult r = lsgd_cli(args);
+  ASSERT_EQ(r.code, 0) << r.err;
+  const std::string skip = "skipped frame 30 (" + (broken / "bad.png").string() + ")";
+  const auto at = r.err.find(skip);
+  EXPECT_NE(at, std::string::npos) << r.err;
+  EXPECT_EQ(r.err.find(skip, at + 1), std::string::npos) << "reported twice:\n" << r.err;
+  rows = read_csv(csv);
+  ASSERT_EQ(rows.size(), 5u);
+  EXPECT_EQ(rows[3][0], "broken");
+  EXPECT_EQ(rows[3].back(), "1");  // skipped_frames
+  EXPECT_EQ(rows[1].back(), "0");
+  const fs::path out = kTmp / "broken.json";
+  const CmdResult e = lsgd_cli("eval --sequence '" + (broken / "sequence.txt").string() +
+                               "' --gt '" + (broken / "groundtruth.txt").string() +
+                               "' --min-gap 5 --mode exhaustive --json '" + out.string() + "'");
+  ASSERT_EQ(e.code, 0) << e.err;
+  const auto cell = nlohmann::json::parse(slurp(out));
+  EXPECT_EQ(cell["skipped_frames"], 1);
+  for (std::size_t c = 4; c < kHeader.size(); ++c) {
+    if (c == kFirstTimeColumn || c == kFirstTimeColumn + 1 || kHeader[c] == "prt") continue;
+    if (kHeader[c] == "bytes_per_frame" || kHeader[c] == "nodes") continue;
+    EXPECT_DOUBLE_EQ(std::stod(rows[3][c - 1]), cell[kHeader[c]].get<double>()) << kHeader[c];
+  }
 }
 
 #endif  // LSGD_CLI

@@ -11,6 +11,10 @@ namespace lsgd {
 // Frames of one sequence, ground truth, detections file or database: 10
 // million (four days at 30 frames per second; KITTI-00 has 4,541).
 constexpr std::int64_t kMaxFrames = 10'000'000;
+// Frame ids and database session ids: 2^53 - 1, so that every id is exact
+// in JSON numbers (doubles) and in Python and JavaScript readers of them.
+constexpr std::int64_t kMaxFrameId = (std::int64_t{1} << 53) - 1;
+constexpr std::int64_t kMaxSession = kMaxFrameId;
 // An image file: 1 GiB (a 16384 x 16384 BGRA image uncompressed).
 constexpr std::int64_t kMaxImageFileBytes = std::int64_t{1} << 30;
 // A YAML configuration file: 1 MiB.

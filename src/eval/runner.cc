@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <ctime>
 #include <cmath>
 #include <memory>
 
@@ -9,6 +10,7 @@
 
 #include "internal/check.h"
 #include "lsgd/error.h"
+#include "lsgd/limits.h"
 
 namespace lsgd::eval {
 namespace {
@@ -20,6 +22,13 @@ namespace {
   if (dynamic_cast<const FormatError*>(&e)) throw FormatError(message);
   if (dynamic_cast<const InvalidArgument*>(&e)) throw InvalidArgument(message);
   throw Error(message);
+}
+
+// CPU time of the calling thread, milliseconds.
+double thread_cpu_ms() {
+  timespec t{};
+  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &t);
+  return static_cast<double>(t.tv_sec) * 1e3 + static_cast<double>(t.tv_nsec) * 1e-6;
 }
 
 }  // namespace
@@ -84,50 +93,77 @@ std::vector<FrameRecord> run_detector(Detector& detector, const FrameSource& sou
     internal::throw_invalid("run_detector: the frame source is empty (", source.frames,
                             " frames)");
   }
-  std::vector<FrameRecord> records;
-  records.reserve(static_cast<std::size_t>(source.frames));
-  // Source index of every frame the detector stored (its ids are dense).
-  std::vector<std::int64_t> source_of;
-  source_of.reserve(static_cast<std::size_t>(source.frames));
-  const auto to_source = [&](std::int64_t id) {
-    return id >= 0 && id < static_cast<std::int64_t>(source_of.size())
-               ? source_of[static_cast<std::size_t>(id)]
-               : id;
+  if (options.first < 0 || options.first > source.frames) {
+    internal::throw_invalid("run_detector: first frame ", options.first, " is outside the ",
+                            source.frames, " frames of the source");
+  }
+  // The run's id of every frame the detector holds (its own ids are dense).
+  std::vector<std::int64_t> ids = options.stored_ids;
+  if (static_cast<std::int64_t>(ids.size()) != detector.size()) {
+    internal::throw_invalid("run_detector: ", ids.size(), " stored ids for a detector holding ",
+                            detector.size(), " frames");
+  }
+  for (std::size_t k = 0; k < ids.size(); ++k) {
+    const std::int64_t bound = k + 1 < ids.size() ? ids[k + 1] : options.first_id + options.first;
+    if (ids[k] < 0 || ids[k] >= bound) {
+      internal::throw_invalid("run_detector: stored id ", ids[k], " is negative or not below ",
+                              "the next id ", bound);
+    }
+  }
+  if (options.first_id < 0 || options.first_id > kMaxFrameId - source.frames) {
+    internal::throw_invalid("run_detector: first id ", options.first_id, " is outside [0, ",
+                            kMaxFrameId - source.frames, "]");
+  }
+  const auto to_id = [&](std::int64_t dense) {
+    return dense >= 0 && dense < static_cast<std::int64_t>(ids.size())
+               ? ids[static_cast<std::size_t>(dense)]
+               : dense;
   };
-  for (std::int64_t i = 0; i < source.frames; ++i) {
+  std::vector<FrameRecord> records;
+  if (options.keep_records) records.reserve(static_cast<std::size_t>(source.frames - options.first));
+  ids.reserve(ids.size() + static_cast<std::size_t>(source.frames - options.first));
+  for (std::int64_t i = options.first; i < source.frames; ++i) {
+    const std::int64_t id = options.first_id + i;
     const auto start = std::chrono::steady_clock::now();
     Result result;
-    double load_ms = 0;
+    FrameTimes times;
     try {
       const cv::Mat image = source.load(i);
-      load_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start)
-                    .count();
+      times.load_ms =
+          std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start)
+              .count();
+      const double cpu_start = thread_cpu_ms();
       result = detector.process(image);
+      times.process_cpu_ms = thread_cpu_ms() - cpu_start;
     } catch (const Error& e) {
       const std::string name = source.name ? source.name(i) : std::to_string(i);
-      if (!options.skip_bad_frames) rethrow_for_frame(e, i, name);
-      if (on_skip) on_skip(i, name, e.what());
-      FrameRecord skipped;
-      skipped.frame = i;
-      skipped.load_ms = load_ms;
-      skipped.skipped = true;
-      records.push_back(skipped);
+      if (!options.skip_bad_frames) rethrow_for_frame(e, id, name);
+      if (on_skip) on_skip(id, name, e.what());
+      if (options.keep_records) {
+        FrameRecord skipped;
+        skipped.frame = id;
+        skipped.load_ms = times.load_ms;
+        skipped.skipped = true;
+        records.push_back(skipped);
+      }
       continue;
     }
-    source_of.push_back(i);
-    result.frame = i;
-    result.best.frame = to_source(result.best.frame);
-    for (Candidate& c : result.candidates) c.frame = to_source(c.frame);
-    for (StageVerdict& v : result.verification) v.candidate = to_source(v.candidate);
-    if (on_frame) on_frame(result, load_ms);
-    FrameRecord record;
-    record.frame = result.frame;
-    record.reported = result.best;
-    record.loop = result.loop;
-    record.candidates = result.candidates;
-    record.timings = result.timings;
-    record.load_ms = load_ms;
-    records.push_back(std::move(record));
+    ids.push_back(id);
+    result.frame = id;
+    result.best.frame = to_id(result.best.frame);
+    for (Candidate& c : result.candidates) c.frame = to_id(c.frame);
+    for (StageVerdict& v : result.verification) v.candidate = to_id(v.candidate);
+    if (on_frame) on_frame(result, times);
+    if (options.keep_records) {
+      FrameRecord record;
+      record.frame = result.frame;
+      record.reported = result.best;
+      record.loop = result.loop;
+      record.candidates = std::move(result.candidates);
+      record.timings = result.timings;
+      record.load_ms = times.load_ms;
+      records.push_back(std::move(record));
+    }
   }
   return records;
 }

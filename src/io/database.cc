@@ -3,6 +3,7 @@
 #include <errno.h>
 #include <fcntl.h>
 #include <sqlite3.h>
+#include <sys/file.h>
 #include <sys/stat.h>
 #include <unistd.h>
 #include <yaml-cpp/yaml.h>
@@ -14,11 +15,14 @@
 #include <deque>
 #include <limits>
 #include <map>
+#include <set>
 #include <type_traits>
 
 #include "internal/check.h"
 #include "lsgd/error.h"
+#include "io/wal_check.h"
 #include "lsgd/io/config.h"
+#include "lsgd/limits.h"
 
 #ifndef LSGD_VERSION
 #define LSGD_VERSION "unknown"
@@ -32,6 +36,9 @@ using internal::concat;
 constexpr int kOrbBytes = 32;                                             // per keypoint
 constexpr std::size_t kFeatureBytes = 2 * sizeof(float) + kOrbBytes;      // x, y, descriptor
 constexpr std::int64_t kNull = std::numeric_limits<std::int64_t>::min();  // NULL in checksums
+// Appends between checkpoints (Impl::checkpoint): the most frames that live
+// only in the write-ahead log.
+constexpr std::int64_t kCheckpointFrames = 32;
 
 template <typename... Parts>
 [[noreturn]] void format_error(const std::string& path, const Parts&... parts) {
@@ -111,6 +118,9 @@ struct RowBytes {
   std::int64_t loop = kNull;
   bool has_loop_inliers = false;
   double loop_inliers = 0;
+  // The caller's frame id (format 3); NULL in rows of older formats, whose
+  // checksum does not cover it (their frame id is their row id).
+  std::int64_t frame = kNull;
   const void* name = nullptr;
   std::int64_t name_size = 0;
   const void* hist = nullptr;
@@ -123,8 +133,8 @@ struct RowBytes {
 
 // CRC-32 of a frame row: id, session, node, place as int64 little-endian
 // (NULL = INT64_MIN), then (rows with loop_inliers, format 2) loop as int64
-// and loop_inliers' IEEE-754 bits as int64, then name, histogram, pixels,
-// features as blobs.
+// and loop_inliers' IEEE-754 bits as int64, then (rows with a frame id,
+// format 3) frame as int64, then name, histogram, pixels, features as blobs.
 std::uint32_t row_checksum(const RowBytes& r) {
   std::uint32_t crc = static_cast<std::uint32_t>(crc32(0, Z_NULL, 0));
   crc = crc_int(crc, r.id);
@@ -137,6 +147,7 @@ std::uint32_t row_checksum(const RowBytes& r) {
     crc = crc_int(crc, r.loop);
     crc = crc_int(crc, bits);
   }
+  if (r.frame != kNull) crc = crc_int(crc, r.frame);
   crc = crc_blob(crc, r.name, r.name_size);
   crc = crc_blob(crc, r.hist, r.hist_size);
   crc = crc_blob(crc, r.pixels, r.pixels_size);
@@ -243,23 +254,26 @@ const char* kSchema =
     "CREATE TABLE frames("
     "id INTEGER PRIMARY KEY, session INTEGER NOT NULL, name TEXT NOT NULL,"
     "histogram BLOB NOT NULL, pixels BLOB NOT NULL, node INTEGER, place INTEGER,"
-    "features BLOB, crc32 INTEGER NOT NULL, loop INTEGER, loop_inliers REAL);";
+    "features BLOB, crc32 INTEGER NOT NULL, loop INTEGER, loop_inliers REAL, frame INTEGER);";
 
-// Format 1 files have no loop columns: they read as NULL.
-const char* kSelectFrames =
-    "SELECT id, session, name, histogram, pixels, node, place, features, crc32, loop, "
-    "loop_inliers FROM frames ORDER BY id";
-const char* kSelectFramesV1 =
-    "SELECT id, session, name, histogram, pixels, node, place, features, crc32, NULL, NULL "
-    "FROM frames ORDER BY id";
+// Columns a format lacks read as NULL: loop state before 2, frame ids before 3.
+std::string select_frames(int format, const char* tail = " ORDER BY id") {
+  return concat("SELECT id, session, name, histogram, pixels, node, place, features, crc32, ",
+                format < 2 ? "NULL, NULL" : "loop, loop_inliers", ", ",
+                format < 3 ? "NULL" : "frame", " FROM frames", tail);
+}
+
+// The caller's id of a row: its frame column, or its row id in older formats.
+std::string frame_column(int format) { return format < 3 ? "id" : "coalesce(frame, id)"; }
 
 const char* kInsertFrame =
     "INSERT INTO frames(id, session, name, histogram, pixels, node, place, features, crc32, "
-    "loop, loop_inliers) VALUES(?1, ?2, ?3, ?4, ?5, ?6, ?7, ?8, ?9, ?10, ?11)";
+    "loop, loop_inliers, frame) VALUES(?1, ?2, ?3, ?4, ?5, ?6, ?7, ?8, ?9, ?10, ?11, ?12)";
 
-// Format 1 -> 2, inside the caller's transaction.
+// Older formats -> 3, inside the caller's transaction.
 const char* kUpgradeV1 =
     "ALTER TABLE frames ADD COLUMN loop INTEGER; ALTER TABLE frames ADD COLUMN loop_inliers REAL;";
+const char* kUpgradeV2 = "ALTER TABLE frames ADD COLUMN frame INTEGER;";
 
 const std::vector<std::string> kIntegerMeta = {"format_version", "width",     "height",
                                                "grid_rows",      "grid_cols", "checksum"};
@@ -277,7 +291,13 @@ struct Database::Impl {
   GridSize grid{0, 0};
   std::int64_t frames = 0;
   std::int64_t last_session = -1;
+  std::int64_t last_frame = -1;     // the caller's id of the last row
+  std::set<std::int64_t> sessions;  // sessions with frames
   int format = kDatabaseFormatVersion;
+  int lock_fd = -1;                 // holds the writer's lock (flock) while open
+  std::int64_t since_checkpoint = 0;
+  std::string note;                 // what open() found about the last writer
+  bool opened = false;              // open() completed: the destructor may checkpoint
   std::string checked_yaml;  // options YAML already found compatible
   Statement insert;
   // Scratch of append(), reused between frames.
@@ -286,9 +306,23 @@ struct Database::Impl {
   std::vector<std::uint8_t> orb;
 
   ~Impl() {
+    if (db && writable && opened) {
+      try {
+        checkpoint("closed");
+      } catch (...) {
+        // The frames stay committed in the write-ahead log; the next open replays it.
+      }
+    }
     insert = Statement();
     if (db) sqlite3_close_v2(db);
+    if (lock_fd >= 0) ::close(lock_fd);  // after SQLite's own descriptors (POSIX locks)
   }
+
+  // Records in meta that the writer is `state` ("open" or "closed") with
+  // `frames` frames, then moves every committed frame from the write-ahead
+  // log into the file and empties the log: afterwards the file alone holds
+  // them, and damage to the log cannot lose them (docs/reliability.md).
+  void checkpoint(const char* state);
 
   void check_writable() const {
     if (!writable) internal::throw_invalid("database ", path, " was opened read-only");
@@ -320,9 +354,12 @@ struct Database::Impl {
 
   void load_header();
   // `continuity`: the decision's state after the frame, or null when unknown.
+  // `frame`: the detector's id of the frame; `caller_id`: the caller's.
   void insert_frame(const Detector& detector, std::int64_t frame, std::int64_t session,
                     const std::string& name, std::int64_t node, std::int64_t place,
-                    const ContinuityState* continuity);
+                    const ContinuityState* continuity, std::int64_t caller_id);
+  // InvalidArgument unless frames may be appended to `session`.
+  void check_session(std::int64_t session) const;
 };
 
 void Database::Impl::load_header() {
@@ -428,10 +465,7 @@ void Database::Impl::load_header() {
                  options.segmentation.superpixel_size);
   }
   // 4. Frames: columns present, ids dense.
-  {
-    const char* select = format < 2 ? kSelectFramesV1 : kSelectFrames;
-    Statement columns(db, path, (std::string(select) + " LIMIT 0").c_str());
-  }
+  { Statement columns(db, path, select_frames(format, " LIMIT 0").c_str()); }
   {
     Statement count(db, path, "SELECT count(*), min(id), max(id) FROM frames");
     step_read(db, count.get(), path);
@@ -445,10 +479,45 @@ void Database::Impl::load_header() {
     if (frames > 0 && !sized) format_error(path, frames, " frames but no frame size in meta");
   }
   if (frames > 0) {
-    Statement last(db, path, "SELECT session FROM frames ORDER BY id DESC LIMIT 1");
+    Statement last(db, path,
+                   concat("SELECT session, ", frame_column(format),
+                          " FROM frames ORDER BY id DESC LIMIT 1")
+                       .c_str());
     step_read(db, last.get(), path);
     last_session = sqlite3_column_int64(last.get(), 0);
+    last_frame = sqlite3_column_int64(last.get(), 1);
+    Statement distinct(db, path, "SELECT DISTINCT session FROM frames");
+    while (step_read(db, distinct.get(), path)) {
+      sessions.insert(sqlite3_column_int64(distinct.get(), 0));
+    }
   }
+}
+
+void Database::Impl::checkpoint(const char* state) {
+  exec_write(db, path, "BEGIN IMMEDIATE");
+  try {
+    const std::map<std::string, std::string> saved = meta;
+    meta["writer"] = state;
+    meta["checkpoint_frames"] = std::to_string(frames);
+    try {
+      write_meta();
+    } catch (...) {
+      meta = saved;
+      throw;
+    }
+    exec_write(db, path, "COMMIT");
+  } catch (...) {
+    sqlite3_exec(db, "ROLLBACK", nullptr, nullptr, nullptr);
+    throw;
+  }
+  // TRUNCATE waits (busy timeout) for readers of the log; if one still holds
+  // it, the frames stay in the log until the next checkpoint.
+  int log = -1, moved = -1;
+  const int rc = sqlite3_wal_checkpoint_v2(db, nullptr, SQLITE_CHECKPOINT_TRUNCATE, &log, &moved);
+  if (rc != SQLITE_OK && (rc & 0xFF) != SQLITE_BUSY) {
+    io_error(path, "cannot checkpoint its write-ahead log (", sqlite3_errmsg(db), ")");
+  }
+  since_checkpoint = 0;
 }
 
 Database::Database(std::unique_ptr<Impl> impl) : impl_(std::move(impl)) {}
@@ -458,24 +527,87 @@ Database& Database::operator=(Database&& other) noexcept = default;
 
 Database Database::open(const std::string& path, Mode mode) {
   struct stat st;
-  if (::stat(path.c_str(), &st) != 0) io_error(path, "cannot open (", std::strerror(errno), ")");
+  if (::stat(path.c_str(), &st) != 0) {
+    io_error(path, errno == ENOENT ? "does not exist" : "cannot be opened",
+             errno == ENOENT ? "" : concat(" (", std::strerror(errno), ")"));
+  }
   if (!S_ISREG(st.st_mode)) io_error(path, "is not a regular file");
+  const bool writable = mode == Mode::kReadWrite;
+  if (::access(path.c_str(), writable ? R_OK | W_OK : R_OK) != 0) {
+    io_error(path, "cannot be ", writable ? "read and written" : "read", " (",
+             std::strerror(errno), ")");
+  }
   auto impl = std::make_unique<Impl>();
   impl->path = path;
-  impl->writable = mode == Mode::kReadWrite;
-  const int flags = impl->writable ? SQLITE_OPEN_READWRITE : SQLITE_OPEN_READONLY;
+  impl->writable = writable;
+  // One writer at a time: a second one would interleave its frames with ours.
+  // The writer holds an exclusive flock on the file while open (flock locks
+  // are separate from SQLite's POSIX locks; the descriptor is closed only
+  // after SQLite's, which closing it would otherwise release).
+  impl->lock_fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
+  if (impl->lock_fd < 0) io_error(path, "cannot be opened (", std::strerror(errno), ")");
+  bool writer_active = false;
+  if (writable) {
+    // A reader holds a shared lock for a moment (below): wait up to 2 s.
+    int tries = 0;
+    while (::flock(impl->lock_fd, LOCK_EX | LOCK_NB) != 0) {
+      const int error = errno;
+      if (error != EWOULDBLOCK) {
+        io_error(path, "cannot be locked for writing (", std::strerror(error), ")");
+      }
+      if (++tries == 200) {
+        io_error(path, "another process is writing to it (one writer at a time: wait for it to "
+                       "finish, or give this run another database)");
+      }
+      ::usleep(10'000);
+    }
+  } else if (::flock(impl->lock_fd, LOCK_SH | LOCK_NB) != 0) {
+    writer_active = true;  // its log is in flux: SQLite reads it consistently, we cannot
+  }
+  // Before SQLite replays the log, which it would do silently up to any damage.
+  const wal::WalCheck log = writer_active ? wal::WalCheck{} : wal::check_wal(path + "-wal");
+  if (!writable && !writer_active) ::flock(impl->lock_fd, LOCK_UN);
+  if (!log.damage.empty()) {
+    format_error(path, log.damage,
+                 ". Nothing was changed; to open the database as of its last checkpoint, losing "
+                 "what the log holds, move '",
+                 path, "-wal' away");
+  }
+  const int flags = writable ? SQLITE_OPEN_READWRITE : SQLITE_OPEN_READONLY;
   if (sqlite3_open_v2(path.c_str(), &impl->db, flags, nullptr) != SQLITE_OK) {
     io_error(path, "cannot open (", impl->db ? sqlite3_errmsg(impl->db) : "out of memory", ")");
   }
   sqlite3_extended_result_codes(impl->db, 1);
   sqlite3_busy_timeout(impl->db, 5000);
   impl->load_header();
-  if (impl->writable && impl->format < 2) {
+  Impl& m = *impl;
+  const auto writer = m.meta.find("writer");
+  if (writer != m.meta.end() && writer->second == "open") {
+    const auto at = m.meta.find("checkpoint_frames");
+    const std::string checkpointed = at == m.meta.end() ? "?" : at->second;
+    if (!writable) {
+      m.note = writer_active
+                   ? concat("a writer has it open (", m.frames, " frames readable)")
+                   : concat("its last writer was stopped before closing it (", m.frames,
+                            " frames readable, ", checkpointed,
+                            " of them checkpointed into the file)");
+    } else if (log.committed_frames > 0) {
+      m.note = concat("the last writer was stopped before closing it; its write-ahead log held ",
+                      log.committed_frames, " pages of committed transactions, replayed: ",
+                      m.frames, " frames");
+    } else {
+      m.note = concat("the last writer was stopped before closing it and left no write-ahead "
+                      "log: the ",
+                      m.frames, " frames of its last checkpoint are here; frames it committed "
+                      "after that checkpoint, if any, are lost");
+    }
+  }
+  if (writable && m.format < kDatabaseFormatVersion) {
     // Upgrade in place, atomically: the columns and the new meta or nothing.
-    Impl& m = *impl;
     exec_write(m.db, path, "BEGIN IMMEDIATE");
     try {
-      exec_write(m.db, path, kUpgradeV1);
+      if (m.format < 2) exec_write(m.db, path, kUpgradeV1);
+      exec_write(m.db, path, kUpgradeV2);
       m.meta["format_version"] = std::to_string(kDatabaseFormatVersion);
       m.meta["options"] = to_yaml(m.options);
       m.write_meta();
@@ -487,13 +619,17 @@ Database Database::open(const std::string& path, Mode mode) {
     }
     m.format = kDatabaseFormatVersion;
   }
-  if (impl->writable) {
+  if (writable) {
     // WAL: an append writes its pages once, sequentially, to the log; FULL:
     // the log is synced at every commit, so a committed frame survives a
-    // power loss too (docs/reliability.md, "Persistence").
-    exec_write(impl->db, path, "PRAGMA journal_mode=WAL; PRAGMA synchronous=FULL;");
-    Statement insert(impl->db, path, kInsertFrame);
-    impl->insert = std::move(insert);
+    // power loss too. SQLite's own checkpoints are replaced by ours, which
+    // empty the log (docs/reliability.md, "Persistence").
+    exec_write(m.db, path,
+               "PRAGMA journal_mode=WAL; PRAGMA synchronous=FULL; PRAGMA wal_autocheckpoint=0;");
+    Statement insert(m.db, path, kInsertFrame);
+    m.insert = std::move(insert);
+    m.checkpoint("open");
+    m.opened = true;
   }
   return Database(std::move(impl));
 }
@@ -567,9 +703,62 @@ const std::string& Database::path() const { return impl_->path; }
 const DetectorOptions& Database::options() const { return impl_->options; }
 std::int64_t Database::frames() const { return impl_->frames; }
 std::int64_t Database::last_session() const { return impl_->last_session; }
+std::int64_t Database::last_frame() const { return impl_->last_frame; }
+const std::string& Database::note() const { return impl_->note; }
+
+std::vector<std::int64_t> Database::frame_ids() const {
+  const Impl& m = *impl_;
+  std::vector<std::int64_t> ids;
+  ids.reserve(static_cast<std::size_t>(m.frames));
+  Statement stmt(m.db, m.path,
+                 concat("SELECT ", frame_column(m.format), " FROM frames ORDER BY id").c_str());
+  while (step_read(m.db, stmt.get(), m.path) &&
+         static_cast<std::int64_t>(ids.size()) < m.frames) {
+    ids.push_back(sqlite3_column_int64(stmt.get(), 0));
+  }
+  return ids;
+}
+
+SessionFrames Database::session_frames(std::int64_t session) const {
+  const Impl& m = *impl_;
+  SessionFrames out;
+  out.session = session;
+  const std::string column = frame_column(m.format);
+  {
+    // The first id of the session: one past the frame stored just before it.
+    Statement before(m.db, m.path,
+                     concat("SELECT ", column, " FROM frames WHERE id < (SELECT min(id) FROM "
+                            "frames WHERE session = ?1) ORDER BY id DESC LIMIT 1")
+                         .c_str());
+    sqlite3_bind_int64(before.get(), 1, session);
+    if (step_read(m.db, before.get(), m.path)) {
+      out.first_id = sqlite3_column_int64(before.get(), 0) + 1;
+    }
+  }
+  Statement rows(m.db, m.path,
+                 concat("SELECT ", column, ", name FROM frames WHERE session = ?1 AND id < ?2 "
+                        "ORDER BY id")
+                     .c_str());
+  sqlite3_bind_int64(rows.get(), 1, session);
+  sqlite3_bind_int64(rows.get(), 2, m.frames);
+  while (step_read(m.db, rows.get(), m.path)) {
+    out.frames.push_back({sqlite3_column_int64(rows.get(), 0), column_text(rows.get(), 1)});
+  }
+  return out;
+}
+
+void Database::verify() const {
+  Detector scratch(impl_->options);
+  restore(scratch);
+}
 
 DatabaseInfo Database::info() const {
   const Impl& m = *impl_;
+  exec_write(m.db, m.path, "BEGIN");  // one snapshot, even beside a writer
+  struct EndRead {
+    sqlite3* db;
+    ~EndRead() { sqlite3_exec(db, "COMMIT", nullptr, nullptr, nullptr); }
+  } end_read{m.db};
   DatabaseInfo info;
   info.path = m.path;
   info.format_version = std::stoi(m.meta.at("format_version"));
@@ -578,13 +767,24 @@ DatabaseInfo Database::info() const {
   info.width = m.width;
   info.height = m.height;
   info.grid = m.grid;
-  info.frames = m.frames;
+  info.note = m.note;
   {
+    Statement stmt(m.db, m.path, "SELECT count(*) FROM frames");
+    step_read(m.db, stmt.get(), m.path);
+    info.frames = sqlite3_column_int64(stmt.get(), 0);
+  }
+  {
+    // Sessions in the order their frames were stored, with their id ranges.
+    const std::string column = frame_column(m.format);
     Statement stmt(m.db, m.path,
-                   "SELECT session, count(*) FROM frames GROUP BY session ORDER BY session");
+                   concat("SELECT session, count(*), min(", column, "), max(", column,
+                          ") FROM frames GROUP BY session ORDER BY min(id)")
+                       .c_str());
     while (step_read(m.db, stmt.get(), m.path)) {
-      info.sessions.emplace_back(sqlite3_column_int64(stmt.get(), 0),
-                                 sqlite3_column_int64(stmt.get(), 1));
+      info.sessions.push_back({sqlite3_column_int64(stmt.get(), 0),
+                               sqlite3_column_int64(stmt.get(), 1),
+                               sqlite3_column_int64(stmt.get(), 2),
+                               sqlite3_column_int64(stmt.get(), 3)});
     }
   }
   {
@@ -621,7 +821,7 @@ void Database::check_compatible(const DetectorOptions& options) const {
 }
 
 void Database::restore(Detector& detector) const {
-  const Impl& m = *impl_;
+  Impl& m = *impl_;
   if (detector.size() != 0) {
     internal::throw_invalid("database ", m.path, ": restore needs a new detector, this one holds ",
                             detector.size(), " frames");
@@ -663,9 +863,17 @@ void Database::restore(Detector& detector) const {
   std::vector<std::vector<std::int64_t>> nodes;
   std::deque<std::int64_t> places;  // last `keep` places; kNull when not recorded
 
-  Statement stmt(m.db, m.path, m.format < 2 ? kSelectFramesV1 : kSelectFrames);
+  // One read transaction: the rows and their count are one snapshot, even
+  // while another process appends (a reader beside the writer).
+  exec_write(m.db, m.path, "BEGIN");
+  struct EndRead {
+    sqlite3* db;
+    ~EndRead() { sqlite3_exec(db, "COMMIT", nullptr, nullptr, nullptr); }
+  } end_read{m.db};
+  Statement stmt(m.db, m.path, select_frames(m.format).c_str());
   ContinuityState continuity;  // after the last row that recorded it
   std::int64_t id = 0;
+  std::int64_t last_frame = -1;
   for (; step_read(m.db, stmt.get(), m.path); ++id) {
     sqlite3_stmt* s = stmt.get();
     const auto bad = [&](const auto&... parts) {
@@ -732,6 +940,19 @@ void Database::restore(Detector& detector) const {
     } else if (type(10) != SQLITE_NULL || type(9) != SQLITE_NULL) {
       bad("loop_inliers is not a number");
     }
+    if (type(11) == SQLITE_INTEGER) {
+      row.frame = sqlite3_column_int64(s, 11);
+      if (row.frame <= last_frame || row.frame > kMaxFrameId) {
+        bad("frame id ", row.frame, " is not above the previous frame's ", last_frame,
+            " and at most ", kMaxFrameId);
+      }
+    } else if (type(11) != SQLITE_NULL) {
+      bad("frame is not an integer");
+    } else if (id <= last_frame) {
+      bad("has no frame id, and its row id ", id, " is not above the previous frame's ",
+          last_frame);
+    }
+    last_frame = row.frame == kNull ? id : row.frame;
     const std::string name = column_text(s, 2);  // after the blobs: text conversion is not needed
     row.name = name.data();
     row.name_size = static_cast<std::int64_t>(name.size());
@@ -778,7 +999,11 @@ void Database::restore(Detector& detector) const {
     if (row.has_loop_inliers) continuity = {id, row.loop, row.loop_inliers};
   }
   if (id != m.frames) {
-    format_error(m.path, "read ", id, " frames but the database held ", m.frames, " at open");
+    if (m.writable) {  // we hold the writer's lock: nothing else appends
+      format_error(m.path, "read ", id, " frames but the database held ", m.frames, " at open");
+    }
+    m.frames = id;  // a writer appended since open: this snapshot holds more
+    m.last_frame = last_frame;
   }
   try {
     if (nodes_mode) detector.restore_nodes(std::move(nodes));
@@ -802,7 +1027,8 @@ void Database::restore(Detector& detector) const {
 
 void Database::Impl::insert_frame(const Detector& detector, std::int64_t frame,
                                   std::int64_t session, const std::string& name, std::int64_t node,
-                                  std::int64_t place, const ContinuityState* continuity) {
+                                  std::int64_t place, const ContinuityState* continuity,
+                                  std::int64_t caller_id) {
   const DescriptorView view = detector.store().view(frame);
   const auto cells = static_cast<std::size_t>(view.cells);
   hist_bytes.clear();
@@ -832,6 +1058,7 @@ void Database::Impl::insert_frame(const Detector& detector, std::int64_t frame,
     row.has_loop_inliers = true;
     row.loop_inliers = continuity->inliers;
   }
+  row.frame = caller_id;
   row.name = name.data();
   row.name_size = static_cast<std::int64_t>(name.size());
   row.hist = hist_bytes.data();
@@ -870,6 +1097,7 @@ void Database::Impl::insert_frame(const Detector& detector, std::int64_t frame,
     sqlite3_bind_int64(s, 10, row.loop);
     sqlite3_bind_double(s, 11, row.loop_inliers);
   }
+  sqlite3_bind_int64(s, 12, caller_id);
   const int rc = sqlite3_step(s);
   sqlite3_reset(s);
   if (rc != SQLITE_DONE)
@@ -893,16 +1121,33 @@ void transaction(sqlite3* db, const std::string& path, F&& write) {
 
 }  // namespace
 
+void Database::Impl::check_session(std::int64_t session) const {
+  if (session < 0 || session > kMaxSession) {
+    internal::throw_invalid("database ", path, ": session ", session, " is outside [0, ",
+                            kMaxSession, "]");
+  }
+  if (session != last_session && sessions.count(session) != 0) {
+    internal::throw_invalid("database ", path, ": session ", session,
+                            " has frames before session ", last_session,
+                            "'s: a session's frames stay together, so only the last session "
+                            "can be continued; choose a new session id");
+  }
+}
+
 void Database::append(const Detector& detector, const Result& result, std::int64_t session,
-                      const std::string& name) {
+                      const std::string& name, std::int64_t frame) {
   Impl& m = *impl_;
   m.check_writable();
-  if (session < 0) internal::throw_invalid("database ", m.path, ": session ", session, " < 0");
-  if (result.frame != m.frames || detector.size() != m.frames + 1) {
-    internal::throw_invalid("database ", m.path, ": append of frame ", result.frame,
-                            " from a detector holding ", detector.size(),
-                            " frames, but the database holds ", m.frames,
+  m.check_session(session);
+  if (detector.size() != m.frames + 1) {
+    internal::throw_invalid("database ", m.path, ": append from a detector holding ",
+                            detector.size(), " frames, but the database holds ", m.frames,
                             " (append each frame right after process())");
+  }
+  if (frame < 0) frame = m.last_frame + 1;
+  if (frame <= m.last_frame || frame > kMaxFrameId) {
+    internal::throw_invalid("database ", m.path, ": frame id ", frame, " must be above the last ",
+                            "stored id ", m.last_frame, " and at most ", kMaxFrameId);
   }
   const std::string yaml = to_yaml(detector.options());
   if (yaml != m.checked_yaml) {
@@ -910,13 +1155,14 @@ void Database::append(const Detector& detector, const Result& result, std::int64
     m.checked_yaml = yaml;
   }
   const DetectorOptions& o = detector.options();
+  const std::int64_t dense = m.frames;  // the detector's id of its last frame
   std::int64_t node = kNull, place = kNull;
   if (o.search.mode == SearchMode::kDynamicNodes) node = result.node;
   if (o.verification.temporal) {
     const TemporalVerifier& t = detector.temporal_verifier();
-    if (t.last_query() != result.frame || t.places().empty()) {
+    if (t.last_query() != dense || t.places().empty()) {
       internal::throw_invalid("database ", m.path, ": the temporal verifier's last query is ",
-                              t.last_query(), ", not frame ", result.frame);
+                              t.last_query(), ", not frame ", dense);
     }
     place = t.places().back();
   }
@@ -935,7 +1181,7 @@ void Database::append(const Detector& detector, const Result& result, std::int64
       }
     }
     try {
-      m.insert_frame(detector, result.frame, session, name, node, place, &detector.continuity());
+      m.insert_frame(detector, dense, session, name, node, place, &detector.continuity(), frame);
     } catch (...) {
       m.meta = saved;
       throw;
@@ -948,12 +1194,15 @@ void Database::append(const Detector& detector, const Result& result, std::int64
   }
   ++m.frames;
   m.last_session = session;
+  m.last_frame = frame;
+  m.sessions.insert(session);
+  if (++m.since_checkpoint >= kCheckpointFrames) m.checkpoint("open");
 }
 
 void Database::append_all(const Detector& detector, std::int64_t session) {
   Impl& m = *impl_;
   m.check_writable();
-  if (session < 0) internal::throw_invalid("database ", m.path, ": session ", session, " < 0");
+  m.check_session(session);
   if (detector.size() < m.frames) {
     internal::throw_invalid("database ", m.path, ": the detector holds ", detector.size(),
                             " frames, fewer than the ", m.frames, " stored");
@@ -992,7 +1241,8 @@ void Database::append_all(const Detector& detector, std::int64_t session) {
         const std::int64_t place =
             f >= first_place ? places[static_cast<std::size_t>(f - first_place)] : kNull;
         m.insert_frame(detector, f, session, "", node, place,
-                       f + 1 == detector.size() ? &detector.continuity() : nullptr);
+                       f + 1 == detector.size() ? &detector.continuity() : nullptr,
+                       m.last_frame + 1 + (f - first));
       }
     } catch (...) {
       m.meta = saved;
@@ -1004,8 +1254,11 @@ void Database::append_all(const Detector& detector, std::int64_t session) {
     m.height = detector.height();
     m.grid = detector.store().grid();
   }
+  m.last_frame += detector.size() - first;
   m.frames = detector.size();
   m.last_session = session;
+  m.sessions.insert(session);
+  m.checkpoint("open");
 }
 
 }  // namespace lsgd::io

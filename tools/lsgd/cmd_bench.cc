@@ -125,35 +125,45 @@ void run(const bench::Setup& a, const DetectorOptions& options, bench::RunData& 
   plan_slic(a, options, d);
   d.peak_rss_before_bytes = bench::peak_rss_bytes();
 
-  Progress progress(a.frames, std::string("bench ") + to_string(options.search.mode));
-  cv::Mat gray;
-  double total_ms = 0;
-  for (std::int64_t i = 0; i < a.frames; ++i) {
+  // Frame i: route frame i % 1090 rendered and converted to gray by the
+  // source (outside process()), fed through the frame loop of every command.
+  struct Loaded {
+    cv::Mat gray;
+    double render_ms = 0, cvt_ms = 0;
+  };
+  const auto loaded = std::make_shared<Loaded>();
+  eval::FrameSource source;
+  source.frames = a.frames;
+  source.load = [&world, loaded](std::int64_t i) {
     const Stopwatch render;
     const cv::Mat bgr = world.render(i % world.frames());
-    const double render_ms = render.elapsed().wall_ms;
+    loaded->render_ms = render.elapsed().wall_ms;
     const Stopwatch cvt;
-    cv::cvtColor(bgr, gray, cv::COLOR_BGR2GRAY);
-    const double cvt_ms = cvt.elapsed().wall_ms;
-
-    const Stopwatch process;
-    const Result r = detector.process(gray);
-    const double cpu_ms = process.elapsed().cpu_ms;
-
-    bench::SlicSamples& s = d.slic;
-    if (s.slic && i == 0) s.slic->time(gray);  // untimed warm-up call
-    if (slic_frame(a, s, i)) {
-      const bool ours_first = s.ms.size() % 2 == 0;
-      if (ours_first) ours.time(gray, s);
-      const Elapsed e = s.slic->time(gray);
-      s.ms.push_back(e.wall_ms);
-      s.cpu_ms.push_back(e.cpu_ms);
-      if (!ours_first) ours.time(gray, s);
-    }
-    if (i >= a.warmup) record(r, cpu_ms, render_ms, cvt_ms, d.samples);
-    total_ms += r.timings.total_ms;
-    progress.update(i + 1, total_ms / static_cast<double>(i + 1));
-  }
+    cv::cvtColor(bgr, loaded->gray, cv::COLOR_BGR2GRAY);
+    loaded->cvt_ms = cvt.elapsed().wall_ms;
+    return loaded->gray;
+  };
+  source.name = [](std::int64_t i) { return "synthetic frame " + std::to_string(i); };
+  eval::RunOptions run_options;
+  run_options.keep_records = false;
+  run_frames(detector, source, std::string("bench ") + to_string(options.search.mode), run_options,
+             [&](const Result& r, const eval::FrameTimes& times) {
+               const std::int64_t i = r.frame;
+               const cv::Mat& gray = loaded->gray;
+               bench::SlicSamples& s = d.slic;
+               if (s.slic && i == 0) s.slic->time(gray);  // untimed warm-up call
+               if (slic_frame(a, s, i)) {
+                 const bool ours_first = s.ms.size() % 2 == 0;
+                 if (ours_first) ours.time(gray, s);
+                 const Elapsed e = s.slic->time(gray);
+                 s.ms.push_back(e.wall_ms);
+                 s.cpu_ms.push_back(e.cpu_ms);
+                 if (!ours_first) ours.time(gray, s);
+               }
+               if (i >= a.warmup) {
+                 record(r, times.process_cpu_ms, loaded->render_ms, loaded->cvt_ms, d.samples);
+               }
+             });
   d.nodes = detector.nodes();
   d.bytes_per_frame = detector.bytes_per_frame();
   d.stored = detector.size();
@@ -211,7 +221,8 @@ void register_bench(CLI::App& app) {
   cmd->add_option("--block", s.block, "frames per row of the query-time-vs-N table (default 500)")
       ->check(at_least(1));
   cmd->add_option("--seed", s.seed, "seed of the synthetic world (default 1)");
-  cmd->add_option("--json", args->json, "also write the results as JSON here");
+  cmd->add_option("--json", args->json, "also write the results as JSON here")
+      ->check(kNonEmptyPath);
   args->detector.add_to(*cmd);
   cmd->callback([args] { bench_command(*args); });
 }

@@ -75,9 +75,12 @@ void demo(const DemoArgs& args) {
     if (!args.output.empty()) {
       csv = std::make_unique<CsvWriter>((dir / (std::string("results-") + to_string(mode) + ".csv")).string());
     }
-    const auto records =
-        run_with_progress(detector, source, std::string("demo ") + to_string(mode), csv.get());
-    const auto metrics = eval::evaluate(records, world.ground_truth(), options.search.min_gap);
+    const FrameRun run = run_frames(
+        detector, source, std::string("demo ") + to_string(mode), {},
+        [&](const Result& r, const eval::FrameTimes&) {
+          if (csv) csv->write(r, source.name(r.frame));
+        });
+    const auto metrics = eval::evaluate(run.records, world.ground_truth(), options.search.min_gap);
     std::cout << "\n" << to_string(mode) << " search:\n";
     print_metrics(metrics, detector.nodes(), std::cout);
     results[to_string(mode)] = metrics_json(metrics);
@@ -98,7 +101,8 @@ void register_demo(CLI::App& app) {
   CLI::App* cmd = app.add_subcommand(
       "demo", "run and evaluate the detector on a built-in synthetic street with revisits");
   cmd->add_option("--output", args->output,
-                  "also write the frames, ground truth, per-frame CSV and metrics JSON here");
+                  "also write the frames, ground truth, per-frame CSV and metrics JSON here")
+      ->check(kNonEmptyPath);
   cmd->add_option("--seed", args->seed, "seed of the synthetic world");
   args->detector.add_to(*cmd);
   cmd->callback([args] { demo(*args); });

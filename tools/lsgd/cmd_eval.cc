@@ -226,8 +226,13 @@ void evaluate_sequence(const EvalArgs& args, const io::SequenceOptions& options)
   std::unique_ptr<CsvWriter> csv;
   if (!args.output.empty()) csv = std::make_unique<CsvWriter>(args.output);
   Detector detector(detector_options);
-  const auto records =
-      run_with_progress(detector, source, "eval", csv.get(), !args.layout.strict);
+  eval::RunOptions run_options;
+  run_options.skip_bad_frames = !args.layout.strict;
+  const FrameRun run = run_frames(detector, source, "eval", run_options,
+                                  [&](const Result& r, const eval::FrameTimes&) {
+                                    if (csv) csv->write(r, source.name(r.frame));
+                                  });
+  const std::vector<eval::FrameRecord>& records = run.records;
   const eval::Metrics metrics = score(args, records, gt, detector_options.search.min_gap);
   const std::vector<std::string> warnings = eval::setup_warnings(detector, gt);
   for (const std::string& w : warnings) std::cerr << "lsgd: warning: " << w << "\n";
@@ -237,7 +242,7 @@ void evaluate_sequence(const EvalArgs& args, const io::SequenceOptions& options)
   json["mode"] = to_string(detector_options.search.mode);
   json["verification"] = verification_stages(detector_options.verification);
   json["nodes"] = detector.nodes();
-  json["skipped_frames"] = skipped_frames(records);
+  json["skipped_frames"] = run.skipped;
   json["bytes_per_frame"] = detector.bytes_per_frame();
   json["sequence"] = args.sequence;
   describe_inputs(args, options, layout, gt, json);
@@ -246,7 +251,7 @@ void evaluate_sequence(const EvalArgs& args, const io::SequenceOptions& options)
   std::cout << args.sequence << " (" << to_string(detector_options.search.mode) << ", verification "
             << verification_stages(detector_options.verification) << ")\n";
   print_metrics(metrics, detector.nodes(), std::cout);
-  if (const std::int64_t skipped = skipped_frames(records); skipped > 0) {
+  if (const std::int64_t skipped = run.skipped; skipped > 0) {
     std::cout << "  skipped " << skipped
               << " frames (unreadable or rejected images; scored as frames without a report)\n";
   }
@@ -288,29 +293,36 @@ void register_eval(CLI::App& app) {
       "ground truth (strict protocol by default)");
   args->command = cmd;
   cmd->add_option("--sequence", args->sequence,
-                  "folder of images (natural order), list file, or a dataset layout (--layout)");
+                  "folder of images (natural order), list file, or a dataset layout (--layout)")
+      ->check(kNonEmptyPath);
   cmd->add_option("--detections", args->detections,
                   "score this CSV instead of running the detector: query,match,score per line "
                   "(match -1: no loop) or the CSV of `lsgd run`")
-      ->check(CLI::ExistingFile);
+      ->check(CLI::ExistingFile)
+      ->check(kNonEmptyPath);
   cmd->add_option("--gt", args->gt,
                   "ground truth: pairs text ('q m' per line, 0-based), MATLAB .mat loop matrix, "
                   "KITTI poses or LSGDDN loopinf (detected from the file)")
       ->required()
-      ->check(CLI::ExistingFile);
+      ->check(CLI::ExistingFile)
+      ->check(kNonEmptyPath);
   cmd->add_option("--gt-format", args->gt_format,
                   "auto (default), pairs, mat, kitti-poses (10 m, 100 frames; see `lsgd gt "
                   "convert` for other values) or loopinf")
       ->check(CLI::IsMember({"auto", "pairs", "mat", "kitti-poses", "loopinf"}));
   cmd->add_option("--report", args->report,
                   "write a self-contained HTML report here (PR curve, similarity matrix with "
-                  "ground truth, trajectory with --poses, timings, configuration)");
+                  "ground truth, trajectory with --poses, timings, configuration)")
+      ->check(kNonEmptyPath);
   cmd->add_option("--poses", args->poses,
                   "KITTI poses file (12 or 13 columns) of the evaluated frames: draws the "
                   "trajectory and the loops found in the --report")
-      ->check(CLI::ExistingFile);
-  cmd->add_option("--json", args->json, "write the metrics here as JSON")->required();
-  cmd->add_option("--output", args->output, "also write the per-frame CSV of `lsgd run` here");
+      ->check(CLI::ExistingFile)
+      ->check(kNonEmptyPath);
+  cmd->add_option("--json", args->json, "write the metrics here as JSON")->required()
+      ->check(kNonEmptyPath);
+  cmd->add_option("--output", args->output, "also write the per-frame CSV of `lsgd run` here")
+      ->check(kNonEmptyPath);
   cmd->add_option("--frames", args->frames,
                   "with --detections: frames of the full sequence (ground-truth rows; default: "
                   "from the ground truth)")

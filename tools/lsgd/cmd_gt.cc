@@ -28,7 +28,8 @@ struct GtArgs {
 void add_source_options(CLI::App& cmd, GtArgs& a) {
   cmd.add_option("SOURCE", a.source,
                  "ground truth: pairs text, MATLAB .mat, KITTI poses or LSGDDN loopinf")
-      ->required();
+      ->required()
+      ->check(kNonEmptyPath);
   cmd.add_option("--format", a.format,
                  "auto | pairs | mat | kitti-poses | loopinf (default auto: by content)");
   cmd.add_option(
@@ -129,7 +130,8 @@ void register_gt(CLI::App& app) {
   auto conv = std::make_shared<GtArgs>();
   CLI::App* c = gt->add_subcommand("convert", "read any ground-truth format, write pairs text");
   add_source_options(*c, *conv);
-  c->add_option("--output", conv->output, "pairs text file to write ('q m' per line)")->required();
+  c->add_option("--output", conv->output, "pairs text file to write ('q m' per line)")->required()
+      ->check(kNonEmptyPath);
   c->add_option("--min-gap", conv->min_gap,
                 "kitti-poses: loops are more than this many frames apart (default 100)");
   c->callback([conv] { convert(*conv); });
@@ -141,7 +143,8 @@ void register_gt(CLI::App& app) {
   s->add_option("--min-gap", st->min_gap,
                 "temporal window W: also count positives with a match older than W frames "
                 "(kitti-poses: also the derivation gap, default 100)");
-  s->add_option("--json", st->json, "also write the statistics here as JSON");
+  s->add_option("--json", st->json, "also write the statistics here as JSON")
+      ->check(kNonEmptyPath);
   s->callback([st] { stats(*st); });
 }
 

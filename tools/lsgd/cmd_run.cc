@@ -1,10 +1,21 @@
 // lsgd run --sequence PATH [--config FILE] [--output FILE] [--database FILE [--session N]]
+//
+// Frame ids (README, "Frame ids"): image i of the sequence (after --first,
+// --last, --every) is frame first_id + i, whether or not earlier images were
+// skipped; first_id is 0 without a database and for a database's first
+// session, and one past the last stored frame for a new session. A run
+// re-started with the same sequence continues the session it interrupted.
+#include <sys/stat.h>
+#include <unistd.h>
+
 #include <algorithm>
+#include <cmath>
 #include <cstdio>
-#include <fstream>
+#include <filesystem>
 #include <iostream>
 #include <memory>
 #include <optional>
+#include <unordered_set>
 
 #include <CLI/CLI.hpp>
 #include <opencv2/core.hpp>
@@ -17,9 +28,12 @@
 #include "lsgd/io/config.h"
 #include "lsgd/io/database.h"
 #include "lsgd/io/layouts.h"
+#include "lsgd/limits.h"
 
 namespace lsgd::cli {
 namespace {
+
+namespace fs = std::filesystem;
 
 struct RunArgs {
   std::string sequence;
@@ -30,10 +44,6 @@ struct RunArgs {
   std::optional<std::int64_t> session;  // session id of this run's frames
 };
 
-// --database: creates FILE or resumes the detector it holds, appends every
-// frame (one transaction each). Resuming takes the stored options; flags and
-// --config must agree with them except --threshold. Frame ids (CSV column
-// frame) continue after the stored frames.
 // The command's files: nothing it writes may be something it reads.
 void check_files(const RunArgs& args, const io::Sequence& sequence) {
   CommandFiles files;
@@ -45,14 +55,191 @@ void check_files(const RunArgs& args, const io::Sequence& sequence) {
   files.check();
 }
 
+// The name a database keeps for an image: its absolute, normal path, so that
+// a re-run from another folder recognises it.
+std::string stored_name(const std::string& image) {
+  std::error_code ec;
+  const fs::path absolute = fs::absolute(image, ec);
+  return ec ? image : absolute.lexically_normal().string();
+}
+
+// True when `image` of --sequence is the image a row named `stored` (rows of
+// older lsgd hold the path as it was given).
+bool same_image(const std::string& image, const std::string& stored) {
+  return stored == image || stored == stored_name(image);
+}
+
+// Fraction of the histogram mass in which two descriptors of one grid differ
+// (0: identical; 1: nothing in common).
+double descriptor_difference(const DescriptorView& a, const DescriptorView& b) {
+  if (a.cells != b.cells || a.storage() != b.storage()) return 1.0;
+  double diff = 0, mass = 0;
+  const std::size_t n = static_cast<std::size_t>(a.cells) *
+                        (a.storage() == HistogramStorage::kCompact ? kCompactBins : kBins);
+  for (std::size_t i = 0; i < n; ++i) {
+    const double x = a.storage() == HistogramStorage::kCompact ? a.compact[i] : a.hist[i];
+    const double y = b.storage() == HistogramStorage::kCompact ? b.compact[i] : b.hist[i];
+    diff += std::abs(x - y);
+    mass += x + y;
+  }
+  return mass > 0 ? diff / mass : 0.0;
+}
+
+// Which session this run appends to, and from which image.
+struct SessionPlan {
+  std::int64_t session = 0;
+  std::int64_t first_id = 0;     // id of image 0 of --sequence
+  std::int64_t first = 0;        // first image to process
+  bool resume = false;           // continues a session already holding frames
+  std::int64_t last_stored = -1; // id of the session's last stored frame (resume)
+};
+
+const char* kNewSessionHint = "; pass --session N with a new N to store them as a new session";
+
+// The last session continues when its frames are --sequence's images at
+// their ids (first_id + index), the last one with the same content; a
+// sequence holding some of its images elsewhere is refused (another --first
+// or --every, an edited list) rather than stored twice. Else a new session.
+SessionPlan plan_session(const io::Database& db, const Detector& detector,
+                         const io::Sequence& sequence, const eval::FrameSource& source,
+                         const std::optional<std::int64_t>& chosen) {
+  const auto& images = sequence.images;
+  const auto count = static_cast<std::int64_t>(images.size());
+  const auto new_session = [&](std::int64_t session) {
+    SessionPlan plan;
+    plan.session = session;
+    plan.first_id = db.last_frame() + 1;
+    if (plan.first_id > kMaxFrameId - count) {
+      throw InvalidArgument("database " + db.path() + ": the frame ids of " +
+                            std::to_string(count) + " more images would exceed " +
+                            std::to_string(kMaxFrameId));
+    }
+    return plan;
+  };
+  if (db.frames() == 0) return new_session(chosen.value_or(0));
+  const std::int64_t last = db.last_session();
+  if (chosen && *chosen != last) {
+    if (!db.session_frames(*chosen).frames.empty()) {
+      throw InvalidArgument("--session " + std::to_string(*chosen) + ": session " +
+                            std::to_string(*chosen) + " of " + db.path() +
+                            " has frames before the last session (" + std::to_string(last) +
+                            "), and a session's frames stay together: continue session " +
+                            std::to_string(last) + " or choose a new id");
+    }
+    return new_session(*chosen);
+  }
+  const io::SessionFrames stored = db.session_frames(last);
+  std::string mismatch;
+  for (const io::StoredFrame& f : stored.frames) {
+    const std::int64_t index = f.frame - stored.first_id;
+    if (index < 0 || index >= count) {
+      mismatch = "frame " + std::to_string(f.frame) + " (" + f.name + ") would be image " +
+                 std::to_string(index) + ", beyond the " + std::to_string(count) +
+                 " images of --sequence";
+      break;
+    }
+    if (!same_image(images[static_cast<std::size_t>(index)], f.name)) {
+      mismatch = "frame " + std::to_string(f.frame) + " is " + f.name + ", but image " +
+                 std::to_string(index) + " of --sequence is " +
+                 images[static_cast<std::size_t>(index)];
+      break;
+    }
+  }
+  const std::string session = std::to_string(last);
+  if (mismatch.empty()) {
+    // Same names: the same content too? (A camera folder reused for a new
+    // recording keeps its file names.) The last stored frame is described
+    // again and compared with what was stored.
+    const io::StoredFrame& tail = stored.frames.back();
+    const std::int64_t index = tail.frame - stored.first_id;
+    double difference = 1.0;
+    std::string why;
+    try {
+      Detector probe(detector.options());
+      probe.process(source.load(index));
+      difference = descriptor_difference(probe.store().view(0),
+                                         detector.store().view(detector.size() - 1));
+      why = "its histograms differ in " + std::to_string(std::lround(100 * difference)) +
+            " % of their mass";
+    } catch (const Error& e) {
+      why = e.what();
+    }
+    if (difference > 0.01) {
+      throw InvalidArgument("database " + db.path() + ": --sequence has the image names of "
+                            "session " + session + ", but image " + std::to_string(index) + " (" +
+                            images[static_cast<std::size_t>(index)] +
+                            ") is not the one stored as frame " + std::to_string(tail.frame) +
+                            " (" + why + ")" + kNewSessionHint);
+    }
+    SessionPlan plan;
+    plan.session = last;
+    plan.first_id = stored.first_id;
+    plan.first = index + 1;
+    plan.resume = true;
+    plan.last_stored = tail.frame;
+    return plan;
+  }
+  if (chosen) {
+    throw InvalidArgument("--session " + session + " continues session " + session + " of " +
+                          db.path() + " only with the images it holds at their ids: " + mismatch +
+                          kNewSessionHint);
+  }
+  std::unordered_set<std::string> names;
+  for (const io::StoredFrame& f : stored.frames) names.insert(f.name);
+  for (std::int64_t i = 0; i < count; ++i) {
+    const std::string& image = images[static_cast<std::size_t>(i)];
+    if (names.count(image) || names.count(stored_name(image))) {
+      throw InvalidArgument(
+          "database " + db.path() + ": image " + std::to_string(i) + " of --sequence (" + image +
+          ") is already stored in session " + session + ", whose frames are not --sequence's "
+          "images at their ids (" + mismatch + "). To continue session " + session +
+          ", re-run with the sequence and --first/--last/--every it was started with" +
+          kNewSessionHint);
+    }
+  }
+  if (last >= kMaxSession) {
+    throw InvalidArgument("database " + db.path() + ": the last session is " + session +
+                          ", the largest id; pass --session N with an unused N");
+  }
+  return new_session(last + 1);
+}
+
+// The rows of a CSV an interrupted run of the session wrote: rows of frames
+// the database does not hold (at most the one being committed when the run
+// stopped) are cut, so the file again has one row per stored frame.
+std::unique_ptr<CsvWriter> continue_csv(const RunArgs& args, const SessionPlan& plan) {
+  struct stat st {};
+  if (args.output.empty() || ::stat(args.output.c_str(), &st) != 0 || !S_ISREG(st.st_mode)) {
+    return std::make_unique<CsvWriter>(args.output);
+  }
+  const CsvWriter::Trim trim = CsvWriter::trim(args.output, plan.last_stored);
+  // One row may be ahead of the database: the frame being committed when the
+  // run stopped (its row is written first). More means committed frames were lost.
+  if (trim.dropped > 1) {
+    std::cerr << "lsgd: warning: " << args.output << " had rows for " << trim.dropped
+              << " frames after frame " << plan.last_stored
+              << ", the last one " << args.database
+              << " holds: the database lost frames it had committed (was its write-ahead log "
+                 "damaged or deleted?); they are processed again\n";
+  }
+  if (trim.last_row != plan.last_stored) {
+    std::cerr << "lsgd: note: " << args.output << " ends at frame " << trim.last_row
+              << ", but session " << plan.session << " holds frames up to " << plan.last_stored
+              << " (their rows went to another output)\n";
+  }
+  return std::make_unique<CsvWriter>(args.output, CsvWriter::kAppend);
+}
+
 void run_database(const RunArgs& args, const io::Sequence& sequence) {
   check_files(args, sequence);
   const DetectorFlags& flags = args.detector;
-  const bool exists = std::ifstream(args.database).good();
+  struct stat st {};
+  const bool exists = ::stat(args.database.c_str(), &st) == 0;  // also when unreadable
   std::optional<io::Database> db;
   DetectorOptions options;
   if (exists) {
     db.emplace(io::Database::open(args.database));
+    if (!db->note().empty()) std::cerr << "lsgd: note: " << args.database << ": " << db->note() << "\n";
     options = flags.config.empty() ? db->options() : io::load_config(flags.config);
     if (!flags.mode.empty()) options.search.mode = parse_search_mode(flags.mode.c_str());
     if (flags.min_gap) options.search.min_gap = *flags.min_gap;
@@ -63,56 +250,65 @@ void run_database(const RunArgs& args, const io::Sequence& sequence) {
     options = flags.resolve();
     db.emplace(io::Database::create(args.database, options));
   }
-  Detector detector(options);
-  db->restore(detector);  // checks the options against the stored ones
-  const std::int64_t session = args.session ? *args.session : db->last_session() + 1;
-  std::cerr << (exists ? "resumed " : "created ") << args.database << ": " << detector.size()
-            << " frames stored, appending session " << session << "\n";
-  const eval::FrameSource source = eval::sequence_source(sequence);
-  CsvWriter csv(args.output);
-  Progress progress(source.frames, "run");
-  double total_ms = 0;
-  std::int64_t processed = 0;
-  std::string first_skip;
-  for (std::int64_t i = 0; i < source.frames; ++i) {
-    Result result;
-    try {
-      result = detector.process(source.load(i));
-    } catch (const Error& e) {
-      const std::string where = "frame " + std::to_string(i) + " (" + source.name(i) + "): ";
-      if (args.layout.strict) throw Error(where + e.what());
-      std::cerr << "lsgd: skipped " << where << e.what() << " (--strict stops here instead)\n";
-      if (first_skip.empty()) first_skip = e.what();
-      continue;  // nothing stored: the database only ever holds processed frames
+  // A database this run created and could not store a frame in is not left behind.
+  const auto discard_if_empty = [&] {
+    if (exists || !db || db->frames() != 0) return;
+    db.reset();
+    for (const char* suffix : {"", "-wal", "-shm"}) std::remove((args.database + suffix).c_str());
+  };
+  try {
+    Detector detector(options);
+    db->restore(detector);  // checks the options against the stored ones
+    const eval::FrameSource source = eval::sequence_source(sequence);
+    const SessionPlan plan = plan_session(*db, detector, sequence, source, args.session);
+    const auto images = static_cast<std::int64_t>(sequence.images.size());
+    if (plan.resume && plan.first >= images) {
+      std::cerr << args.database << ": session " << plan.session << " already holds every image "
+                << "of --sequence (frames " << plan.first_id << " .. " << plan.last_stored
+                << "): nothing to do" << kNewSessionHint << "\n";
+      return;
     }
-    ++processed;
-    db->append(detector, result, session, source.name(i));
-    csv.write(result, source.name(i));
-    total_ms += result.timings.total_ms;
-    progress.update(i + 1, total_ms / static_cast<double>(processed));
+    std::cerr << (exists ? "resumed " : "created ") << args.database << ": " << detector.size()
+              << " frames stored; "
+              << (plan.resume ? "continuing session " : "appending session ") << plan.session
+              << (plan.resume ? " at image " + std::to_string(plan.first) : std::string())
+              << ", frame ids " << plan.first_id + plan.first << " .. "
+              << plan.first_id + images - 1 << "\n";
+    const std::unique_ptr<CsvWriter> csv =
+        plan.resume ? continue_csv(args, plan) : std::make_unique<CsvWriter>(args.output);
+    eval::RunOptions run_options;
+    run_options.skip_bad_frames = !args.layout.strict;
+    run_options.first = plan.first;
+    run_options.first_id = plan.first_id;
+    run_options.stored_ids = db->frame_ids();
+    run_options.keep_records = false;
+    // The row is written (and flushed) before the frame is committed: after a
+    // crash the CSV holds at most one row the database lacks, which the
+    // re-run cuts (continue_csv).
+    const FrameRun run = run_frames(
+        detector, source, "run", run_options, [&](const Result& r, const eval::FrameTimes&) {
+          const std::string& image = sequence.images[static_cast<std::size_t>(r.frame - plan.first_id)];
+          csv->write(r, image);
+          db->append(detector, r, plan.session, stored_name(image), r.frame);
+        });
+    // A new session that stored nothing is an error as a new database is
+    // (frames of another size than the stored ones, a list of garbage).
+    if (run.processed == 0 && !plan.resume) throw_no_frame(run.skipped, run.first_error);
+    std::cerr << "processed " << run.processed << " frames"
+              << (run.skipped > 0 ? " (" + std::to_string(run.skipped) + " skipped)"
+                                  : std::string())
+              << ", " << csv->loops() << " loops, " << run.mean_ms() << " ms/frame mean; "
+              << args.database << " holds " << db->frames() << " frames"
+              << (args.output.empty() ? "" : ", rows in " + args.output) << "\n";
+  } catch (...) {
+    discard_if_empty();
+    throw;
   }
-  if (processed == 0) {
-    // A database this run created and left empty is not left behind.
-    if (!exists && db->frames() == 0) {
-      db.reset();
-      for (const char* suffix : {"", "-wal", "-shm"}) std::remove((args.database + suffix).c_str());
-    }
-    throw_no_frame(source.frames, first_skip);
-  }
-  const std::int64_t skipped = source.frames - processed;
-  std::cerr << "processed " << processed << " frames"
-            << (skipped > 0 ? " (" + std::to_string(skipped) + " skipped)" : std::string()) << ", "
-            << csv.loops() << " loops, " << total_ms / static_cast<double>(processed)
-            << " ms/frame mean; " << args.database << " holds " << db->frames() << " frames"
-            << (args.output.empty() ? "" : ", rows in " + args.output) << "\n";
 }
 
 void run(const RunArgs& args) {
   if (args.session && args.database.empty()) {
     throw InvalidArgument("--session needs --database");
-  }
-  if (args.session && *args.session < 0) {
-    throw InvalidArgument("--session " + std::to_string(*args.session) + " must be >= 0");
   }
   if (!args.database.empty()) {
     run_database(args, io::open_sequence(args.sequence, args.layout.resolve()));
@@ -124,16 +320,16 @@ void run(const RunArgs& args) {
   const eval::FrameSource source = eval::sequence_source(sequence);
   CsvWriter csv(args.output);
   Detector detector(options);
-  const auto records = run_with_progress(detector, source, "run", &csv, !args.layout.strict);
-  double total_ms = 0;
-  for (const auto& r : records) total_ms += r.timings.total_ms;
-  const std::int64_t skipped = skipped_frames(records);
-  const auto processed = static_cast<std::int64_t>(records.size()) - skipped;
-  std::cerr << "processed " << processed << " frames"
-            << (skipped > 0 ? " (" + std::to_string(skipped) + " skipped)" : std::string()) << ", "
-            << csv.loops() << " loops, "
-            << total_ms / static_cast<double>(std::max<std::int64_t>(processed, 1))
-            << " ms/frame mean"
+  eval::RunOptions run_options;
+  run_options.skip_bad_frames = !args.layout.strict;
+  run_options.keep_records = false;
+  const FrameRun run = run_frames(detector, source, "run", run_options,
+                                  [&](const Result& r, const eval::FrameTimes&) {
+                                    csv.write(r, source.name(r.frame));
+                                  });
+  std::cerr << "processed " << run.processed << " frames"
+            << (run.skipped > 0 ? " (" + std::to_string(run.skipped) + " skipped)" : std::string())
+            << ", " << csv.loops() << " loops, " << run.mean_ms() << " ms/frame mean"
             << (args.output.empty() ? "" : ", rows in " + args.output) << "\n";
 }
 
@@ -144,16 +340,22 @@ void register_run(CLI::App& app) {
   CLI::App* cmd = app.add_subcommand("run", "detect loops in an image sequence, one CSV row per frame");
   cmd->add_option("--sequence", args->sequence,
                   "folder of images (natural order), list file, or a dataset layout (--layout)")
-      ->required();
-  cmd->add_option("--output", args->output, "CSV file to write (default: standard output)");
+      ->required()
+      ->check(kNonEmptyPath);
+  cmd->add_option("--output", args->output, "CSV file to write (default: standard output)")
+      ->check(kNonEmptyPath);
   args->detector.add_to(*cmd);
   args->layout.add_to(*cmd);
   cmd->add_option("--database", args->database,
                   "SQLite file keeping the detector's state: created when missing, else resumed "
-                  "(its options apply; frames are appended, one transaction each)");
+                  "(its options apply; frames are appended, one transaction each; a re-run "
+                  "with the same sequence continues the session it interrupted)")
+      ->check(kNonEmptyPath);
   cmd->add_option("--session", args->session,
-                  "session id of this run's frames in --database (default: last session + 1, "
-                  "0 for a new database)");
+                  "session id of this run's frames in --database (default: continue the last "
+                  "session when --sequence is its sequence, else last session + 1; 0 for a new "
+                  "database)")
+      ->check(CLI::Range(std::int64_t{0}, kMaxSession));
   cmd->callback([args] { run(*args); });
 }
 

@@ -37,6 +37,7 @@ struct SweepArgs {
   std::string markdown;
   std::string json;
   int jobs = 1;
+  bool strict = false;
   DetectorFlags detector;
 };
 
@@ -53,11 +54,10 @@ struct Dataset {
   std::vector<std::string> images;
 };
 
-// Opens the sequence, decodes its first image and reads the ground truth, so
-// a wrong path fails before any run.
+// Opens the sequence and reads the ground truth, so a wrong path fails before
+// any run (images are read by the runs, which skip bad ones as lsgd eval does).
 Dataset prepare(const eval::SweepDataset& spec) {
   const io::Sequence sequence = io::open_sequence(spec.sequence);
-  io::read_image(sequence.images.front());
   Dataset d{spec, eval::sequence_source(sequence),
             load_ground_truth(spec.ground_truth, static_cast<std::int64_t>(sequence.images.size())),
             0, {}};
@@ -72,12 +72,14 @@ struct Cell {
   const eval::SweepPoint* point = nullptr;
   DetectorOptions options;  // the point's options with the dataset's window
   std::string label;        // for progress and error messages
+  bool first_of_dataset = false;  // reports the dataset's skipped frames
 };
 
 struct Row {
   eval::Metrics metrics;
   std::int64_t nodes = 0;
   std::size_t bytes_per_frame = 0;
+  std::int64_t skipped = 0;  // frames skipped (unreadable or rejected images)
   bool done = false;
 };
 
@@ -134,7 +136,7 @@ class SweepOutput {
                "precision_at_decision,recall_at_decision,recall_at_100_precision,"
                "threshold_at_100_precision,"
                "precision_at_100_recall,average_precision,recall_at_1,recall_at_5,recall_at_10,"
-               "prt,ms_per_frame_median,ms_per_frame_p95,nodes,bytes_per_frame\n"
+               "prt,ms_per_frame_median,ms_per_frame_p95,nodes,bytes_per_frame,skipped_frames\n"
             << std::flush;
     }
     std::ostringstream md;
@@ -247,7 +249,7 @@ class SweepOutput {
           << exact(m.recall_at_1) << ',' << exact(m.recall_at_5) << ',' << exact(m.recall_at_10)
           << ',' << exact(m.prt) << ',' << exact(m.ms_per_frame_median) << ','
           << exact(m.ms_per_frame_p95) << ',' << rows_[i].nodes << ',' << rows_[i].bytes_per_frame
-          << '\n'
+          << ',' << rows_[i].skipped << '\n'
           << std::flush;
     if (!*csv_) throw IoError("error while writing CSV file '" + args_.csv + "'");
   }
@@ -263,6 +265,7 @@ class SweepOutput {
     row["verification"] = verification_stages(cell.options.verification);
     row["nodes"] = rows_[i].nodes;
     row["bytes_per_frame"] = rows_[i].bytes_per_frame;
+    row["skipped_frames"] = rows_[i].skipped;
     row["config_yaml"] = io::to_yaml(cell.options);
     return row;
   }
@@ -278,19 +281,22 @@ class SweepOutput {
   std::unique_ptr<std::ofstream> markdown_;
 };
 
-Row run_cell(const Cell& cell, bool progress) {
+// Runs one cell through the frame loop of every command; bad frames are
+// skipped as by lsgd eval (reported once per dataset) unless --strict.
+Row run_cell(const Cell& cell, bool progress, bool strict) {
   Detector detector(cell.options);
-  const std::vector<eval::FrameRecord> records =
-      progress ? run_with_progress(detector, cell.dataset->source, cell.label, nullptr)
-               : eval::run_detector(detector, cell.dataset->source);
-  return {eval::evaluate(records, cell.dataset->gt, cell.options.search.min_gap), detector.nodes(),
-          detector.bytes_per_frame(), true};
+  eval::RunOptions options;
+  options.skip_bad_frames = !strict;
+  const FrameRun run = run_frames(detector, cell.dataset->source, cell.label, options, {},
+                                  progress, cell.first_of_dataset);
+  return {eval::evaluate(run.records, cell.dataset->gt, cell.options.search.min_gap),
+          detector.nodes(), detector.bytes_per_frame(), run.skipped, true};
 }
 
 // Runs the cells on `jobs` threads (1: this thread, with a progress bar).
 // After a failure no new cell starts; running ones finish and are kept. The
 // first failure is rethrown, naming its cell.
-void run_cells(const std::vector<Cell>& cells, int jobs, SweepOutput& output) {
+void run_cells(const std::vector<Cell>& cells, int jobs, bool strict, SweepOutput& output) {
   std::atomic<std::size_t> next{0};
   std::atomic<bool> failed{false};
   std::exception_ptr error;
@@ -298,7 +304,7 @@ void run_cells(const std::vector<Cell>& cells, int jobs, SweepOutput& output) {
   auto worker = [&] {
     for (std::size_t i; !failed && (i = next++) < cells.size();) {
       try {
-        output.add(i, run_cell(cells[i], jobs == 1));
+        output.add(i, run_cell(cells[i], jobs == 1, strict));
       } catch (const std::exception& e) {
         std::lock_guard<std::mutex> lock(error_mutex);
         if (!failed.exchange(true)) {
@@ -357,7 +363,7 @@ void sweep(const SweepArgs& args) {
   std::vector<Cell> cells;
   for (const Dataset& d : datasets) {
     for (const eval::SweepPoint& p : points) {
-      Cell cell{&d, &p, p.options, d.spec.name};
+      Cell cell{&d, &p, p.options, d.spec.name, &p == &points.front()};
       for (std::size_t k = 0; k < keys.size(); ++k) cell.label += " " + keys[k] + "=" + p.values[k];
       cell.label = "[" + std::to_string(cells.size() + 1) + "/" +
                    std::to_string(datasets.size() * points.size()) + "] " + cell.label;
@@ -368,7 +374,7 @@ void sweep(const SweepArgs& args) {
   }
   SweepOutput output(args, keys, datasets, cells);
   output.write_headers(base);
-  run_cells(cells, args.jobs, output);
+  run_cells(cells, args.jobs, args.strict, output);
 }
 
 }  // namespace
@@ -386,12 +392,18 @@ void register_sweep(CLI::App& app) {
                   "KEY=VALUES: a config key (e.g. search.nodes.beta) and a comma list or an "
                   "inclusive range a:b:step; repeat for a cross product, first --set slowest")
       ->take_all();
-  cmd->add_option("--csv", args->csv, "write the table as CSV here (rows flushed as they finish)");
-  cmd->add_option("--markdown", args->markdown, "also write the Markdown table here");
-  cmd->add_option("--json", args->json, "write every row's metrics, PR curve and config here");
+  cmd->add_option("--csv", args->csv, "write the table as CSV here (rows flushed as they finish)")
+      ->check(kNonEmptyPath);
+  cmd->add_option("--markdown", args->markdown, "also write the Markdown table here")
+      ->check(kNonEmptyPath);
+  cmd->add_option("--json", args->json, "write every row's metrics, PR curve and config here")
+      ->check(kNonEmptyPath);
   cmd->add_option("--jobs", args->jobs,
                   "cells run in parallel threads (default 1; times only comparable with 1)")
       ->check(CLI::Range(1, 256));
+  cmd->add_flag("--strict", args->strict,
+                "stop at the first image that cannot be read or is rejected; default: skip it "
+                "as lsgd eval does (reported once per dataset, counted in skipped_frames)");
   args->detector.add_to(*cmd);
   // The window is a property of each dataset here (--dataset ...,MIN_GAP).
   if (CLI::Option* gap = cmd->get_option_no_throw("--min-gap")) cmd->remove_option(gap);

@@ -4,8 +4,10 @@
 
 #include <chrono>
 #include <cstdio>
+#include <filesystem>
 #include <iomanip>
 #include <iostream>
+#include <optional>
 
 #include <CLI/CLI.hpp>
 
@@ -26,7 +28,8 @@ std::int64_t now_ns() {
 
 void DetectorFlags::add_to(CLI::App& command) {
   command.add_option("--config", config, "YAML detector configuration (unknown keys are errors)")
-      ->check(CLI::ExistingFile);
+      ->check(CLI::ExistingFile)
+      ->check(kNonEmptyPath);
   command.add_option("--mode", mode, "search mode, overrides search.mode")
       ->check(CLI::IsMember({"exhaustive", "nodes"}));
   command.add_option("--min-gap", min_gap,
@@ -119,13 +122,25 @@ void Progress::update(std::int64_t done, double ms_per_frame) {
   std::fflush(stderr);
 }
 
-CsvWriter::CsvWriter(const std::string& path) : out_(&std::cout) {
+namespace {
+
+constexpr const char* kCsvHeader = "frame,image,loop_frame,candidate_frame,score,ms,appearance,inliers";
+
+}  // namespace
+
+const CLI::Validator kNonEmptyPath(
+    [](std::string& value) { return value.empty() ? std::string("an empty file name") : ""; },
+    "FILE");
+
+CsvWriter::CsvWriter(const std::string& path, Mode mode) : path_(path), out_(&std::cout) {
   if (!path.empty()) {
-    file_ = std::make_unique<std::ofstream>(path);
+    file_ = std::make_unique<std::ofstream>(
+        path, mode == kAppend ? std::ios::out | std::ios::app : std::ios::out | std::ios::trunc);
     if (!*file_) throw IoError("cannot write output file '" + path + "'");
     out_ = file_.get();
   }
-  *out_ << "frame,image,loop_frame,candidate_frame,score,ms,appearance,inliers\n" << std::flush;
+  if (mode == kCreate) *out_ << kCsvHeader << "\n" << std::flush;
+  if (!*out_) throw IoError("error while writing " + (path.empty() ? "the CSV rows to standard output" : "'" + path + "'"));
 }
 
 void CsvWriter::write(const Result& r, const std::string& image) {
@@ -140,36 +155,84 @@ void CsvWriter::write(const Result& r, const std::string& image) {
         << std::setprecision(4) << r.timings.total_ms << ',' << std::setprecision(6)
         << (r.best.frame >= 0 ? r.evidence.appearance : 0.0) << ',' << r.evidence.inliers << '\n'
         << std::flush;
-  if (!*out_) throw IoError("error while writing the CSV output");
+  if (!*out_) {
+    throw IoError("error while writing the row of frame " + std::to_string(r.frame) + " to " +
+                  (path_.empty() ? std::string("standard output")
+                                 : "'" + path_ + "' (is the disk full?)"));
+  }
   loops_ += r.loop ? 1 : 0;
 }
 
-std::vector<eval::FrameRecord> run_with_progress(Detector& detector,
-                                                 const eval::FrameSource& source,
-                                                 const std::string& label, CsvWriter* csv,
-                                                 bool skip_bad_frames) {
-  Progress progress(source.frames, label);
-  double total_ms = 0;
-  std::int64_t done = 0;
-  std::string first_skip;
-  eval::RunOptions options;
-  options.skip_bad_frames = skip_bad_frames;
-  auto records = eval::run_detector(
+CsvWriter::Trim CsvWriter::trim(const std::string& path, std::int64_t last_frame) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw IoError("cannot read '" + path + "'");
+  std::string line;
+  if (!std::getline(in, line) || line != kCsvHeader) {
+    throw FormatError("'" + path + "' is not a CSV of lsgd run (its first line is not '" +
+                      kCsvHeader + "'); pass another --output");
+  }
+  Trim trim;
+  std::int64_t keep = static_cast<std::int64_t>(line.size()) + 1;  // bytes kept
+  bool cutting = false;
+  while (std::getline(in, line)) {
+    const bool complete = !in.eof();  // the line ended with '\n'
+    std::int64_t frame = -1;
+    const auto comma = line.find(',');
+    try {
+      if (comma != std::string::npos) frame = std::stoll(line.substr(0, comma));
+    } catch (const std::exception&) {
+      frame = -1;
+    }
+    if (!cutting && complete && frame >= 0 && frame <= last_frame) {
+      keep += static_cast<std::int64_t>(line.size()) + 1;
+      trim.last_row = frame;
+      continue;
+    }
+    cutting = true;
+    if (complete) {
+      ++trim.dropped;
+    } else {
+      trim.partial = true;
+    }
+  }
+  if (trim.dropped > 0 || trim.partial) {
+    in.close();
+    std::error_code ec;
+    std::filesystem::resize_file(path, static_cast<std::uintmax_t>(keep), ec);
+    if (ec) throw IoError("cannot cut the rows after frame " + std::to_string(last_frame) +
+                          " from '" + path + "': " + ec.message());
+  }
+  return trim;
+}
+
+FrameRun run_frames(Detector& detector, const eval::FrameSource& source, const std::string& label,
+                    const eval::RunOptions& options, const eval::FrameCallback& on_frame,
+                    bool progress, bool report_skips) {
+  std::optional<Progress> bar;
+  if (progress) bar.emplace(source.frames - options.first, label);
+  FrameRun run;
+  const std::string advice =
+      options.skip_bad_frames ? " (--strict stops here instead)" : std::string();
+  run.records = eval::run_detector(
       detector, source,
-      [&](const Result& r, double) {
-        if (csv) csv->write(r, source.name(r.frame));
-        total_ms += r.timings.total_ms;
-        ++done;
-        progress.update(r.frame + 1, total_ms / static_cast<double>(done));
+      [&](const Result& r, const eval::FrameTimes& times) {
+        if (on_frame) on_frame(r, times);
+        ++run.processed;
+        run.total_ms += r.timings.total_ms;
+        if (bar) bar->update(run.processed + run.skipped, run.mean_ms());
       },
       options,
       [&](std::int64_t frame, const std::string& name, const std::string& error) {
-        std::cerr << "lsgd: skipped frame " << frame << " (" << name << "): " << error
-                  << " (--strict stops here instead)\n";
-        if (first_skip.empty()) first_skip = error;
+        if (report_skips) {
+          std::cerr << "lsgd: skipped frame " << frame << " (" << name << "): " << error
+                    << advice << "\n";
+        }
+        if (run.first_error.empty()) run.first_error = error;
+        ++run.skipped;
+        if (bar) bar->update(run.processed + run.skipped, run.mean_ms());
       });
-  if (done == 0) throw_no_frame(source.frames, first_skip);
-  return records;
+  if (detector.size() == 0) throw_no_frame(run.skipped, run.first_error);
+  return run;
 }
 
 void throw_no_frame(std::int64_t images, const std::string& first_error) {
@@ -178,11 +241,6 @@ void throw_no_frame(std::int64_t images, const std::string& first_error) {
               "); is --sequence a folder of images or a list of their paths?");
 }
 
-std::int64_t skipped_frames(const std::vector<eval::FrameRecord>& records) {
-  std::int64_t n = 0;
-  for (const auto& r : records) n += r.skipped ? 1 : 0;
-  return n;
-}
 
 nlohmann::json metrics_json(const eval::Metrics& m) {
   nlohmann::json j;

@@ -15,9 +15,7 @@
 #include "lsgd/eval/runner.h"
 #include "lsgd/io/layouts.h"
 
-namespace CLI {
-class App;
-}
+#include <CLI/CLI.hpp>
 
 namespace lsgd::cli {
 
@@ -69,32 +67,60 @@ class Progress {
 // Writes `lsgd run` rows:
 // frame,image,loop_frame,candidate_frame,score,ms,appearance,inliers.
 // Each row is flushed, so an error later in the run loses nothing written.
+// Errors name the file.
 class CsvWriter {
  public:
-  explicit CsvWriter(const std::string& path);  // empty path: stdout
+  enum Mode { kCreate, kAppend };
+  // Empty path: stdout. kCreate writes the header (replacing the file);
+  // kAppend adds rows after the existing ones (a file trim() accepted).
+  explicit CsvWriter(const std::string& path, Mode mode = kCreate);
   void write(const Result& result, const std::string& image);
   std::int64_t loops() const { return loops_; }  // rows written with a loop
 
+  struct Trim {
+    std::int64_t dropped = 0;    // complete rows cut
+    bool partial = false;        // an incomplete last line was cut
+    std::int64_t last_row = -1;  // frame of the last row kept; -1: none
+  };
+  // Cuts the rows of frames after `last_frame` (and an incomplete last line)
+  // from an existing CSV this writer wrote, in place. Throws FormatError when
+  // the file is not one (its header differs).
+  static Trim trim(const std::string& path, std::int64_t last_frame);
+
  private:
+  std::string path_;
   std::int64_t loops_ = 0;
   std::unique_ptr<std::ofstream> file_;
   std::ostream* out_;
 };
 
-// Runs the detector over the source with a progress bar labelled `label`,
-// writing each frame's CSV row to `csv` when given. With skip_bad_frames, an
-// unreadable or rejected image is reported on stderr ("skipped frame ...")
-// and the run goes on (eval::RunOptions); when no frame at all could be
-// processed it throws (throw_no_frame).
-std::vector<eval::FrameRecord> run_with_progress(Detector& detector,
-                                                 const eval::FrameSource& source,
-                                                 const std::string& label, CsvWriter* csv,
-                                                 bool skip_bad_frames = false);
+// A CLI11 check for file arguments: an empty name ('') is an error, not
+// "no file".
+extern const CLI::Validator kNonEmptyPath;
+
+// What run_frames did.
+struct FrameRun {
+  std::vector<eval::FrameRecord> records;  // empty unless the options keep records
+  std::int64_t processed = 0;
+  std::int64_t skipped = 0;
+  double total_ms = 0;  // Detector::process wall time of the processed frames
+  std::string first_error;  // why the first skipped frame was skipped
+  double mean_ms() const { return processed > 0 ? total_ms / static_cast<double>(processed) : 0; }
+};
+
+// The frame loop of every command (eval::run_detector: one numbering, one way
+// to skip), with a progress bar labelled `label` (when `progress`), each
+// skipped frame reported on stderr ("lsgd: skipped frame I (PATH): reason")
+// (unless !report_skips)
+// and `on_frame` called for each processed frame (a CSV row, a database
+// append). Throws (throw_no_frame) when the detector ends the run holding no
+// frame at all.
+FrameRun run_frames(Detector& detector, const eval::FrameSource& source, const std::string& label,
+                    const eval::RunOptions& options, const eval::FrameCallback& on_frame = {},
+                    bool progress = true, bool report_skips = true);
 // A run in which every image was skipped is an error, not an empty success:
 // throws lsgd::Error saying so, with the first image's error.
 [[noreturn]] void throw_no_frame(std::int64_t images, const std::string& first_error);
-// Frames of `records` that were skipped.
-std::int64_t skipped_frames(const std::vector<eval::FrameRecord>& records);
 
 nlohmann::json metrics_json(const eval::Metrics& m);
 // Prints the headline numbers of an evaluation, one per line.

@@ -28,14 +28,28 @@ struct FrameSource {
 // The images of a sequence, read with io::read_image.
 FrameSource sequence_source(const io::Sequence& sequence);
 
-// Called after each frame with its result and the milliseconds spent loading
-// it. Frame ids in the result (its frame, best, candidates, verdicts) are
-// source indices, also when earlier frames were skipped.
-using FrameCallback = std::function<void(const Result& result, double load_ms)>;
-// Called for each skipped frame: its source index, name and the error.
+// Times of one frame around Detector::process.
+struct FrameTimes {
+  double load_ms = 0;         // reading and decoding the image (FrameSource::load)
+  double process_cpu_ms = 0;  // CPU time of this thread inside process()
+};
+
+// Called after each processed frame with its result, whose frame ids (its
+// frame, best, candidates, verdicts) are the run's ids (RunOptions), also
+// when earlier frames were skipped. The detector holds the frame already; an
+// exception thrown here stops the run.
+using FrameCallback = std::function<void(const Result& result, const FrameTimes& times)>;
+// Called for each skipped frame: its id, name and the error.
 using SkipCallback =
     std::function<void(std::int64_t frame, const std::string& name, const std::string& error)>;
 
+// The one frame loop of lsgd: run, eval, sweep and bench all feed frames
+// through run_detector, so they number, skip and time frames alike.
+//
+// Frame ids: source frame i has id first_id + i, whether or not earlier
+// frames were skipped (a skipped frame keeps its id and stores nothing).
+// Frames the detector already held before the run (restored from a
+// database) keep the ids given in stored_ids.
 struct RunOptions {
   // false: a frame that fails to load (missing, truncated, corrupt, not an
   // image) or that the detector rejects (other size, 16-bit) stops the run
@@ -44,11 +58,18 @@ struct RunOptions {
   // it, and its record has no report (skipped = true), so a skipped
   // ground-truth loop counts as missed. Later frames keep their source index.
   bool skip_bad_frames = false;
+  // Source frames before `first` are not loaded (resuming a run whose
+  // earlier frames the detector holds already).
+  std::int64_t first = 0;
+  // Id of source frame 0.
+  std::int64_t first_id = 0;
+  // Ids of the frames the detector holds before the run, in its order
+  // (strictly increasing, below first_id + first); empty for a new detector.
+  std::vector<std::int64_t> stored_ids;
+  // false: return no records (a long `lsgd run` needs none).
+  bool keep_records = true;
 };
 
-// Feeds every frame to the detector in order. Frames already processed were
-// passed to `on_frame` (a CSV writer keeps them) before any error. Throws
-// InvalidArgument for an empty source.
 // Warnings about a setup in which the method cannot work as intended, for
 // `lsgd eval` to print (stderr), store (JSON) and show (HTML report): a grid of
 // fewer than 4 cells (the descriptor is nearly a whole-image histogram),
@@ -58,6 +79,12 @@ struct RunOptions {
 // sequence (its frame size is known); empty when all is well.
 std::vector<std::string> setup_warnings(const Detector& detector, const GroundTruth& gt);
 
+// Feeds frames first .. frames-1 to the detector in order and returns one
+// record per frame fed (skipped ones included), record i for source frame
+// first + i. Frames already processed were passed to `on_frame` (a CSV writer
+// keeps them) before any error. Throws InvalidArgument for an empty source,
+// `first` outside it, stored_ids that do not match the detector, or ids
+// that would not increase.
 std::vector<FrameRecord> run_detector(Detector& detector, const FrameSource& source,
                                       const FrameCallback& on_frame = {},
                                       const RunOptions& options = {},

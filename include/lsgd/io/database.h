@@ -3,17 +3,21 @@
 // frame, one transaction per appended frame: a crash loses at most the frame
 // being written, and the file stays inspectable with the sqlite3 shell.
 //
-// Schema (format version 1; docs/reliability.md, "Persistence"):
+// Schema (format version 3; docs/reliability.md, "Persistence"):
 //
 //   meta(key TEXT PRIMARY KEY, value NOT NULL)
-//     format_version   1 (integer)
+//     format_version   3 (integer)
 //     library_version  e.g. "0.1.0", the lsgd that created the file
 //     options          the DetectorOptions as YAML (io::to_yaml)
 //     width, height    frame size (0 until the first frame)
 //     grid_rows, grid_cols
+//     writer           "open" while a writer has the file, "closed" after it
+//                      closed it (absent in older files)
+//     checkpoint_frames  frames in the file at the writer's last checkpoint
 //     checksum         CRC-32 of every other "key=value\n", keys in order
 //   frames(id INTEGER PRIMARY KEY,  -- detector frame id: 0, 1, 2, ... dense
-//          session INTEGER NOT NULL, -- >= 0, chosen by the writer
+//          session INTEGER NOT NULL, -- 0 .. kMaxSession, chosen by the writer;
+//                                    -- a session's rows are consecutive
 //          name TEXT NOT NULL,       -- image name or path ('' when unknown)
 //          histogram BLOB NOT NULL,  -- cells * 256 uint16, little-endian
 //          pixels BLOB NOT NULL,     -- cells uint32, little-endian
@@ -22,21 +26,34 @@
 //                                    -- (-1: none); NULL when temporal is off or unknown
 //          features BLOB,            -- ORB: n * 2 float32 (x, y), then n * 32 bytes;
 //                                    -- NULL when geometric verification is off
-//          crc32 INTEGER NOT NULL)   -- CRC-32 of every other column (see database.cc)
+//          crc32 INTEGER NOT NULL,   -- CRC-32 of every other column (see database.cc)
+//          loop INTEGER,             -- the decision's state after the frame: its
+//          loop_inliers REAL,        -- loop (detector id, -1: none) and inliers
+//          frame INTEGER)            -- the caller's frame id, increasing with id
+//                                    -- (NULL in rows of older formats: = id)
 //
 // Node membership is derived from frames.node (node k = its frames in id
 // order; node k is created by its first frame, so first frames increase with
 // k); the temporal verifier's state is the place of the last max(agree, 1)
 // frames. Neither needs a table of its own, so appending a frame is one row.
 //
+// Durability: the write-ahead log is checked before SQLite replays it (a
+// damaged log that would silently lose a commit is a FormatError), and the
+// writer moves the log into the file every 32 frames and when it closes, so
+// a writer that ends (normally or by an error) leaves every frame in the file
+// itself.
+//
 // Errors: a missing or unwritable file is IoError; a file that is not SQLite,
 // is truncated, damaged (SQLite's quick_check, the checksums, blob sizes, ids,
-// node order) or of a newer format is FormatError naming the file; options
-// that do not match the stored ones are InvalidArgument naming the key.
+// node order, the write-ahead log) or of a newer format is FormatError naming
+// the file; options that do not match the stored ones are InvalidArgument
+// naming the key.
 //
 // Thread safety: a Database is used by one thread at a time (it owns one
-// sqlite3 connection and its prepared statements). Two processes may read the
-// same file; only one should append.
+// sqlite3 connection and its prepared statements). One writer at a time: a
+// Database opened for writing holds an exclusive lock on the file (flock)
+// until destroyed, and a second writer, in this process or another, gets an
+// IoError saying so. Readers may open it meanwhile.
 #pragma once
 
 #include <cstdint>
@@ -50,11 +67,32 @@
 namespace lsgd::io {
 
 // The format this lsgd writes and the newest it reads. Version 2 keeps the
-// loop decision's state per frame (Detector::continuity()); a version 1 file
-// is read as it is and, opened for writing, upgraded in place (two columns
-// added, its decision options reset to this version's defaults: version 1
-// thresholds were raw similarities, version 2's are in sigma).
-constexpr int kDatabaseFormatVersion = 2;
+// loop decision's state per frame (Detector::continuity()), version 3 the
+// caller's frame id. Older files are read as they are and, opened for
+// writing, upgraded in place (columns added; from version 1 its decision
+// options reset to this version's defaults: version 1 thresholds were raw
+// similarities, version 2's are in sigma).
+constexpr int kDatabaseFormatVersion = 3;
+
+// The frames of one session, as the caller numbered and named them.
+struct StoredFrame {
+  std::int64_t frame = 0;  // the caller's id (in files of format 1 and 2: the row id)
+  std::string name;
+};
+struct SessionFrames {
+  std::int64_t session = -1;
+  // One past the id of the frame stored just before the session (0 for the
+  // first): lsgd run numbers a session's frames first_id + image index.
+  std::int64_t first_id = 0;
+  std::vector<StoredFrame> frames;  // in order; empty for an unknown session
+};
+
+struct SessionInfo {
+  std::int64_t session = 0;
+  std::int64_t frames = 0;
+  std::int64_t first_frame = 0;  // smallest and largest caller id
+  std::int64_t last_frame = 0;
+};
 
 struct DatabaseInfo {
   std::string path;
@@ -65,9 +103,10 @@ struct DatabaseInfo {
   int height = 0;
   GridSize grid;
   std::int64_t frames = 0;
-  std::vector<std::pair<std::int64_t, std::int64_t>> sessions;  // (session, frames), by session
+  std::vector<SessionInfo> sessions;  // in the order they were stored
   std::int64_t nodes = 0;  // dynamic nodes (0 in exhaustive mode)
   std::int64_t bytes = 0;  // size of the file plus its write-ahead log
+  std::string note;        // Database::note()
 };
 
 class Database {
@@ -98,7 +137,22 @@ class Database {
   std::int64_t frames() const;
   // Session of the last frame; -1 when there is none.
   std::int64_t last_session() const;
+  // The caller's id of the last frame; -1 when there is none.
+  std::int64_t last_frame() const;
+  // What open() found about the writer before this one: empty when it closed
+  // the file, else that it was stopped (killed) and what was recovered.
+  const std::string& note() const;
+  // Reads in one snapshot: counts, sessions, nodes, size. Cheap: rows are
+  // not checked (verify() does).
   DatabaseInfo info() const;
+  // Checks every row as restore() would (types, sizes, checksums, node order,
+  // places, ids), into a scratch detector; throws FormatError naming the file
+  // and the first damaged frame.
+  void verify() const;
+  // The caller's id of every stored frame, in storage order (increasing).
+  std::vector<std::int64_t> frame_ids() const;
+  // The frames of `session` (empty when it has none).
+  SessionFrames session_frames(std::int64_t session) const;
 
   // Throws InvalidArgument naming the first key whose value differs from the
   // stored one, with both values. Every option must match except
@@ -113,14 +167,20 @@ class Database {
   // damaged rows (detector then holds part of the frames: discard it).
   void restore(Detector& detector) const;
 
-  // Appends the frame `result` describes, just processed by `detector`
-  // (result.frame must be frames() and the detector's last frame), in one
-  // transaction. `session` >= 0; `name` is free text (the image path).
+  // Appends the detector's last frame, just processed (the detector must
+  // hold frames() + 1 frames; `result` is what process() returned for it:
+  // its node is stored, its ids are not read, so a caller may have renumbered
+  // them), in one transaction. `session`: 0 .. kMaxSession, either the last
+  // session or one without frames (a session's frames stay together).
+  // `name` is free text (the image path). `frame`: the caller's id of the
+  // frame, above every stored one (-1: one past the last). Throws
+  // InvalidArgument for misuse, IoError when the file cannot be written.
   void append(const Detector& detector, const Result& result, std::int64_t session,
-              const std::string& name = "");
+              const std::string& name = "", std::int64_t frame = -1);
 
   // Appends every frame of `detector` not stored yet (ids frames() ..
-  // detector.size() - 1) in one transaction, with empty names. Node
+  // detector.size() - 1) in one transaction, with empty names and caller ids
+  // continuing after last_frame(). Node
   // membership comes from the detector; temporal places are known only for
   // its last max(agree, 1) frames (earlier rows get NULL, which restore()
   // never reads).

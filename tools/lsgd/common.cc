@@ -130,7 +130,7 @@ constexpr const char* kCsvHeader = "frame,image,loop_frame,candidate_frame,score
 
 const CLI::Validator kNonEmptyPath(
     [](std::string& value) { return value.empty() ? std::string("an empty file name") : ""; },
-    "FILE");
+    "");  // no name in the help: ExistingFile already says FILE where it applies
 
 CsvWriter::CsvWriter(const std::string& path, Mode mode) : path_(path), out_(&std::cout) {
   if (!path.empty()) {

@@ -47,6 +47,8 @@
 #include "lsgd/frame_store.h"
 #include "lsgd/image.h"
 #include "lsgd/search.h"
+#include "lsgd/search/dynamic_nodes.h"
+#include "lsgd/search/exhaustive.h"
 #include "lsgd/segmentation.h"
 #include "lsgd/similarity.h"
 
@@ -275,7 +277,7 @@ int main(int argc, char** argv) {
         }
       }
       lsgd::SearchOptions o = search;
-      o.mode = lsgd::SearchMode::kDynamicNodes;
+      o.mode = lsgd::kNodesSearch;
       lsgd::FrameStore store;
       lsgd::DynamicNodes dn;
       std::vector<lsgd::Candidate> scratch, out;

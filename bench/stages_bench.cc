@@ -41,6 +41,8 @@
 #include "lsgd/geometric.h"
 #include "lsgd/image.h"
 #include "lsgd/search.h"
+#include "lsgd/search/dynamic_nodes.h"
+#include "lsgd/search/exhaustive.h"
 #include "lsgd/segmentation.h"
 #include "lsgd/similarity.h"
 #include "lsgd/verification.h"
@@ -447,7 +449,7 @@ const NodesSetup& nodes_setup(Size size, std::int64_t frames, const lsgd::Search
 void BM_DynamicNodes(benchmark::State& state, Size size, lsgd::HistogramStorage storage) {
   const std::int64_t frames = state.range(0);
   lsgd::SearchOptions options;  // defaults: min_gap 50, top_n 10, reference thresholds
-  options.mode = lsgd::SearchMode::kDynamicNodes;
+  options.mode = lsgd::kNodesSearch;
   const auto metric = lsgd::SimilarityMetric::kReference;
   const NodesSetup& setup = nodes_setup(size, frames, options, metric, storage);  // untimed
   // The query continues the route: its previous frame is the last stored one.

@@ -47,8 +47,9 @@ SequenceOptions sequence_options(const VerificationOptions& v) {
 Detector::Detector(const DetectorOptions& options)
     : options_(options),
       segmenter_((options.check(), options.segmentation)),
+      search_(make_search(options.search)),
       evidence_(sequence_options(options.verification), options.search.min_gap,
-                options.search.mode == SearchMode::kDynamicNodes),
+                !search_->scores_every_frame()),
       temporal_(options.verification.temporal_options),
       geometric_(options.verification.geometric_options) {}
 
@@ -86,7 +87,7 @@ Result Detector::process(const ImageView& frame) {
   return process_gray(ms_since(start), start);
 }
 
-std::int64_t Detector::nodes() const { return nodes_.size(); }
+std::int64_t Detector::nodes() const { return search_->groups(); }
 
 double Detector::similarity(std::int64_t a, std::int64_t b) const {
   return lsgd::similarity(store_.view(a), store_.view(b), options_.similarity.metric);
@@ -118,19 +119,14 @@ Result Detector::process_gray(double convert_ms, std::int64_t start_ns) {
 
   t = now_ns();
   const SimilarityMetric metric = options_.similarity.metric;
-  const bool exhaustive = options_.search.mode == SearchMode::kExhaustive;
-  if (exhaustive) {
-    search_exhaustive(store_, descriptor_.view(), result.frame, options_.search, metric, scratch_,
-                      raw_, &row_);
-  } else {
-    const auto outcome = nodes_.assign(store_, descriptor_.view(), result.frame, options_.search,
-                                       metric, scratch_, raw_);
-    result.node = outcome.node;
-    result.node_created = outcome.created;
-  }
+  const CandidateSearch::Outcome outcome =
+      search_->search({store_, descriptor_.view(), result.frame, metric}, raw_, row_);
+  result.node = outcome.group;
+  result.node_created = outcome.created;
   // After a restore the evidence is recomputed from the stored frames first.
   if (evidence_.last_query() != result.frame - 1) evidence_.rebuild(store_, metric);
-  evidence_.add_query(store_, descriptor_.view(), result.frame, metric, exhaustive ? &row_ : nullptr);
+  evidence_.add_query(store_, descriptor_.view(), result.frame, metric,
+                      search_->scores_every_frame() ? &row_ : nullptr);
   score_candidates(result);
   result.timings.search_ms = ms_since(t);
 
@@ -154,7 +150,7 @@ void Detector::score_candidates(Result& result) {
   const SimilarityMetric metric = options_.similarity.metric;
   const int top_n = options_.search.top_n;
   if (options_.verification.temporal) {
-    if (options_.search.mode == SearchMode::kExhaustive) {
+    if (search_->scores_every_frame()) {
       evidence_.best_places(top_n, result.candidates);
     } else {
       evidence_.realign(store_, descriptor_.view(), raw_, metric, top_n, result.candidates);
@@ -302,13 +298,14 @@ void Detector::restore_frame(int width, int height, const Descriptor& descriptor
                              std::int64_t node) {
   const Exclusive exclusive(busy_, "restore_frame");
   const std::int64_t frame = store_.size();
-  const std::int64_t max_node =
-      options_.search.mode == SearchMode::kDynamicNodes ? store_.groups() : 0;
+  const bool groups = search_->has_groups();
+  const std::int64_t max_node = groups ? store_.groups() : 0;
   if (node < 0 || node > max_node) {
-    internal::throw_invalid(
-        "restore_frame: frame ", frame, " has node ", node, ": expected 0 to ", max_node,
-        options_.search.mode == SearchMode::kDynamicNodes ? " (an earlier node or the next new one)"
-                                                          : " (the search mode is exhaustive)");
+    internal::throw_invalid("restore_frame: frame ", frame, " has node ", node, ": expected 0 to ",
+                            max_node,
+                            groups ? " (an earlier node or the next new one)"
+                                   : internal::concat(" (the search mode ", search_->name(),
+                                                      " has no groups)"));
   }
   if (width <= 0 || height <= 0 || (frame > 0 && (width != width_ || height != height_))) {
     internal::throw_invalid("restore_frame: frame ", frame, " is ", width, "x", height,
@@ -353,38 +350,7 @@ void Detector::restore_frame(int width, int height, const Descriptor& descriptor
 
 void Detector::restore_nodes(std::vector<std::vector<std::int64_t>> nodes) {
   const Exclusive exclusive(busy_, "restore_nodes");
-  if (options_.search.mode != SearchMode::kDynamicNodes) {
-    internal::throw_invalid("restore_nodes: the search mode is ", to_string(options_.search.mode));
-  }
-  // As assign() builds them: every stored frame in exactly one node, nodes in
-  // the order their first frames were stored.
-  std::vector<std::int64_t> node_of(static_cast<std::size_t>(store_.size()), -1);
-  for (std::size_t k = 0; k < nodes.size(); ++k) {
-    for (const std::int64_t id : nodes[k]) {
-      if (id < 0 || id >= store_.size()) {
-        internal::throw_invalid("restore_nodes: frame ", id, " of node ", k,
-                                " is not stored (", store_.size(), " frames)");
-      }
-      std::int64_t& owner = node_of[static_cast<std::size_t>(id)];
-      if (owner >= 0) {
-        internal::throw_invalid("restore_nodes: frame ", id, " is in node ", owner, " and in node ",
-                                k);
-      }
-      owner = static_cast<std::int64_t>(k);
-    }
-    if (k > 0 && !nodes[k].empty() && !nodes[k - 1].empty() &&
-        nodes[k].front() <= nodes[k - 1].front()) {
-      internal::throw_invalid("restore_nodes: node ", k, " starts at frame ", nodes[k].front(),
-                              ", not after node ", k - 1, "'s first frame ", nodes[k - 1].front());
-    }
-  }
-  for (std::size_t id = 0; id < node_of.size(); ++id) {
-    if (node_of[id] < 0) {
-      internal::throw_invalid("restore_nodes: frame ", id, " is in no node (every stored frame "
-                              "joined or created one)");
-    }
-  }
-  nodes_.restore(std::move(nodes));
+  search_->restore_groups(std::move(nodes), store_.size());
 }
 
 void Detector::restore_continuity(const ContinuityState& state) {

@@ -250,11 +250,11 @@ TEST(CompactDetector, RestoreFramePlacesFramesByNode) {
     Detector d(o);  // exhaustive: every frame in group 0
     const std::string m =
         message_of<InvalidArgument>([&] { d.restore_frame(160, 120, c, {}, {}, 1); });
-    EXPECT_NE(m.find("node 1: expected 0 to 0 (the search mode is exhaustive)"), std::string::npos)
+    EXPECT_NE(m.find("node 1: expected 0 to 0 (the search mode exhaustive has no groups)"), std::string::npos)
         << m;
     EXPECT_EQ(d.size(), 0);
   }
-  o.search.mode = SearchMode::kDynamicNodes;
+  o.search.mode = kNodesSearch;
   Detector d(o);
   for (const std::int64_t bad : {-1, 1}) {
     const std::string m =
@@ -284,7 +284,7 @@ TEST(CompactDetector, RestoredNodesMustCoverEveryFrameOnce) {
   DetectorOptions o;
   o.segmentation.superpixel_size = 16;
   o.descriptor.storage = HistogramStorage::kCompact;
-  o.search.mode = SearchMode::kDynamicNodes;
+  o.search.mode = kNodesSearch;
   const std::vector<Descriptor> exact = street(8, 40);
   Detector d(o);
   for (const Descriptor& e : exact) d.restore_frame(160, 120, compacted(e));
@@ -300,19 +300,19 @@ TEST(CompactDetector, RestoredNodesMustCoverEveryFrameOnce) {
   EXPECT_NE(refused({{0, 1, 2, 3, 4, 5, 6, 7, 8}}).find("frame 8 of node 0 is not stored"),
             std::string::npos);
   EXPECT_EQ(d.nodes(), 0);
-  EXPECT_NE(message_of<InvalidArgument>([&] { d.dynamic_nodes().members(5); })
+  EXPECT_NE(message_of<InvalidArgument>([&] { d.search().members(5); })
                 .find("node 5 does not exist (0 nodes)"),
             std::string::npos);
   d.restore_nodes({{0, 2, 4}, {1, 3}, {5}, {6, 7}});
-  EXPECT_EQ(d.dynamic_nodes().members(1), (std::vector<std::int64_t>{1, 3}));
-  EXPECT_THROW(d.dynamic_nodes().members(-1), InvalidArgument);
+  EXPECT_EQ(d.search().members(1), (std::vector<std::int64_t>{1, 3}));
+  EXPECT_THROW(d.search().members(-1), InvalidArgument);
 }
 
 TEST(CompactDetector, NodesRestoredWithoutPlacementStillRun) {
   DetectorOptions o;
   o.segmentation.superpixel_size = 16;
   o.descriptor.storage = HistogramStorage::kCompact;
-  o.search.mode = SearchMode::kDynamicNodes;
+  o.search.mode = kNodesSearch;
   o.search.min_gap = 2;
   o.search.nodes.alpha = 10;
   const std::vector<Descriptor> exact = street(8, 40);

@@ -60,7 +60,7 @@ DetectorOptions custom_options() {
   o.segmentation.intensity_scale = 0.1;       // not exact in binary
   o.segmentation.distance_scale = 1.0 / 3.0;  // needs 17 digits
   o.similarity.metric = SimilarityMetric::kNormalizedL1;
-  o.search.mode = SearchMode::kDynamicNodes;
+  o.search.mode = kNodesSearch;
   o.search.min_gap = 123456789;
   o.search.top_n = 7;
   o.search.nodes.threshold_0 = 0.123456789012345678;
@@ -132,7 +132,7 @@ TEST(ParseConfig, FullConfig) {
   EXPECT_EQ(o.segmentation.intensity_scale, 4.5);
   EXPECT_EQ(o.segmentation.distance_scale, 0.2);
   EXPECT_EQ(o.similarity.metric, SimilarityMetric::kL1);
-  EXPECT_EQ(o.search.mode, SearchMode::kDynamicNodes);
+  EXPECT_EQ(o.search.mode, kNodesSearch);
   EXPECT_EQ(o.search.min_gap, 30);
   EXPECT_EQ(o.search.top_n, 3);
   EXPECT_EQ(o.search.nodes.threshold_0, 0.5);

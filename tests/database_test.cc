@@ -67,7 +67,7 @@ std::string temp_path(const std::string& name) {
   return path;
 }
 
-DetectorOptions options(SearchMode mode, const std::string& stages,
+DetectorOptions options(const std::string& mode, const std::string& stages,
                         HistogramStorage storage = HistogramStorage::kExact) {
   DetectorOptions o;
   o.descriptor.storage = storage;
@@ -121,7 +121,7 @@ void expect_same_state(const Detector& a, const Detector& b) {
   ASSERT_EQ(a.nodes(), b.nodes());
   EXPECT_EQ(a.store().groups(), b.store().groups());
   for (std::int64_t k = 0; k < a.nodes(); ++k) {
-    EXPECT_EQ(a.dynamic_nodes().members(k), b.dynamic_nodes().members(k));
+    EXPECT_EQ(a.search().members(k), b.search().members(k));
   }
   EXPECT_EQ(a.temporal_verifier().last_query(), b.temporal_verifier().last_query());
   EXPECT_EQ(a.temporal_verifier().places(), b.temporal_verifier().places());
@@ -151,7 +151,7 @@ std::vector<Result> run(Detector& detector, std::int64_t first, std::int64_t las
 }
 
 struct ResumeCase {
-  SearchMode mode;
+  std::string mode;
   const char* stages;
   std::int64_t frames;  // M
   std::int64_t split;   // N
@@ -160,7 +160,7 @@ struct ResumeCase {
 };
 
 void PrintTo(const ResumeCase& c, std::ostream* out) {
-  *out << to_string(c.mode) << " " << c.stages << ", frames " << c.frames << ", split at "
+  *out << c.mode << " " << c.stages << ", frames " << c.frames << ", split at "
        << c.split << (c.append_all ? ", append_all" : "") << ", " << to_string(c.storage);
 }
 
@@ -174,7 +174,7 @@ TEST_P(Resume, EqualsUninterruptedRun) {
 
   std::string stages = c.stages;
   std::replace(stages.begin(), stages.end(), ',', '_');
-  const std::string path = temp_path(std::string("resume_") + to_string(c.mode) + "_" + stages +
+  const std::string path = temp_path("resume_" + c.mode + "_" + stages +
                                      (c.append_all ? "_all" : "") + "_" + to_string(c.storage));
   {
     Database db = Database::create(path, o);
@@ -211,18 +211,18 @@ TEST_P(Resume, EqualsUninterruptedRun) {
 
 INSTANTIATE_TEST_SUITE_P(
     Modes, Resume,
-    ::testing::Values(ResumeCase{SearchMode::kExhaustive, "temporal", 260, 110, false},
-                      ResumeCase{SearchMode::kDynamicNodes, "temporal", 260, 125, false},
-                      ResumeCase{SearchMode::kExhaustive, "none", 260, 100, false},
-                      ResumeCase{SearchMode::kDynamicNodes, "temporal", 260, 140, true},
-                      ResumeCase{SearchMode::kExhaustive, "temporal,geometric", 190, 150, false},
-                      ResumeCase{SearchMode::kDynamicNodes, "temporal,geometric", 190, 163, false},
-                      ResumeCase{SearchMode::kExhaustive, "temporal", 260, 110, false,
+    ::testing::Values(ResumeCase{kExhaustiveSearch, "temporal", 260, 110, false},
+                      ResumeCase{kNodesSearch, "temporal", 260, 125, false},
+                      ResumeCase{kExhaustiveSearch, "none", 260, 100, false},
+                      ResumeCase{kNodesSearch, "temporal", 260, 140, true},
+                      ResumeCase{kExhaustiveSearch, "temporal,geometric", 190, 150, false},
+                      ResumeCase{kNodesSearch, "temporal,geometric", 190, 163, false},
+                      ResumeCase{kExhaustiveSearch, "temporal", 260, 110, false,
                                  HistogramStorage::kCompact},
-                      ResumeCase{SearchMode::kDynamicNodes, "temporal", 260, 140, true,
+                      ResumeCase{kNodesSearch, "temporal", 260, 140, true,
                                  HistogramStorage::kCompact}),
     [](const ::testing::TestParamInfo<ResumeCase>& param) {
-      std::string name = std::string(to_string(param.param.mode)) + "_" + param.param.stages +
+      std::string name = param.param.mode + "_" + param.param.stages +
                          (param.param.append_all ? "_append_all" : "") +
                          (param.param.storage == HistogramStorage::kCompact ? "_compact" : "");
       std::replace(name.begin(), name.end(), ',', '_');
@@ -235,7 +235,7 @@ TEST(Database, SessionsFindLoopsAcrossSessions) {
   const auto& route = world().route();
   ASSERT_GE(route.size(), 6u);
   ASSERT_TRUE(route[4].revisit);
-  const DetectorOptions o = options(SearchMode::kExhaustive, "temporal,geometric");
+  const DetectorOptions o = options(kExhaustiveSearch, "temporal,geometric");
   const std::string path = temp_path("sessions");
   std::int64_t session0 = 0;
   {
@@ -279,7 +279,7 @@ TEST(Database, SessionsFindLoopsAcrossSessions) {
 }
 
 TEST(Database, OptionsMustMatchExceptThreshold) {
-  const DetectorOptions o = options(SearchMode::kExhaustive, "temporal");
+  const DetectorOptions o = options(kExhaustiveSearch, "temporal");
   const std::string path = temp_path("options");
   Database db = Database::create(path, o);
   DetectorOptions other = o;
@@ -336,7 +336,7 @@ TEST(Database, OptionsMustMatchExceptThreshold) {
 
 TEST(Database, CreateIsAtomicAndNeverOverwrites) {
   const std::string path = temp_path("create");
-  const DetectorOptions o = options(SearchMode::kExhaustive, "temporal");
+  const DetectorOptions o = options(kExhaustiveSearch, "temporal");
   { Database db = Database::create(path, o); }
   const std::string dir = fs::path(path).parent_path();
   for (const auto& entry : fs::directory_iterator(dir)) {
@@ -364,7 +364,7 @@ const std::string& small_database() {
   static const std::string path = [] {
     // Per process: ctest runs the tests that share this file in parallel.
     const std::string p = temp_path("small_" + std::to_string(::getpid()));
-    DetectorOptions o = options(SearchMode::kDynamicNodes, "temporal,geometric");
+    DetectorOptions o = options(kNodesSearch, "temporal,geometric");
     o.search.min_gap = 2;
     o.verification.geometric_options.max_features = 32;
     Database db = Database::create(p, o);
@@ -589,7 +589,7 @@ TEST(Database, OptionsOfAnOlderVersionKeepTheirBehaviour) {
 std::string older_database(int format) {
   const std::string path = temp_path("format" + std::to_string(format));
   {
-    DetectorOptions o = options(SearchMode::kExhaustive, "temporal,geometric");
+    DetectorOptions o = options(kExhaustiveSearch, "temporal,geometric");
     o.search.min_gap = 2;
     o.verification.geometric_options.max_features = 32;
     Database db = Database::create(path, o);
@@ -787,7 +787,7 @@ TEST(DatabaseDamage, EditedRowsAndMeta) {
 // copied while the writer is still open (its destructor would checkpoint).
 std::string crashed_database(const std::string& name, std::int64_t frames) {
   const std::string live = temp_path(name + "_live"), copy = temp_path(name);
-  DetectorOptions o = options(SearchMode::kDynamicNodes, "temporal,geometric");
+  DetectorOptions o = options(kNodesSearch, "temporal,geometric");
   o.search.min_gap = 2;
   o.verification.geometric_options.max_features = 32;
   Database db = Database::create(live, o);
@@ -810,7 +810,7 @@ std::int64_t be32_at(const std::string& bytes, std::size_t at) {
 // the log holds at most the frames since its last checkpoint (every 32).
 TEST(DatabaseWal, AClosedDatabaseHoldsEveryFrameInItsFile) {
   const std::string path = temp_path("closed");
-  DetectorOptions o = options(SearchMode::kExhaustive, "temporal");
+  DetectorOptions o = options(kExhaustiveSearch, "temporal");
   o.search.min_gap = 2;
   {
     Database db = Database::create(path, o);
@@ -924,7 +924,7 @@ TEST(DatabaseWal, ALostOrCutLogOpensWhatRemainsAndSaysSo) {
 // One writer at a time; readers beside it.
 TEST(DatabaseWal, ASecondWriterIsToldAnotherProcessIsWriting) {
   const std::string path = temp_path("two_writers");
-  DetectorOptions o = options(SearchMode::kExhaustive, "none");
+  DetectorOptions o = options(kExhaustiveSearch, "none");
   Database first = Database::create(path, o);
   const std::string m = [&] {
     try {

@@ -18,6 +18,7 @@
 
 #include "lsgd/error.h"
 #include "lsgd/image.h"
+#include "lsgd/search/exhaustive.h"
 #include "test_util.h"
 
 namespace lsgd {
@@ -52,7 +53,7 @@ cv::Mat random_frame(std::uint64_t seed, int type = CV_8UC3, int width = kW, int
   return m;
 }
 
-DetectorOptions small_options(SearchMode mode = SearchMode::kExhaustive, std::int64_t min_gap = 3,
+DetectorOptions small_options(const std::string& mode = kExhaustiveSearch, std::int64_t min_gap = 3,
                               int top_n = 5) {
   DetectorOptions o;
   o.segmentation.superpixel_size = 16;  // 96x64 -> 3 x 4 = 12 cells
@@ -98,7 +99,7 @@ ImageView view_of_mat(const cv::Mat& m) {
 }
 
 TEST(Detector, FrameIsItsOwnBestMatch) {
-  const DetectorOptions o = small_options(SearchMode::kExhaustive, 3, 5);
+  const DetectorOptions o = small_options(kExhaustiveSearch, 3, 5);
   Detector det(o);
   const cv::Mat a = random_frame(1);
   EXPECT_EQ(det.process(a).frame, 0);
@@ -119,8 +120,8 @@ TEST(Detector, FrameIsItsOwnBestMatch) {
 TEST(Detector, OwnMatchInEveryMetricAndMode) {
   for (SimilarityMetric metric :
        {SimilarityMetric::kReference, SimilarityMetric::kL1, SimilarityMetric::kNormalizedL1}) {
-    for (SearchMode mode : {SearchMode::kExhaustive, SearchMode::kDynamicNodes}) {
-      SCOPED_TRACE(testing::Message() << to_string(metric) << " " << to_string(mode));
+    for (const std::string mode : {kExhaustiveSearch, kNodesSearch}) {
+      SCOPED_TRACE(testing::Message() << to_string(metric) << " " << mode);
       DetectorOptions o = small_options(mode, 2, 3);
       o.similarity.metric = metric;
       o.search.nodes.alpha = 0;  // every frame in one node: the query is always examined
@@ -138,7 +139,7 @@ TEST(Detector, OwnMatchInEveryMetricAndMode) {
 }
 
 TEST(Detector, GrayVersionOfABgrFrameMatchesIt) {
-  Detector det(small_options(SearchMode::kExhaustive, 1, 3));
+  Detector det(small_options(kExhaustiveSearch, 1, 3));
   const cv::Mat a = random_frame(3);
   cv::Mat gray;
   cv::cvtColor(a, gray, cv::COLOR_BGR2GRAY);
@@ -154,9 +155,111 @@ TEST(Detector, GrayVersionOfABgrFrameMatchesIt) {
   EXPECT_EQ(det.similarity(0, ra.frame), 1.0);
 }
 
+// The extension point: a mode registered from outside the library runs in
+// the detector through CandidateSearch alone.
+// "test-copy": exhaustive search under another name; results must be identical.
+class CopyOfExhaustive final : public CandidateSearch {
+ public:
+  explicit CopyOfExhaustive(const SearchOptions& o) : options_(o) {}
+  const char* name() const override { return "test-copy"; }
+  bool scores_every_frame() const override { return true; }
+  Outcome search(const Query& q, std::vector<Candidate>& out, std::vector<double>& row) override {
+    search_exhaustive(q.store, q.descriptor, q.id, options_, q.metric, scratch_, out, &row);
+    return {};
+  }
+
+ private:
+  SearchOptions options_;
+  std::vector<Candidate> scratch_;
+};
+
+// "test-blocks": a shortlist with groups: frame i is in group i / 4, and the
+// candidates are the frames of the newest group outside the window.
+class Blocks final : public CandidateSearch {
+ public:
+  explicit Blocks(const SearchOptions& o) : options_(o) {}
+  const char* name() const override { return "test-blocks"; }
+  bool scores_every_frame() const override { return false; }
+  Outcome search(const Query& q, std::vector<Candidate>& out, std::vector<double>&) override {
+    out.clear();
+    const std::int64_t limit = q.id - options_.min_gap;
+    for (std::int64_t j = std::max<std::int64_t>(0, (limit - 1) / 4 * 4); j < limit; ++j) {
+      out.push_back({j, similarity(q.descriptor, q.store.view(j), q.metric)});
+    }
+    std::sort(out.begin(), out.end(), better);
+    if (out.size() > static_cast<std::size_t>(options_.top_n)) out.resize(options_.top_n);
+    const std::int64_t group = q.id / 4;
+    if (group == static_cast<std::int64_t>(groups_.size())) groups_.emplace_back();
+    groups_.back().push_back(q.id);
+    return {group, q.id % 4 == 0};
+  }
+  bool has_groups() const override { return true; }
+  std::int64_t groups() const override { return static_cast<std::int64_t>(groups_.size()); }
+  const std::vector<std::int64_t>& members(std::int64_t g) const override {
+    return groups_.at(static_cast<std::size_t>(g));
+  }
+  void restore_groups(std::vector<std::vector<std::int64_t>> groups, std::int64_t) override {
+    groups_ = std::move(groups);
+  }
+
+ private:
+  SearchOptions options_;
+  std::vector<std::vector<std::int64_t>> groups_;
+};
+
+void register_test_modes() {
+  static const bool once = [] {
+    register_search_mode({"test-copy", "exhaustive, renamed",
+                          [](const SearchOptions& o) -> std::unique_ptr<CandidateSearch> {
+                            return std::make_unique<CopyOfExhaustive>(o);
+                          }});
+    register_search_mode({"test-blocks", "groups of 4 frames",
+                          [](const SearchOptions& o) -> std::unique_ptr<CandidateSearch> {
+                            return std::make_unique<Blocks>(o);
+                          }});
+    return true;
+  }();
+  (void)once;
+}
+
+TEST(SearchModes, ARegisteredModeRunsInTheDetectorThroughTheInterfaceAlone) {
+  register_test_modes();
+  EXPECT_NE(search_mode_names().find("test-copy"), std::string::npos);
+  const auto make = [](const SearchOptions& o) -> std::unique_ptr<CandidateSearch> {
+    return std::make_unique<CopyOfExhaustive>(o);
+  };
+  EXPECT_THROW(register_search_mode({"test-copy", "again", make}), InvalidArgument);
+  EXPECT_THROW(register_search_mode({"", "no name", make}), InvalidArgument);
+  EXPECT_THROW(register_search_mode({"test-none", "no make", nullptr}), InvalidArgument);
+
+  DetectorOptions copy = small_options(kExhaustiveSearch, 2, 4);
+  copy.verification.temporal = true;  // sequence evidence over the search's row
+  DetectorOptions original = copy;
+  copy.search.mode = "test-copy";
+  Detector a(copy), b(original);
+  for (int i = 0; i < 60; ++i) {
+    const cv::Mat f = random_frame(700 + i % 23);  // revisits
+    const Result ra = a.process(f);
+    const Result rb = b.process(f);
+    expect_same_result(ra, rb);
+  }
+
+  DetectorOptions blocks = small_options("test-blocks", 2, 4);
+  blocks.verification.temporal = true;  // realigned candidates, sampled statistics
+  Detector c(blocks);
+  for (int i = 0; i < 60; ++i) {
+    const Result r = c.process(random_frame(700 + i % 23));
+    EXPECT_EQ(r.node, i / 4);
+    EXPECT_EQ(r.node_created, i % 4 == 0);
+    for (const Candidate& k : r.candidates) EXPECT_LT(k.frame, i - 2);
+  }
+  EXPECT_EQ(c.nodes(), 15);
+  EXPECT_EQ(c.search().members(3), (std::vector<std::int64_t>{12, 13, 14, 15}));
+}
+
 TEST(Detector, Deterministic) {
-  for (SearchMode mode : {SearchMode::kExhaustive, SearchMode::kDynamicNodes}) {
-    SCOPED_TRACE(to_string(mode));
+  for (const std::string mode : {kExhaustiveSearch, kNodesSearch}) {
+    SCOPED_TRACE(mode);
     Detector a(small_options(mode, 2, 4)), b(small_options(mode, 2, 4));
     calibrate(a);
     calibrate(b);
@@ -171,8 +274,8 @@ TEST(Detector, Deterministic) {
 }
 
 TEST(Detector, ExhaustiveAndNodesAgreeWhenOneNode) {
-  DetectorOptions ex = small_options(SearchMode::kExhaustive, 0, 6);
-  DetectorOptions dn = small_options(SearchMode::kDynamicNodes, 0, 6);
+  DetectorOptions ex = small_options(kExhaustiveSearch, 0, 6);
+  DetectorOptions dn = small_options(kNodesSearch, 0, 6);
   dn.search.nodes.alpha = 0;
   dn.search.nodes.beta = 0;
   Detector a(ex), b(dn);
@@ -196,12 +299,12 @@ TEST(Detector, ExhaustiveAndNodesAgreeWhenOneNode) {
   }
   EXPECT_EQ(a.nodes(), 0);
   EXPECT_EQ(b.nodes(), 1);
-  EXPECT_EQ(b.dynamic_nodes().members(0).size(), static_cast<std::size_t>(n));
+  EXPECT_EQ(b.search().members(0).size(), static_cast<std::size_t>(n));
 }
 
 TEST(Detector, OtherSizeThrowsAndLeavesDetectorUnchanged) {
-  for (SearchMode mode : {SearchMode::kExhaustive, SearchMode::kDynamicNodes}) {
-    SCOPED_TRACE(to_string(mode));
+  for (const std::string mode : {kExhaustiveSearch, kNodesSearch}) {
+    SCOPED_TRACE(mode);
     Detector det(small_options(mode, 1, 5));
     Detector reference(small_options(mode, 1, 5));
     for (int i = 0; i < 3; ++i) {
@@ -232,8 +335,8 @@ TEST(Detector, OtherSizeThrowsAndLeavesDetectorUnchanged) {
 }
 
 TEST(Detector, BadFormatThrowsAndLeavesDetectorUnchanged) {
-  Detector det(small_options(SearchMode::kDynamicNodes, 1, 5));
-  Detector reference(small_options(SearchMode::kDynamicNodes, 1, 5));
+  Detector det(small_options(kNodesSearch, 1, 5));
+  Detector reference(small_options(kNodesSearch, 1, 5));
   for (int i = 0; i < 2; ++i) {
     det.process(random_frame(700 + i));
     reference.process(random_frame(700 + i));
@@ -266,7 +369,7 @@ TEST(Detector, RejectedFirstFrameLeavesDetectorEmpty) {
 }
 
 TEST(Detector, ResultFields) {
-  DetectorOptions o = small_options(SearchMode::kExhaustive, 2, 3);
+  DetectorOptions o = small_options(kExhaustiveSearch, 2, 3);
   o.decision.threshold = 2.5;
   Detector det(o);
   const int calibrated = 2 + static_cast<int>(kMinCalibration);  // the first query with scores
@@ -323,7 +426,7 @@ TEST(Detector, ResultFields) {
 // A loop is declared exactly when the score reaches the threshold.
 TEST(Detector, LoopDecisionThresholdBoundaries) {
   const auto scores = [](double threshold) {
-    DetectorOptions o = small_options(SearchMode::kExhaustive, 0, 1);
+    DetectorOptions o = small_options(kExhaustiveSearch, 0, 1);
     o.decision.threshold = threshold;
     Detector det(o);
     calibrate(det);
@@ -343,7 +446,7 @@ TEST(Detector, LoopDecisionThresholdBoundaries) {
 }
 
 TEST(Detector, NodeModeReportsNodes) {
-  DetectorOptions o = small_options(SearchMode::kDynamicNodes, 2, 5);
+  DetectorOptions o = small_options(kNodesSearch, 2, 5);
   Detector det(o);
   std::int64_t created = 0;
   for (int i = 0; i < 15; ++i) {
@@ -362,13 +465,13 @@ TEST(Detector, NodeModeReportsNodes) {
     for (const Candidate& c : r.candidates) EXPECT_LT(c.frame, i - 2);
   }
   EXPECT_EQ(det.nodes(), created);
-  EXPECT_EQ(det.dynamic_nodes().size(), created);
+  EXPECT_EQ(det.search().groups(), created);
   EXPECT_EQ(det.store().groups(), created);  // each node's frames placed together
 }
 
 TEST(Detector, ImageViewAndMatGiveIdenticalResults) {
-  Detector by_mat(small_options(SearchMode::kExhaustive, 1, 4));
-  Detector by_view(small_options(SearchMode::kExhaustive, 1, 4));
+  Detector by_mat(small_options(kExhaustiveSearch, 1, 4));
+  Detector by_view(small_options(kExhaustiveSearch, 1, 4));
   for (int i = 0; i < 8; ++i) {
     const int type = i % 3 == 0 ? CV_8UC1 : i % 3 == 1 ? CV_8UC3 : CV_8UC4;
     const cv::Mat f = random_frame(1100 + i % 3, type);
@@ -464,7 +567,7 @@ TEST(Detector, OptionsValidatedAtConstruction) {
 // detector holds exactly the frames that completed. (Run under ASan/UBSan by
 // scripts/ci-hardening.sh.)
 TEST(Detector, TwoThreadsOnOneDetectorAreRefusedNotCorrupted) {
-  DetectorOptions o = small_options(SearchMode::kDynamicNodes, 2, 5);
+  DetectorOptions o = small_options(kNodesSearch, 2, 5);
   Detector det(o);
   std::vector<cv::Mat> frames;
   for (int i = 0; i < 8; ++i) frames.push_back(random_frame(700 + i, CV_8UC3, 320, 240));

@@ -3,6 +3,8 @@
 // the reference implementation's relative thresholds) against hand-computed
 // node assignments and an independent re-implementation.
 #include "lsgd/search.h"
+#include "lsgd/search/dynamic_nodes.h"
+#include "lsgd/search/exhaustive.h"
 
 #include <gtest/gtest.h>
 
@@ -193,7 +195,8 @@ TEST(SearchOptions, EachFieldOutOfRangeNamesTheField) {
       {"top_n", [](SearchOptions& o) { o.top_n = 0; }},
       {"top_n", [](SearchOptions& o) { o.top_n = -3; }},
       {"top_n", [](SearchOptions& o) { o.top_n = 1001; }},
-      {"mode", [](SearchOptions& o) { o.mode = static_cast<SearchMode>(9); }},
+      {"mode", [](SearchOptions& o) { o.mode = "foo"; }},
+      {"mode", [](SearchOptions& o) { o.mode = ""; }},
       {"threshold_0", [](SearchOptions& o) { o.nodes.threshold_0 = 0.0; }},
       {"threshold_0", [](SearchOptions& o) { o.nodes.threshold_0 = -0.5; }},
       {"threshold_0", [](SearchOptions& o) { o.nodes.threshold_0 = 10.5; }},
@@ -238,24 +241,34 @@ TEST(SearchOptions, BoundaryValuesAccepted) {
   EXPECT_NO_THROW(o.check());
   o.min_gap = 1000000000;
   o.top_n = 1000;
-  o.mode = SearchMode::kDynamicNodes;
+  o.mode = kNodesSearch;
   EXPECT_NO_THROW(o.check());
 }
 
-TEST(SearchMode, ParseAndToString) {
-  EXPECT_EQ(parse_search_mode("exhaustive"), SearchMode::kExhaustive);
-  EXPECT_EQ(parse_search_mode("nodes"), SearchMode::kDynamicNodes);
-  for (SearchMode m : {SearchMode::kExhaustive, SearchMode::kDynamicNodes}) {
-    EXPECT_EQ(parse_search_mode(to_string(m)), m);
+TEST(SearchModes, TheBuiltInModesAreRegisteredAndMadeByName) {
+  EXPECT_EQ(search_mode_names(), "exhaustive, nodes");
+  for (const SearchMode& m : search_modes()) {
+    SearchOptions o;
+    o.mode = m.name;
+    const std::unique_ptr<CandidateSearch> search = make_search(o);
+    EXPECT_STREQ(search->name(), m.name);
+    EXPECT_EQ(search->groups(), 0);
   }
-  EXPECT_STREQ(to_string(SearchMode::kExhaustive), "exhaustive");
-  EXPECT_STREQ(to_string(SearchMode::kDynamicNodes), "nodes");
-  EXPECT_THROW(parse_search_mode("foo"), InvalidArgument);
-  EXPECT_THROW(parse_search_mode(""), InvalidArgument);
-  EXPECT_THROW(parse_search_mode("Nodes"), InvalidArgument);
-  EXPECT_THROW(parse_search_mode("dynamic"), InvalidArgument);
-  EXPECT_NE(message_of<InvalidArgument>([] { parse_search_mode("foo"); }).find("foo"),
-            std::string::npos);
+  SearchOptions o;
+  EXPECT_TRUE(make_search(o)->scores_every_frame());
+  EXPECT_FALSE(make_search(o)->has_groups());
+  EXPECT_THROW(make_search(o)->members(0), InvalidArgument);
+  EXPECT_THROW(make_search(o)->restore_groups({}, 0), InvalidArgument);
+  o.mode = kNodesSearch;
+  EXPECT_FALSE(make_search(o)->scores_every_frame());
+  EXPECT_TRUE(make_search(o)->has_groups());
+  for (const char* bad : {"foo", "", "Nodes", "dynamic", "exhaustive "}) {
+    const std::string message = message_of<InvalidArgument>([&] { check_search_mode(bad); });
+    EXPECT_NE(message.find(std::string("'") + bad + "'"), std::string::npos) << message;
+    EXPECT_NE(message.find("exhaustive, nodes"), std::string::npos) << message;
+    o.mode = bad;
+    EXPECT_THROW(make_search(o), InvalidArgument);
+  }
 }
 
 // ---- dynamic nodes
@@ -287,7 +300,7 @@ std::vector<Step> run_nodes(DynamicNodes& nodes, const std::vector<Descriptor>& 
 std::vector<Step> run_zero_thresholds(DynamicNodes& nodes, const std::vector<Descriptor>& frames,
                                       std::int64_t min_gap, int top_n) {
   SearchOptions o;
-  o.mode = SearchMode::kDynamicNodes;
+  o.mode = kNodesSearch;
   o.min_gap = min_gap;
   o.top_n = top_n;
   o.nodes.alpha = 0;
@@ -417,7 +430,7 @@ std::vector<Step> run_hand_computed(DynamicNodes& nodes, std::int64_t min_gap) {
   std::vector<Descriptor> frames;
   for (int t : ts) frames.push_back(line_descriptor(t));
   SearchOptions o;
-  o.mode = SearchMode::kDynamicNodes;
+  o.mode = kNodesSearch;
   o.min_gap = min_gap;
   o.top_n = 10;
   o.nodes.threshold_0 = 1.0;
@@ -575,7 +588,7 @@ TEST(DynamicNodes, MatchesIndependentImplementationOnRandomWalks) {
       for (std::int64_t gap : {0, 3, 10}) {
         for (SimilarityMetric metric : {SimilarityMetric::kL1, SimilarityMetric::kReference}) {
           SearchOptions o;
-          o.mode = SearchMode::kDynamicNodes;
+          o.mode = kNodesSearch;
           o.min_gap = gap;
           o.top_n = 5;
           o.nodes = nopt;

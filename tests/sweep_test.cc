@@ -101,7 +101,7 @@ TEST(SweepGrid, CrossProductInTheOrderGiven) {
     EXPECT_EQ(points[i].values, expected[i]) << i;
     EXPECT_EQ(points[i].options.segmentation.superpixel_size, i < 2 ? 30 : 40) << i;
     EXPECT_EQ(points[i].options.search.mode,
-              i % 2 ? lsgd::SearchMode::kDynamicNodes : lsgd::SearchMode::kExhaustive)
+              i % 2 ? lsgd::kNodesSearch : lsgd::kExhaustiveSearch)
         << i;
   }
 }

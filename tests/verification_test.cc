@@ -321,7 +321,7 @@ namespace {
 // the new streets F, G) and moving objects (C, B', A'', G and the dense H)
 // must not produce accepted false loops in the synthetic world, in either
 // search mode, with the default options.
-class SyntheticDefaults : public ::testing::TestWithParam<SearchMode> {};
+class SyntheticDefaults : public ::testing::TestWithParam<std::string> {};
 
 TEST_P(SyntheticDefaults, AcceptNoFalseLoop) {
   const eval::SyntheticWorld world;
@@ -341,7 +341,7 @@ TEST_P(SyntheticDefaults, AcceptNoFalseLoop) {
 }
 
 INSTANTIATE_TEST_SUITE_P(Modes, SyntheticDefaults,
-                         ::testing::Values(SearchMode::kExhaustive, SearchMode::kDynamicNodes));
+                         ::testing::Values(kExhaustiveSearch, kNodesSearch));
 
 }  // namespace
 }  // namespace lsgd

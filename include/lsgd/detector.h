@@ -87,9 +87,10 @@ class Detector {
   const DetectorOptions& options() const { return options_; }
   std::int64_t size() const { return store_.size(); }
   const FrameStore& store() const { return store_; }
-  // Number of dynamic nodes (0 in exhaustive mode).
+  // Number of groups of the search mode (dynamic nodes; 0 in exhaustive mode).
   std::int64_t nodes() const;
-  const DynamicNodes& dynamic_nodes() const { return nodes_; }
+  // The search mode (search.mode), e.g. its groups.
+  const CandidateSearch& search() const { return *search_; }
   // Bytes held per stored frame (descriptor storage).
   std::size_t bytes_per_frame() const { return store_.bytes_per_frame(); }
 
@@ -120,9 +121,10 @@ class Detector {
   void restore_frame(int width, int height, const Descriptor& descriptor,
                      const std::vector<float>& points = {},
                      const std::vector<std::uint8_t>& orb = {}, std::int64_t node = 0);
-  // Node membership (DynamicNodes::restore) as process() builds it: every
-  // stored frame in exactly one node, nodes in the order of their first
-  // frames. Only in nodes mode. InvalidArgument otherwise, detector unchanged.
+  // The search's groups (CandidateSearch::restore_groups; dynamic nodes) as
+  // process() builds them: in nodes mode every stored frame in exactly one
+  // node, nodes in the order of their first frames. InvalidArgument
+  // otherwise (or for a mode without groups), detector unchanged.
   void restore_nodes(std::vector<std::vector<std::int64_t>> nodes);
   // Temporal places (TemporalVerifier::restore); last_query must be size() - 1.
   // Only with temporal verification.
@@ -143,7 +145,7 @@ class Detector {
   int height_ = 0;
   Segmenter segmenter_;
   FrameStore store_;
-  DynamicNodes nodes_;
+  std::unique_ptr<CandidateSearch> search_;  // made from options_.search
   AppearanceEvidence evidence_;
   TemporalVerifier temporal_;
   GeometricVerifier geometric_;
@@ -154,7 +156,6 @@ class Detector {
   DescribeScratch describe_scratch_;
   Descriptor exact_;       // the frame's histograms as computed
   Descriptor descriptor_;  // ... and as stored (descriptor.storage)
-  std::vector<Candidate> scratch_;
   std::vector<Candidate> raw_;  // the search's candidates, by similarity
   std::vector<Candidate> examined_;  // candidates verify() checks geometrically, in order
   std::vector<char> gated_;          // verify(): 1 for a candidate the agreement gate rejected

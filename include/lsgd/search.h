@@ -1,9 +1,20 @@
-// Candidate search over stored frames (paper Sec. III-D/E): exhaustive, or
-// through dynamic nodes (Algorithm 1) with the reference implementation's
-// thresholds relative to the similarity between the query and its previous frame.
+// Candidate search over stored frames: the detector's extension point for
+// finding the earlier frames most like the query. A search mode is a class
+// implementing CandidateSearch, registered by name in src/search.cc (the one
+// table of built-in modes) or by register_search_mode(); SearchOptions::mode
+// selects it. The built-in modes:
+// - "exhaustive" (lsgd/search/exhaustive.h): every frame outside the
+//   temporal window is scored;
+// - "nodes" (lsgd/search/dynamic_nodes.h): the paper's dynamic nodes
+//   (Sec. III-D/E, Algorithm 1) with the reference implementation's
+//   thresholds relative to the similarity between the query and its
+//   previous frame.
+// docs/design.md, "Add a search mode", is the recipe.
 #pragma once
 
 #include <cstdint>
+#include <memory>
+#include <string>
 #include <vector>
 
 #include "lsgd/frame_store.h"
@@ -11,11 +22,9 @@
 
 namespace lsgd {
 
-enum class SearchMode { kExhaustive, kDynamicNodes };
-
-const char* to_string(SearchMode mode);
-// Parses "exhaustive" or "nodes"; throws InvalidArgument otherwise.
-SearchMode parse_search_mode(const char* name);
+// Names of the built-in modes.
+inline constexpr const char* kExhaustiveSearch = "exhaustive";
+inline constexpr const char* kNodesSearch = "nodes";
 
 struct DynamicNodeOptions {
   // base = threshold_0 * sim(query, previous frame); in (0, 10]. Reference: 0.9.
@@ -30,7 +39,8 @@ struct DynamicNodeOptions {
 };
 
 struct SearchOptions {
-  SearchMode mode = SearchMode::kExhaustive;
+  // A registered search mode (search_modes()): "exhaustive" or "nodes".
+  std::string mode = kExhaustiveSearch;
   // Temporal window w in frames, [0, 1e9]: frame j is a candidate for query i
   // only if j < i - w. Reference disc_num: 50.
   std::int64_t min_gap = 50;
@@ -49,45 +59,70 @@ struct Candidate {
 // results are deterministic.
 bool better(const Candidate& a, const Candidate& b);
 
-// Keeps the top_n best candidates of all frames j < query - min_gap.
-// `scratch` is reused between calls; the result is written best first. When
-// `row` is given it receives every candidate's similarity, in frame order
-// (row[j] for j < query - min_gap).
-void search_exhaustive(const FrameStore& store, const DescriptorView& query, std::int64_t query_id,
-                       const SearchOptions& options, SimilarityMetric metric,
-                       std::vector<Candidate>& scratch, std::vector<Candidate>& out,
-                       std::vector<double>* row = nullptr);
-
-// Dynamic nodes: groups of similar earlier frames, created online.
-class DynamicNodes {
+// One search mode. The detector owns one, made by make_search() from its
+// options, and calls search() once per frame, before storing the frame.
+class CandidateSearch {
  public:
+  // Frame `id` (== store.size(): it is searched before it is stored), its
+  // descriptor as stored, and the similarity metric.
+  struct Query {
+    const FrameStore& store;
+    DescriptorView descriptor;
+    std::int64_t id;
+    SimilarityMetric metric;
+  };
   struct Outcome {
-    std::int64_t node = -1;  // node the query joined, or the one it created
-    bool created = false;    // true when no node accepted the query
-    std::int64_t similarities = 0;  // similarity evaluations spent
+    // The group the query joined or created (a dynamic node); -1 for a mode
+    // without groups. The store keeps a group's frames together.
+    std::int64_t group = -1;
+    bool created = false;  // true when the query started a new group
   };
 
-  // Runs Algorithm 1 for frame `query_id` (which must be store.size(): the
-  // query is assigned before it is stored). Writes the best top_n candidates of
-  // the accepting node that lie outside the temporal window, best first; none
-  // when a new node is created.
-  Outcome assign(const FrameStore& store, const DescriptorView& query, std::int64_t query_id,
-                 const SearchOptions& options, SimilarityMetric metric,
-                 std::vector<Candidate>& scratch, std::vector<Candidate>& out);
+  virtual ~CandidateSearch() = default;
+  // The registered name (SearchOptions::mode).
+  virtual const char* name() const = 0;
+  // True when search() scores every frame j < id - min_gap and writes s(id, j)
+  // to row[j] (row resized to that count): the appearance statistics then
+  // come from every candidate, and the temporal stage ranks every place
+  // (evidence.h). False for a shortlist: row is left alone, the statistics
+  // come from sampled diagonals and the candidates are realigned.
+  virtual bool scores_every_frame() const = 0;
+  // Writes at most top_n candidates j < id - min_gap, best first (better())
+  // by raw similarity; `row` as above.
+  virtual Outcome search(const Query& query, std::vector<Candidate>& out,
+                         std::vector<double>& row) = 0;
 
-  std::int64_t size() const { return static_cast<std::int64_t>(nodes_.size()); }
-  // Frame ids of `node`, first frame first; InvalidArgument for a node that
-  // does not exist.
-  const std::vector<std::int64_t>& members(std::int64_t node) const;
-
-  // Persistence (lsgd::io::Database): replaces the nodes by `nodes` (frame ids
-  // of each node, first frame first, in creation order), as assign() would
-  // have built them. Throws InvalidArgument, leaving the nodes unchanged, for
-  // an empty node, a negative id or ids not increasing within a node.
-  void restore(std::vector<std::vector<std::int64_t>> nodes);
-
- private:
-  std::vector<std::vector<std::int64_t>> nodes_;  // frame ids, first frame first
+  // Groups: how many, and the frames of group k (first frame first);
+  // InvalidArgument for a group that does not exist. None by default.
+  virtual bool has_groups() const { return false; }
+  virtual std::int64_t groups() const { return 0; }
+  virtual const std::vector<std::int64_t>& members(std::int64_t group) const;
+  // Persistence (lsgd::io::Database): replaces the groups by `groups`, as
+  // search() would have built them over `frames` stored frames. Throws
+  // InvalidArgument, leaving the search unchanged, when they could not have
+  // been built so; a mode without groups always throws.
+  virtual void restore_groups(std::vector<std::vector<std::int64_t>> groups, std::int64_t frames);
 };
+
+// A registered search mode.
+struct SearchMode {
+  const char* name;
+  const char* summary;  // one line, for help texts
+  std::unique_ptr<CandidateSearch> (*make)(const SearchOptions& options);
+};
+
+// Every registered mode, in registration order: the built-in ones first.
+std::vector<SearchMode> search_modes();
+// Registers another mode (e.g. an application's own index), usable by name
+// in SearchOptions::mode from then on; call it before the detectors that use
+// it are made. InvalidArgument for a missing name, summary or make function,
+// or a name already registered. Thread-safe.
+void register_search_mode(const SearchMode& mode);
+// "exhaustive, nodes": the names, for messages and help texts.
+std::string search_mode_names();
+// Throws InvalidArgument naming `name` and the registered modes unless `name` is one.
+void check_search_mode(const std::string& name);
+// The mode options.mode names, made with `options` (checked first).
+std::unique_ptr<CandidateSearch> make_search(const SearchOptions& options);
 
 }  // namespace lsgd

@@ -247,9 +247,12 @@ void read_search(const YAML::Node& node, const std::string& source, SearchOption
       node, source, "search",
       {{"mode",
         [&](const YAML::Node& v, const std::string& k) {
-          o.mode = read_enum(
-              v, source, k, parse_search_mode,
-              std::vector<SearchMode>{SearchMode::kExhaustive, SearchMode::kDynamicNodes});
+          o.mode = read_string(v, source, k);
+          try {
+            check_search_mode(o.mode);
+          } catch (const InvalidArgument&) {
+            wrong_type(source, k, v, concat("one of ", search_mode_names()));
+          }
         }},
        {"min_gap", [&](const YAML::Node& v,
                        const std::string& k) { o.min_gap = read_int64(v, source, k, kMin, kMax); }},
@@ -389,6 +392,13 @@ std::vector<YAML::Node> load_documents(const std::string& text, const std::strin
 
 // ---------------------------------------------------------------- writing
 
+// "exhaustive | nodes": the registered search modes, for the YAML comment.
+std::string mode_choices() {
+  std::string out;
+  for (const SearchMode& m : search_modes()) out += concat(out.empty() ? "" : " | ", m.name);
+  return out;
+}
+
 // Shortest decimal text that parses back to exactly `value`, always with a
 // '.' or exponent so it reads as a float; YAML spellings for inf and NaN.
 std::string format_double(double value) {
@@ -458,7 +468,7 @@ std::string to_yaml(const DetectorOptions& options) {
       << "  metric: " << to_string(options.similarity.metric)
       << "  # reference | l1 | normalized_l1\n"
       << "search:\n"
-      << "  mode: " << to_string(search.mode) << "  # exhaustive | nodes\n"
+      << "  mode: " << search.mode << "  # " << mode_choices() << "\n"
       << "  min_gap: " << search.min_gap << "  # frames\n"
       << "  top_n: " << search.top_n << "\n"
       << "  nodes: {threshold_0: " << format_double(search.nodes.threshold_0)

@@ -805,7 +805,7 @@ void Database::check_compatible(const DetectorOptions& options) const {
   const std::string stages = verification_stages(stored.verification);
   for (const auto& [key, value] : mine) {
     if (starts_with(key, "decision.")) continue;
-    if (stored.search.mode != SearchMode::kDynamicNodes && starts_with(key, "search.nodes."))
+    if (stored.search.mode != kNodesSearch && starts_with(key, "search.nodes."))
       continue;
     if (!stored.verification.temporal && starts_with(key, "verification.temporal.")) continue;
     if (!stored.verification.geometric && starts_with(key, "verification.geometric.")) continue;
@@ -829,7 +829,7 @@ void Database::restore(Detector& detector) const {
   check_compatible(detector.options());
   if (m.frames == 0) return;
   const DetectorOptions& o = detector.options();
-  const bool nodes_mode = o.search.mode == SearchMode::kDynamicNodes;
+  const bool nodes_mode = detector.search().has_groups();  // dynamic nodes
   const bool temporal = o.verification.temporal;
   const bool geometric = o.verification.geometric;
   const std::size_t keep =
@@ -1157,7 +1157,7 @@ void Database::append(const Detector& detector, const Result& result, std::int64
   const DetectorOptions& o = detector.options();
   const std::int64_t dense = m.frames;  // the detector's id of its last frame
   std::int64_t node = kNull, place = kNull;
-  if (o.search.mode == SearchMode::kDynamicNodes) node = result.node;
+  if (detector.search().has_groups()) node = result.node;
   if (o.verification.temporal) {
     const TemporalVerifier& t = detector.temporal_verifier();
     if (t.last_query() != dense || t.places().empty()) {
@@ -1211,10 +1211,10 @@ void Database::append_all(const Detector& detector, std::int64_t session) {
   check_compatible(detector.options());
   const DetectorOptions& o = detector.options();
   std::vector<std::int64_t> node_of;
-  if (o.search.mode == SearchMode::kDynamicNodes) {
+  if (detector.search().has_groups()) {
     node_of.assign(static_cast<std::size_t>(detector.size()), kNull);
-    const DynamicNodes& nodes = detector.dynamic_nodes();
-    for (std::int64_t k = 0; k < nodes.size(); ++k) {
+    const CandidateSearch& nodes = detector.search();
+    for (std::int64_t k = 0; k < nodes.groups(); ++k) {
       for (const std::int64_t f : nodes.members(k)) node_of[static_cast<std::size_t>(f)] = k;
     }
   }

@@ -158,7 +158,7 @@ nlohmann::json to_json(const Setup& setup, const DetectorOptions& o, const RunDa
   j["height"] = setup.height;
   j["seed"] = setup.seed;
   j["source"] = kSource;
-  j["mode"] = to_string(o.search.mode);
+  j["mode"] = o.search.mode;
   j["verify"] = verification_stages(o.verification);
   j["grid"] = {{"rows", d.grid.rows}, {"cols", d.grid.cols}, {"cells", d.grid.cells()}};
   const std::pair<const char*, const std::vector<double>*> stages[] = {
@@ -193,7 +193,7 @@ void print_report(const Setup& setup, const DetectorOptions& o, const RunData& d
   const Samples& s = d.samples;
   out << "lsgd bench: " << setup.frames << " frames " << setup.width << "x" << setup.height
       << " (synthetic street, seed " << setup.seed << "; frame i renders route frame i % 1090)\n"
-      << "  detector  " << to_string(o.search.mode) << " search, verify "
+      << "  detector  " << o.search.mode << " search, verify "
       << verification_stages(o.verification) << ", S_p " << o.segmentation.superpixel_size
       << " -> grid " << d.grid.rows << "x" << d.grid.cols << " = " << d.grid.cells() << " cells, "
       << o.segmentation.iterations << " iterations\n"
@@ -224,7 +224,7 @@ void print_report(const Setup& setup, const DetectorOptions& o, const RunData& d
   print_row(out, "  total, this thread's CPU time", s.total_cpu);
   print_row(out, "  not timed: render", s.render);
   print_row(out, "  not timed: cv::cvtColor BGR->gray", s.cvtcolor);
-  print_growth(setup, o.search.mode == SearchMode::kExhaustive, d.growth, out);
+  print_growth(setup, d.scores_every_frame, d.growth, out);
   out << "\nmemory: " << d.bytes_per_frame << " bytes stored per frame, store "
       << megabytes(static_cast<double>(d.stored) * static_cast<double>(d.bytes_per_frame))
       << " for " << d.stored << " frames; peak RSS "

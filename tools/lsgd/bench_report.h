@@ -52,6 +52,7 @@ struct RunData {
   std::int64_t peak_rss_before_bytes = 0;  // before the first frame
   std::vector<double> load_start, load_end;
   std::int64_t nodes = 0;
+  bool scores_every_frame = false;  // the search mode scans every frame (exhaustive)
   std::size_t bytes_per_frame = 0;
   std::int64_t stored = 0;
   GridSize grid;

@@ -146,7 +146,7 @@ void run(const bench::Setup& a, const DetectorOptions& options, bench::RunData& 
   source.name = [](std::int64_t i) { return "synthetic frame " + std::to_string(i); };
   eval::RunOptions run_options;
   run_options.keep_records = false;
-  run_frames(detector, source, std::string("bench ") + to_string(options.search.mode), run_options,
+  run_frames(detector, source, "bench " + options.search.mode, run_options,
              [&](const Result& r, const eval::FrameTimes& times) {
                const std::int64_t i = r.frame;
                const cv::Mat& gray = loaded->gray;
@@ -165,6 +165,7 @@ void run(const bench::Setup& a, const DetectorOptions& options, bench::RunData& 
                }
              });
   d.nodes = detector.nodes();
+  d.scores_every_frame = detector.search().scores_every_frame();
   d.bytes_per_frame = detector.bytes_per_frame();
   d.stored = detector.size();
 }
@@ -188,7 +189,7 @@ void bench_command(const BenchArgs& args) {
   run(a, options, d);
   d.load_end = bench::load_average();
   d.growth = bench::query_growth(d.samples.query, a.warmup, a.block,
-                                 options.search.mode == SearchMode::kExhaustive,
+                                 d.scores_every_frame,
                                  options.search.min_gap, d.bytes_per_frame);
   bench::print_report(a, options, d, std::cout);
   if (!args.json.empty()) {

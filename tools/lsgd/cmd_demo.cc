@@ -63,28 +63,27 @@ void demo(const DemoArgs& args) {
   source.load = [&world](std::int64_t i) { return world.render(i); };
   source.name = [](std::int64_t i) { return "synthetic frame " + std::to_string(i); };
 
-  const std::vector<SearchMode> modes =
-      args.detector.mode.empty()
-          ? std::vector<SearchMode>{SearchMode::kExhaustive, SearchMode::kDynamicNodes}
-          : std::vector<SearchMode>{options.search.mode};
+  // Every registered search mode, unless --mode names one.
+  const std::vector<std::string> modes =
+      args.detector.mode.empty() ? search_mode_list() : std::vector<std::string>{options.search.mode};
   nlohmann::json results = nlohmann::json::object();
-  for (const SearchMode mode : modes) {
+  for (const std::string& mode : modes) {
     options.search.mode = mode;
     Detector detector(options);
     std::unique_ptr<CsvWriter> csv;
     if (!args.output.empty()) {
-      csv = std::make_unique<CsvWriter>((dir / (std::string("results-") + to_string(mode) + ".csv")).string());
+      csv = std::make_unique<CsvWriter>((dir / ("results-" + mode + ".csv")).string());
     }
     const FrameRun run = run_frames(
-        detector, source, std::string("demo ") + to_string(mode), {},
+        detector, source, "demo " + mode, {},
         [&](const Result& r, const eval::FrameTimes&) {
           if (csv) csv->write(r, source.name(r.frame));
         });
     const auto metrics = eval::evaluate(run.records, world.ground_truth(), options.search.min_gap);
-    std::cout << "\n" << to_string(mode) << " search:\n";
+    std::cout << "\n" << mode << " search:\n";
     print_metrics(metrics, detector.nodes(), std::cout);
-    results[to_string(mode)] = metrics_json(metrics);
-    results[to_string(mode)]["nodes"] = detector.nodes();
+    results[mode] = metrics_json(metrics);
+    results[mode]["nodes"] = detector.nodes();
   }
   if (!args.output.empty()) {
     results["config_yaml"] = io::to_yaml(options);

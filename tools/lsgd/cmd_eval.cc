@@ -239,7 +239,7 @@ void evaluate_sequence(const EvalArgs& args, const io::SequenceOptions& options)
 
   nlohmann::json json = metrics_json(metrics);
   json["warnings"] = warnings;
-  json["mode"] = to_string(detector_options.search.mode);
+  json["mode"] = detector_options.search.mode;
   json["verification"] = verification_stages(detector_options.verification);
   json["nodes"] = detector.nodes();
   json["skipped_frames"] = run.skipped;
@@ -248,7 +248,7 @@ void evaluate_sequence(const EvalArgs& args, const io::SequenceOptions& options)
   describe_inputs(args, options, layout, gt, json);
   json["config_yaml"] = io::to_yaml(detector_options);
   write_json(json, args.json);
-  std::cout << args.sequence << " (" << to_string(detector_options.search.mode) << ", verification "
+  std::cout << args.sequence << " (" << detector_options.search.mode << ", verification "
             << verification_stages(detector_options.verification) << ")\n";
   print_metrics(metrics, detector.nodes(), std::cout);
   if (const std::int64_t skipped = run.skipped; skipped > 0) {
@@ -258,7 +258,7 @@ void evaluate_sequence(const EvalArgs& args, const io::SequenceOptions& options)
   if (!args.report.empty()) {
     eval::ReportInput input = report_input(args, metrics, records, gt);
     input.sequence = args.sequence;
-    input.mode = to_string(detector_options.search.mode);
+    input.mode = detector_options.search.mode;
     input.verification = verification_stages(detector_options.verification);
     input.config_yaml = io::to_yaml(detector_options);
     input.similarity = [&detector](std::int64_t a, std::int64_t b) {

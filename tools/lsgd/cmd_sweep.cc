@@ -207,7 +207,7 @@ class SweepOutput {
         {"segmentation.superpixel_size", std::to_string(base.segmentation.superpixel_size)},
         {"segmentation.intensity_scale", exact(base.segmentation.intensity_scale)},
         {"similarity.metric", to_string(base.similarity.metric)},
-        {"search.mode", to_string(base.search.mode)},
+        {"search.mode", base.search.mode},
         {"verification.stages", verification_stages(base.verification)}};
     std::string fixed_keys;
     for (const auto& [key, value] : shown) {
@@ -261,7 +261,7 @@ class SweepOutput {
     nlohmann::json row = metrics_json(rows_[i].metrics);
     row["dataset"] = cell.dataset->spec.name;
     row["values"] = values;
-    row["mode"] = to_string(cell.options.search.mode);
+    row["mode"] = cell.options.search.mode;
     row["verification"] = verification_stages(cell.options.verification);
     row["nodes"] = rows_[i].nodes;
     row["bytes_per_frame"] = rows_[i].bytes_per_frame;

@@ -31,7 +31,7 @@ void DetectorFlags::add_to(CLI::App& command) {
       ->check(CLI::ExistingFile)
       ->check(kNonEmptyPath);
   command.add_option("--mode", mode, "search mode, overrides search.mode")
-      ->check(CLI::IsMember({"exhaustive", "nodes"}));
+      ->check(CLI::IsMember(search_mode_list()));
   command.add_option("--min-gap", min_gap,
                      "temporal window in frames: only frames j < i - W are candidates");
   command.add_option("--threshold", threshold,
@@ -44,7 +44,7 @@ void DetectorFlags::add_to(CLI::App& command) {
 
 DetectorOptions DetectorFlags::resolve() const {
   DetectorOptions options = config.empty() ? DetectorOptions{} : io::load_config(config);
-  if (!mode.empty()) options.search.mode = parse_search_mode(mode.c_str());
+  if (!mode.empty()) options.search.mode = mode;
   if (min_gap) options.search.min_gap = *min_gap;
   if (threshold) options.decision.threshold = *threshold;
   if (!verify.empty()) parse_verification_stages(verify, options.verification);
@@ -131,6 +131,12 @@ constexpr const char* kCsvHeader = "frame,image,loop_frame,candidate_frame,score
 const CLI::Validator kNonEmptyPath(
     [](std::string& value) { return value.empty() ? std::string("an empty file name") : ""; },
     "");  // no name in the help: ExistingFile already says FILE where it applies
+
+std::vector<std::string> search_mode_list() {
+  std::vector<std::string> names;
+  for (const SearchMode& m : search_modes()) names.emplace_back(m.name);
+  return names;
+}
 
 CsvWriter::CsvWriter(const std::string& path, Mode mode) : path_(path), out_(&std::cout) {
   if (!path.empty()) {

@@ -98,6 +98,9 @@ class CsvWriter {
 // "no file".
 extern const CLI::Validator kNonEmptyPath;
 
+// The registered search modes' names (lsgd::search_modes()), for --mode.
+std::vector<std::string> search_mode_list();
+
 // What run_frames did.
 struct FrameRun {
   std::vector<eval::FrameRecord> records;  // empty unless the options keep records

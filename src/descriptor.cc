@@ -43,6 +43,17 @@ HistogramStorage parse_histogram_storage(const char* name) {
   internal::throw_invalid("descriptor storage '", name, "' is unknown: expected exact or compact");
 }
 
+const OptionTable<DescriptorOptions>& DescriptorOptions::fields() {
+  using S = DescriptorOptions;
+  static const OptionTable<S> table = {
+      enum_option("storage", &S::storage, {HistogramStorage::kExact, HistogramStorage::kCompact},
+                  parse_histogram_storage,
+                  "exact: 16-bit counts in 256 bins; compact: 8-bit shares in 128 bins (10 KB "
+                  "per KITTI frame, faster search)"),
+  };
+  return table;
+}
+
 void DescriptorOptions::check() const {
   if (storage != HistogramStorage::kExact && storage != HistogramStorage::kCompact) {
     internal::throw_invalid("descriptor.storage = ", static_cast<int>(storage), " is unknown");

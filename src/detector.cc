@@ -22,6 +22,58 @@ double ms_since(std::int64_t start_ns) { return (now_ns() - start_ns) * 1e-6; }
 
 }  // namespace
 
+const OptionTable<DetectorOptions>& DetectorOptions::fields() {
+  using S = DetectorOptions;
+  static const OptionTable<S> table = [] {
+    OptionTable<S> t;
+    nest<S, SegmentationOptions>(t, "segmentation", &S::segmentation, SegmentationOptions::fields());
+    nest<S, DescriptorOptions>(t, "descriptor", &S::descriptor, DescriptorOptions::fields());
+    nest<S, SimilarityOptions>(t, "similarity", &S::similarity, SimilarityOptions::fields());
+    nest<S, SearchOptions>(t, "search", &S::search, SearchOptions::fields());
+    nest<S, VerificationOptions>(t, "verification", &S::verification, VerificationOptions::fields());
+    nest<S, DecisionOptions>(t, "decision", &S::decision, DecisionOptions::fields());
+    return t;
+  }();
+  return table;
+}
+
+namespace {
+
+const OptionField<DetectorOptions>& field(const std::string& key) {
+  const OptionField<DetectorOptions>* f = find_option(DetectorOptions::fields(), key);
+  if (f == nullptr) {
+    // The keys of the same section, to help with a misspelt one.
+    const std::string section = key.substr(0, key.find('.'));
+    std::string known;
+    for (const auto& g : DetectorOptions::fields()) {
+      if (g.name.compare(0, section.size() + 1, section + ".") == 0) {
+        known += (known.empty() ? "" : ", ") + g.name;
+      }
+    }
+    internal::throw_invalid("unknown option '", key, "'",
+                            known.empty() ? std::string(" (see lsgd options)")
+                                          : " (" + section + " has " + known + ")");
+  }
+  return *f;
+}
+
+}  // namespace
+
+void set_option(DetectorOptions& options, const std::string& key, const std::string& value) {
+  const OptionField<DetectorOptions>& f = field(key);
+  try {
+    set_option_text(f, options, value);
+  } catch (const InvalidArgument& e) {
+    const std::string message = e.what();
+    if (message.compare(0, key.size(), key) == 0) throw;
+    internal::throw_invalid(key, ": ", message);
+  }
+}
+
+std::string option_text(const DetectorOptions& options, const std::string& key) {
+  return field(key).text(options);
+}
+
 void DetectorOptions::check() const {
   segmentation.check();
   descriptor.check();

@@ -192,19 +192,35 @@ ModelFit fit_model(bool homography, const std::vector<cv::Point2f>& a,
 }  // namespace
 
 // ---- GeometricOptions -----------------------------------------------------------------
+const OptionTable<GeometricOptions>& GeometricOptions::fields() {
+  using S = GeometricOptions;
+  static const OptionTable<S> table = {
+      integer_option("max_features", &S::max_features, 16, 20000, "", "ORB keypoints kept per frame"),
+      integer_option("min_side", &S::min_side, 0, 4096, "pixels",
+                     "ORB runs on the image scaled so that its shorter side is at least this "
+                     "(0: never upscale)"),
+      integer_option("max_side", &S::max_side, 0, 4096, "pixels",
+                     "... and at most this (0: never downscale; else >= min_side)"),
+      real_option("ratio", &S::ratio, 0.0, 1.0, true, "",
+                  "Lowe's ratio test: a match is kept when best < ratio * second best distance"),
+      real_option("ransac_threshold", &S::ransac_threshold, 0.0, 100.0, true, "pixels",
+                  "RANSAC reprojection threshold in the working-size image"),
+      integer_option("min_inliers", &S::min_inliers, 8, 10000, "",
+                     "a candidate is accepted when the better model (F or H) has this many "
+                     "inliers"),
+      real_option("min_inlier_ratio", &S::min_inlier_ratio, 0.0, 1.0, false, "",
+                  "... and they are at least this fraction of the matches"),
+  };
+  return table;
+}
+
 void GeometricOptions::check() const {
-  internal::check_range("geometric.max_features", max_features, 16, 20000);
-  internal::check_range("geometric.min_side", min_side, 0, 4096, "pixels");
-  internal::check_range("geometric.max_side", max_side, 0, 4096, "pixels");
+  check_options(fields(), *this, "verification.geometric");
   if (max_side > 0 && min_side > max_side) {
-    internal::throw_invalid("geometric.min_side = ", min_side, " is above geometric.max_side = ",
-                            max_side, ": the working size needs min_side <= max_side (or max_side 0)");
+    internal::throw_invalid("verification.geometric.min_side = ", min_side,
+                            " is above verification.geometric.max_side = ", max_side,
+                            ": the working size needs min_side <= max_side (or max_side 0)");
   }
-  internal::check_range_open_low("geometric.ratio", ratio, 0.0, 1.0);
-  internal::check_range_open_low("geometric.ransac_threshold", ransac_threshold, 0.0, 100.0,
-                                 "pixels");
-  internal::check_range("geometric.min_inliers", min_inliers, 8, 10000);
-  internal::check_range("geometric.min_inlier_ratio", min_inlier_ratio, 0.0, 1.0);
 }
 
 // ---- GeometricVerifier ---------------------------------------------------------------

@@ -74,10 +74,51 @@ std::unique_ptr<CandidateSearch> make_search(const SearchOptions& options) {
   internal::throw_invalid("search mode '", options.mode, "' is unknown");  // check() said so
 }
 
-void DynamicNodeOptions::check() const {
-  internal::check_range_open_low("search.nodes.threshold_0", threshold_0, 0.0, 10.0);
-  internal::check_range("search.nodes.alpha", alpha, 0.0, 10.0);
-  internal::check_range("search.nodes.beta", beta, 0.0, 10.0);
+const OptionTable<DynamicNodeOptions>& DynamicNodeOptions::fields() {
+  using S = DynamicNodeOptions;
+  static const OptionTable<S> table = {
+      real_option("threshold_0", &S::threshold_0, 0.0, 10.0, true, "",
+                  "base = threshold_0 * sim(query, previous frame); reference 0.9"),
+      real_option("alpha", &S::alpha, 0.0, 10.0, false, "",
+                  "a node is examined when sim(query, its first frame) > alpha * base"),
+      real_option("beta", &S::beta, 0.0, 10.0, false, "",
+                  "the query joins a node when its mean similarity to the node > beta * base"),
+  };
+  return table;
+}
+
+void DynamicNodeOptions::check() const { check_options(fields(), *this, "search.nodes"); }
+
+const OptionTable<SearchOptions>& SearchOptions::fields() {
+  using S = SearchOptions;
+  static const OptionTable<S> table = [] {
+    OptionField<S> mode;
+    mode.name = "mode";
+    mode.kind = OptionKind::kChoice;
+    mode.doc = "how earlier frames are searched: a registered search mode (search.h)";
+    mode.choices = [] {
+      std::vector<std::string> names;
+      for (const SearchMode& m : search_modes()) names.emplace_back(m.name);
+      return names;
+    };
+    mode.text = [](const S& s) { return s.mode; };
+    mode.set_choice = [](S& s, const std::string& name) {
+      check_search_mode(name);
+      s.mode = name;
+    };
+    OptionTable<S> t = {
+        mode,
+        integer_option<S, std::int64_t>("min_gap", &S::min_gap, 0, 1000000000, "frames",
+                                        "temporal window w: frame j is a candidate for query i "
+                                        "only if j < i - w"),
+        integer_option("top_n", &S::top_n, 1, 1000, "", "best candidates returned"),
+    };
+    nest<S, DynamicNodeOptions>(t, "nodes", &S::nodes, DynamicNodeOptions::fields(),
+                                [](const S& s) { return s.mode == kNodesSearch; },
+                                "in nodes mode");
+    return t;
+  }();
+  return table;
 }
 
 void SearchOptions::check() const {
@@ -86,9 +127,7 @@ void SearchOptions::check() const {
   } catch (const InvalidArgument& e) {
     internal::throw_invalid("search.mode: ", e.what());
   }
-  internal::check_range<std::int64_t>("search.min_gap", min_gap, 0, 1000000000, "frames");
-  internal::check_range("search.top_n", top_n, 1, 1000);
-  nodes.check();
+  check_options(fields(), *this, "search");
 }
 
 bool better(const Candidate& a, const Candidate& b) {

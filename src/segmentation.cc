@@ -10,12 +10,23 @@
 
 namespace lsgd {
 
-void SegmentationOptions::check() const {
-  internal::check_range("segmentation.superpixel_size", superpixel_size, 2, 4096, "pixels");
-  internal::check_range("segmentation.iterations", iterations, 1, 100);
-  internal::check_range_open_low("segmentation.intensity_scale", intensity_scale, 0.0, 1e6);
-  internal::check_range_open_low("segmentation.distance_scale", distance_scale, 0.0, 1e6);
+const OptionTable<SegmentationOptions>& SegmentationOptions::fields() {
+  using S = SegmentationOptions;
+  static const OptionTable<S> table = {
+      integer_option("superpixel_size", &S::superpixel_size, 2, 4096, "pixels",
+                     "S_p, the segmentation scale: the grid has H/(2 S_p)+1 rows and W/(2 S_p)+1 "
+                     "columns"),
+      integer_option("iterations", &S::iterations, 1, 100, "",
+                     "k-means iterations (assign + update); the reference runs 10"),
+      real_option("intensity_scale", &S::intensity_scale, 0.0, 1e6, true, "",
+                  "divides the squared intensity difference in the fuse distance"),
+      real_option("distance_scale", &S::distance_scale, 0.0, 1e6, true, "",
+                  "divides the squared pixel distance (pixels^2) in the fuse distance"),
+  };
+  return table;
 }
+
+void SegmentationOptions::check() const { check_options(fields(), *this, "segmentation"); }
 
 GridSize grid_size(int width, int height, int superpixel_size) {
   if (width <= 0 || height <= 0) {

@@ -152,6 +152,19 @@ SimilarityMetric parse_similarity_metric(const char* name) {
                           "' is unknown: expected reference, l1 or normalized_l1");
 }
 
+const OptionTable<SimilarityOptions>& SimilarityOptions::fields() {
+  using S = SimilarityOptions;
+  static const OptionTable<S> table = {
+      enum_option("metric", &S::metric,
+                  {SimilarityMetric::kReference, SimilarityMetric::kL1,
+                   SimilarityMetric::kNormalizedL1},
+                  parse_similarity_metric,
+                  "reference: the authors' formula; l1: histogram L1; normalized_l1: L1 of "
+                  "histograms normalised per cell"),
+  };
+  return table;
+}
+
 void SimilarityOptions::check() const {
   if (metric != SimilarityMetric::kReference && metric != SimilarityMetric::kL1 &&
       metric != SimilarityMetric::kNormalizedL1) {

@@ -8,20 +8,61 @@
 
 namespace lsgd {
 
+const OptionTable<TemporalOptions>& TemporalOptions::fields() {
+  using S = TemporalOptions;
+  static const OptionTable<S> table = {
+      integer_option("frames", &S::frames, 1, 100, "frames",
+                     "sequence length: the query and the frames-1 frames before it"),
+      integer_option("long_frames", &S::long_frames, 0, 1000, "frames",
+                     "second, longer sequence (0: off; else > frames); the score is the mean of "
+                     "both"),
+      integer_option("tolerance", &S::tolerance, 0, 100, "frames",
+                     "realignment radius of a candidate and slack of the agreement gate"),
+      integer_option("agree", &S::agree, 0, 100, "queries",
+                     "previous queries that must agree on consecutive places (0: no gate)"),
+  };
+  return table;
+}
+
 void TemporalOptions::check() const {
-  internal::check_range("verification.temporal.frames", frames, 1, 100, "frames");
-  internal::check_range("verification.temporal.long_frames", long_frames, 0, 1000, "frames");
+  check_options(fields(), *this, "verification.temporal");
   if (long_frames != 0 && long_frames <= frames) {
     internal::throw_invalid(
         "verification.temporal.long_frames = ", long_frames,
         " must be 0 (off) or more than verification.temporal.frames = ", frames);
   }
-  internal::check_range("verification.temporal.tolerance", tolerance, 0, 100, "frames");
-  internal::check_range("verification.temporal.agree", agree, 0, 100, "queries");
+}
+
+const OptionTable<VerificationOptions>& VerificationOptions::fields() {
+  using S = VerificationOptions;
+  static const OptionTable<S> table = [] {
+    OptionField<S> stages;
+    stages.name = "stages";
+    stages.kind = OptionKind::kChoice;
+    stages.doc = "verification stages after the search (either order)";
+    stages.choices = [] {
+      return std::vector<std::string>{"none", "temporal", "geometric", "temporal,geometric"};
+    };
+    stages.text = [](const S& s) { return verification_stages(s); };
+    stages.set_choice = [](S& s, const std::string& text) { parse_verification_stages(text, s); };
+    OptionTable<S> t = {
+        stages,
+        integer_option("max_candidates", &S::max_candidates, 1, 100, "",
+                       "candidates examined best first; the first no stage rejects is reported"),
+    };
+    t.back().applies = [](const S& s) { return s.temporal || s.geometric; };
+    t.back().when = "with a stage";
+    nest<S, TemporalOptions>(t, "temporal", &S::temporal_options, TemporalOptions::fields(),
+                             [](const S& s) { return s.temporal; }, "with the temporal stage");
+    nest<S, GeometricOptions>(t, "geometric", &S::geometric_options, GeometricOptions::fields(),
+                              [](const S& s) { return s.geometric; }, "with the geometric stage");
+    return t;
+  }();
+  return table;
 }
 
 void VerificationOptions::check() const {
-  internal::check_range("verification.max_candidates", max_candidates, 1, 100);
+  check_options(fields(), *this, "verification");
   temporal_options.check();
   geometric_options.check();
 }

@@ -3,12 +3,17 @@
 #include <gtest/gtest.h>
 #include <unistd.h>
 
+#include <cstdint>
 #include <filesystem>
+#include <set>
+#include <sstream>
 #include <fstream>
 #include <string>
 #include <vector>
 
 #include "lsgd/error.h"
+#include "lsgd/options.h"
+#include "test_util.h"
 
 namespace lsgd::io {
 namespace {
@@ -330,6 +335,115 @@ TEST(ParseConfig, VerificationSection) {
                lsgd::InvalidArgument);
   EXPECT_THROW(parse_config("verification:\n  geometric: {ratio: 1.5}\n", kSource),
                lsgd::InvalidArgument);
+}
+
+}  // namespace
+}  // namespace lsgd::io
+
+namespace lsgd::io {
+namespace {
+
+// ---- the option tables (lsgd/options.h): one declaration per option
+
+TEST(OptionTables, DocsOptionsMdIsGeneratedFromThem) {
+  std::ifstream in(std::string(LSGD_SOURCE_DIR) + "/docs/options.md");
+  ASSERT_TRUE(in) << "docs/options.md is missing";
+  std::ostringstream text;
+  text << in.rdbuf();
+  EXPECT_EQ(text.str(), options_reference())
+      << "docs/options.md is stale: run build/tools/lsgd/lsgd options --markdown > docs/options.md";
+}
+
+TEST(OptionTables, EveryOptionIsDocumentedValidAndReadBackFromItsText) {
+  const DetectorOptions defaults;
+  std::set<std::string> keys;
+  for (const OptionField<DetectorOptions>& f : DetectorOptions::fields()) {
+    SCOPED_TRACE(f.name);
+    EXPECT_TRUE(keys.insert(f.name).second) << "declared twice";
+    EXPECT_FALSE(f.doc.empty());
+    EXPECT_TRUE(f.text);
+    // The default's text sets the default.
+    DetectorOptions o;
+    set_option(o, f.name, f.text(defaults));
+    EXPECT_EQ(to_yaml(o), to_yaml(defaults));
+    if (f.kind == OptionKind::kChoice) {
+      for (const std::string& c : f.choices()) {
+        DetectorOptions p;
+        set_option(p, f.name, c);
+        EXPECT_EQ(option_text(p, f.name), c);
+        EXPECT_NO_THROW(p.check());
+        EXPECT_EQ(option_text(parse_config(to_yaml(p), kSource), f.name), c);
+      }
+      EXPECT_THROW(set_option(o, f.name, "no-such-value"), InvalidArgument);
+      continue;
+    }
+    // Numbers: the default is in range, the ends are accepted, just outside is
+    // refused by check() naming the key, and a value other than the default
+    // goes through YAML and back.
+    const double v = f.number(defaults);
+    EXPECT_TRUE((f.lo_open ? v > f.lo : v >= f.lo) && v <= f.hi);
+    const bool integer = f.kind == OptionKind::kInteger;
+    const auto text = [integer](double x) {
+      return integer ? std::to_string(static_cast<std::int64_t>(x)) : format_real(x);
+    };
+    const double below = integer ? f.lo - 1 : f.lo_open ? f.lo : f.lo - 0.5;
+    for (const double bad : {below, integer ? f.hi + 1 : f.hi + 0.5}) {
+      DetectorOptions p;
+      set_option(p, f.name, text(bad));
+      const std::string message = test::message_of<InvalidArgument>([&] { p.check(); });
+      EXPECT_NE(message.find(f.name), std::string::npos) << message;
+      EXPECT_NE(message.find("out of range"), std::string::npos) << message;
+    }
+    DetectorOptions p;
+    set_option(p, f.name, text(f.hi));
+    if (f.name == "verification.temporal.frames") p.verification.temporal_options.long_frames = 0;
+    if (f.name == "verification.geometric.min_side") p.verification.geometric_options.max_side = 0;
+    EXPECT_NO_THROW(p.check()) << text(f.hi);
+    const DetectorOptions back = parse_config(to_yaml(p), kSource);
+    EXPECT_EQ(option_text(back, f.name), text(f.hi));
+    EXPECT_EQ(to_yaml(back), to_yaml(p));
+    EXPECT_THROW(set_option(p, f.name, "x"), InvalidArgument);
+  }
+  // Every stage is there.
+  for (const char* key : {"segmentation.superpixel_size", "descriptor.storage",
+                          "similarity.metric", "search.mode", "search.nodes.beta",
+                          "verification.stages", "verification.temporal.long_frames",
+                          "verification.geometric.min_inlier_ratio", "decision.threshold"}) {
+    EXPECT_EQ(keys.count(key), 1u) << key;
+  }
+}
+
+TEST(OptionTables, SetOptionNamesUnknownKeysAndWrongValues) {
+  DetectorOptions o;
+  std::string m = test::message_of<InvalidArgument>([&] { set_option(o, "search.nodes.bta", "1"); });
+  EXPECT_NE(m.find("'search.nodes.bta'"), std::string::npos) << m;
+  EXPECT_NE(m.find("search.nodes.beta"), std::string::npos) << m;  // the section's keys
+  m = test::message_of<InvalidArgument>([&] { set_option(o, "search.min_gap", "12x"); });
+  EXPECT_NE(m.find("search.min_gap = '12x' is not an integer"), std::string::npos) << m;
+  m = test::message_of<InvalidArgument>([&] { set_option(o, "decision.threshold", "seven"); });
+  EXPECT_NE(m.find("decision.threshold = 'seven' is not a number"), std::string::npos) << m;
+  m = test::message_of<InvalidArgument>([&] { set_option(o, "search.top_n", "99999999999"); });
+  EXPECT_NE(m.find("is not an integer"), std::string::npos) << m;  // beyond int
+  set_option(o, "search.mode", "nodes");
+  set_option(o, "verification.stages", "geometric,temporal");
+  EXPECT_EQ(option_text(o, "verification.stages"), "temporal,geometric");
+  EXPECT_EQ(o.search.mode, "nodes");
+}
+
+// Which options a resumed database compares: not decision.*, and a stage's
+// options only when the stored options use the stage.
+TEST(OptionTables, ResumableAndAppliesSayWhatAResumeCompares) {
+  DetectorOptions exhaustive;
+  exhaustive.verification.temporal = false;
+  for (const OptionField<DetectorOptions>& f : DetectorOptions::fields()) {
+    SCOPED_TRACE(f.name);
+    EXPECT_EQ(f.resumable, f.name.rfind("decision.", 0) == 0);
+    const bool applies = !f.applies || f.applies(exhaustive);
+    const bool expected = f.name.rfind("search.nodes.", 0) != 0 &&
+                          f.name.rfind("verification.temporal.", 0) != 0;
+    EXPECT_EQ(applies, expected);
+    EXPECT_EQ(f.applies == nullptr, f.when.empty());
+  }
 }
 
 }  // namespace

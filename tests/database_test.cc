@@ -559,7 +559,7 @@ TEST(Database, OptionsOfAnOlderVersionKeepTheirBehaviour) {
   const std::string path = temp_path("older");
   fs::copy_file(small_database(), path);
   rewrite_options(path, [](std::string& yaml) {
-    erase(yaml, "long_frames: 48, ");
+    erase(yaml, "    long_frames: 48  # frames\n");
     const auto from = yaml.find("descriptor:\n");
     ASSERT_NE(from, std::string::npos);
     yaml.erase(from, yaml.find("similarity:") - from);

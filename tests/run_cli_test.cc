@@ -350,3 +350,35 @@ TEST_F(RunCli, AForeignFileAsOutputIsNotCut) {
 }
 
 }  // namespace
+
+namespace {
+
+// --option sets any option of `lsgd options` on every command; a resumed
+// database compares the result with what it stored.
+TEST_F(RunCli, OptionFlagSetsAnyOptionAndIsCheckedOnResume) {
+  CmdResult r = lsgd("options --option search.top_n=7 --option search.nodes.beta=1.25 --yaml");
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_NE(r.out.find("  top_n: 7\n"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("    beta: 1.25\n"), std::string::npos) << r.out;
+  r = lsgd("options --option search.nodes.bta=1");
+  EXPECT_EQ(r.code, 1);
+  EXPECT_NE(r.err.find("unknown option 'search.nodes.bta'"), std::string::npos) << r.err;
+  r = lsgd("options --option search.top_n");
+  EXPECT_EQ(r.code, 1);
+  EXPECT_NE(r.err.find("expected KEY=VALUE"), std::string::npos) << r.err;
+
+  ASSERT_EQ(lsgd(run_args("a.db", "a.csv", " --option verification.temporal.frames=12")).code, 0);
+  const CmdResult info = lsgd("db info --json " + q(kTmp / "a.db"));
+  ASSERT_EQ(info.code, 0) << info.err;
+  EXPECT_NE(info.out.find("frames: 12"), std::string::npos) << info.out;
+  // Another value of a stored option is refused; decision.* may change.
+  r = lsgd(run_args("a.db", "b.csv", " --option verification.temporal.frames=16"));
+  EXPECT_EQ(r.code, 1);
+  EXPECT_NE(r.err.find("verification.temporal.frames = 16 differs from the stored 12"),
+            std::string::npos)
+      << r.err;
+  r = lsgd(run_args("a.db", "b.csv", " --option decision.threshold=8"));
+  EXPECT_EQ(r.code, 0) << r.err;
+}
+
+}  // namespace

@@ -27,6 +27,8 @@
 #include <cstdint>
 #include <string>
 
+#include "lsgd/options.h"
+
 namespace lsgd {
 
 // A loop on appearance alone (no geometric stage) needs a grid of at least
@@ -48,6 +50,7 @@ struct DecisionOptions {
   // fraction of its loop's average inliers; (0, 1].
   double continuity_inliers = 0.2;
   void check() const;
+  static const OptionTable<DecisionOptions>& fields();  // lsgd/options.h
 };
 
 // What decided the reported candidate (Result::evidence).

@@ -44,6 +44,7 @@ HistogramStorage parse_histogram_storage(const char* name);
 struct DescriptorOptions {
   HistogramStorage storage = HistogramStorage::kExact;
   void check() const;
+  static const OptionTable<DescriptorOptions>& fields();  // lsgd/options.h
 };
 
 // Non-owning view of one frame's descriptor (inside a Descriptor or a

@@ -32,7 +32,18 @@ struct DetectorOptions {
   VerificationOptions verification;
   DecisionOptions decision;
   void check() const;
+  // Every option of every stage, keys from the root ("search.min_gap"), in
+  // the order of the YAML (lsgd/options.h).
+  static const OptionTable<DetectorOptions>& fields();
 };
+
+// Sets option `key` (a key of DetectorOptions::fields()) from text as a user
+// types it, e.g. set_option(o, "search.nodes.beta", "1.1"). InvalidArgument
+// naming the key for an unknown key or a value of the wrong kind; the range
+// is checked by DetectorOptions::check().
+void set_option(DetectorOptions& options, const std::string& key, const std::string& value);
+// The value of option `key` as text (InvalidArgument for an unknown key).
+std::string option_text(const DetectorOptions& options, const std::string& key);
 
 // Wall-clock milliseconds spent per stage on one frame.
 struct Timings {

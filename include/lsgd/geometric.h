@@ -20,6 +20,7 @@
 #include <vector>
 
 #include "lsgd/image.h"
+#include "lsgd/options.h"
 
 namespace lsgd {
 
@@ -47,6 +48,7 @@ struct GeometricOptions {
   // pass (docs/results.md: no measured number changes).
   double min_inlier_ratio = 0.25;
   void check() const;
+  static const OptionTable<GeometricOptions>& fields();  // lsgd/options.h
 };
 
 // What the geometric check found for one (query, candidate) pair.

@@ -36,6 +36,7 @@ struct DynamicNodeOptions {
   // in [0, 10]. Reference threshold_2 = 1.0; the paper's Table II sweeps 0.9 / 1.0 / 1.1.
   double beta = 1.0;
   void check() const;
+  static const OptionTable<DynamicNodeOptions>& fields();  // lsgd/options.h
 };
 
 struct SearchOptions {
@@ -46,8 +47,9 @@ struct SearchOptions {
   std::int64_t min_gap = 50;
   // How many best candidates to return, [1, 1000].
   int top_n = 10;
-  DynamicNodeOptions nodes;
+  DynamicNodeOptions nodes;  // used in nodes mode
   void check() const;
+  static const OptionTable<SearchOptions>& fields();  // lsgd/options.h
 };
 
 struct Candidate {

@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "lsgd/image.h"
+#include "lsgd/options.h"
 
 namespace lsgd::internal {
 // One centre's span of one image row in the assignment step (implementation
@@ -47,6 +48,8 @@ struct SegmentationOptions {
 
   // Throws InvalidArgument naming the first invalid field.
   void check() const;
+  // The options, declared once (lsgd/options.h).
+  static const OptionTable<SegmentationOptions>& fields();
 };
 
 struct GridSize {

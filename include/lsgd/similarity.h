@@ -32,6 +32,7 @@ struct SimilarityOptions {
   // Which formula turns two descriptors into a score.
   SimilarityMetric metric = SimilarityMetric::kReference;
   void check() const;
+  static const OptionTable<SimilarityOptions>& fields();  // lsgd/options.h
 };
 
 // Per-cell L1 by a SIMD kernel chosen at run time (identical to the scalar

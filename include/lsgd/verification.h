@@ -45,6 +45,7 @@ struct TemporalOptions {
   // bytes per stored frame (exhaustive search).
   int long_frames = 48;
   void check() const;
+  static const OptionTable<TemporalOptions>& fields();  // lsgd/options.h
 };
 
 struct VerificationOptions {
@@ -62,6 +63,7 @@ struct VerificationOptions {
   TemporalOptions temporal_options;
   GeometricOptions geometric_options;
   void check() const;
+  static const OptionTable<VerificationOptions>& fields();  // lsgd/options.h
 };
 
 // "none", "temporal", "geometric" or "temporal,geometric" (either order).

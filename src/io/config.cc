@@ -85,11 +85,6 @@ std::int64_t read_int64(const YAML::Node& node, const std::string& source, const
   return value;
 }
 
-int read_int(const YAML::Node& node, const std::string& source, const std::string& key) {
-  return static_cast<int>(read_int64(node, source, key, std::numeric_limits<int>::min(),
-                                     std::numeric_limits<int>::max()));
-}
-
 // YAML's spellings of infinity and NaN (.inf, -.Inf, .NAN, ...).
 bool parse_special_double(const std::string& text, double& value) {
   static const std::set<std::string> kInf = {".inf", ".Inf", ".INF", "+.inf", "+.Inf", "+.INF"};
@@ -124,27 +119,12 @@ std::string read_string(const YAML::Node& node, const std::string& source, const
   return node.Scalar();
 }
 
-// Parses an enum name with `parse` (which throws InvalidArgument), reporting
-// a FormatError that names the key and the accepted names.
-template <typename Enum, typename Parse>
-Enum read_enum(const YAML::Node& node, const std::string& source, const std::string& key,
-               Parse parse, const std::vector<Enum>& values) {
-  const std::string name = read_string(node, source, key);
-  try {
-    return parse(name.c_str());
-  } catch (const InvalidArgument&) {
-    std::string known;
-    for (Enum v : values) known += concat(known.empty() ? "" : ", ", to_string(v));
-    wrong_type(source, key, node, concat("one of ", known));
-  }
-}
-
 // ---------------------------------------------------------------- maps
 
 using Reader = std::function<void(const YAML::Node& value, const std::string& key)>;
 
 struct Field {
-  const char* name;
+  std::string name;
   Reader read;
 };
 
@@ -193,162 +173,62 @@ void read_map(const YAML::Node& node, const std::string& source, const std::stri
 
 // ---------------------------------------------------------------- sections
 
-void read_segmentation(const YAML::Node& node, const std::string& source, SegmentationOptions& o) {
-  read_map(node, source, "segmentation",
-           {{"superpixel_size",
-             [&](const YAML::Node& v, const std::string& k) {
-               o.superpixel_size = read_int(v, source, k);
-             }},
-            {"iterations", [&](const YAML::Node& v,
-                               const std::string& k) { o.iterations = read_int(v, source, k); }},
-            {"intensity_scale",
-             [&](const YAML::Node& v, const std::string& k) {
-               o.intensity_scale = read_double(v, source, k);
-             }},
-            {"distance_scale", [&](const YAML::Node& v, const std::string& k) {
-               o.distance_scale = read_double(v, source, k);
-             }}});
+using Table = OptionTable<DetectorOptions>;
+
+// Reads one option's value with the checks of its kind (the range is
+// DetectorOptions::check()'s).
+void read_value(const OptionField<DetectorOptions>& f, const YAML::Node& v,
+                const std::string& source, const std::string& key, DetectorOptions& o) {
+  switch (f.kind) {
+    case OptionKind::kInteger:
+      f.set_integer(o, read_int64(v, source, key, f.type_min, f.type_max));
+      return;
+    case OptionKind::kReal:
+      f.set_real(o, read_double(v, source, key));
+      return;
+    case OptionKind::kChoice: {
+      const std::string text = read_string(v, source, key);
+      try {
+        f.set_choice(o, text);
+      } catch (const InvalidArgument& e) {  // names the value and what is accepted
+        throw FormatError(concat(source, ": '", key, "': ", e.what(), at_line(v)));
+      }
+      return;
+    }
+  }
 }
 
-void read_similarity(const YAML::Node& node, const std::string& source, SimilarityOptions& o) {
-  read_map(node, source, "similarity",
-           {{"metric", [&](const YAML::Node& v, const std::string& k) {
-               o.metric = read_enum(v, source, k, parse_similarity_metric,
-                                    std::vector<SimilarityMetric>{SimilarityMetric::kReference,
-                                                                  SimilarityMetric::kL1,
-                                                                  SimilarityMetric::kNormalizedL1});
-             }}});
-}
-
-void read_descriptor(const YAML::Node& node, const std::string& source, DescriptorOptions& o) {
-  read_map(node, source, "descriptor",
-           {{"storage", [&](const YAML::Node& v, const std::string& k) {
-               o.storage = read_enum(v, source, k, parse_histogram_storage,
-                                     std::vector<HistogramStorage>{HistogramStorage::kExact,
-                                                                   HistogramStorage::kCompact});
-             }}});
-}
-
-void read_nodes(const YAML::Node& node, const std::string& source, DynamicNodeOptions& o) {
-  read_map(
-      node, source, "search.nodes",
-      {{"threshold_0", [&](const YAML::Node& v,
-                           const std::string& k) { o.threshold_0 = read_double(v, source, k); }},
-       {"alpha",
-        [&](const YAML::Node& v, const std::string& k) { o.alpha = read_double(v, source, k); }},
-       {"beta",
-        [&](const YAML::Node& v, const std::string& k) { o.beta = read_double(v, source, k); }}});
-}
-
-void read_search(const YAML::Node& node, const std::string& source, SearchOptions& o) {
-  constexpr std::int64_t kMin = std::numeric_limits<std::int64_t>::min();
-  constexpr std::int64_t kMax = std::numeric_limits<std::int64_t>::max();
-  read_map(
-      node, source, "search",
-      {{"mode",
-        [&](const YAML::Node& v, const std::string& k) {
-          o.mode = read_string(v, source, k);
-          try {
-            check_search_mode(o.mode);
-          } catch (const InvalidArgument&) {
-            wrong_type(source, k, v, concat("one of ", search_mode_names()));
-          }
-        }},
-       {"min_gap", [&](const YAML::Node& v,
-                       const std::string& k) { o.min_gap = read_int64(v, source, k, kMin, kMax); }},
-       {"top_n",
-        [&](const YAML::Node& v, const std::string& k) { o.top_n = read_int(v, source, k); }},
-       {"nodes",
-        [&](const YAML::Node& v, const std::string&) { read_nodes(v, source, o.nodes); }}});
-}
-
-void read_decision(const YAML::Node& node, const std::string& source, DecisionOptions& o) {
-  read_map(node, source, "decision",
-           {{"threshold",
-             [&](const YAML::Node& v, const std::string& k) { o.threshold = read_double(v, source, k); }},
-            {"geometric_bonus",
-             [&](const YAML::Node& v, const std::string& k) {
-               o.geometric_bonus = read_double(v, source, k);
-             }},
-            {"continuity_bonus",
-             [&](const YAML::Node& v, const std::string& k) {
-               o.continuity_bonus = read_double(v, source, k);
-             }},
-            {"continuity_inliers", [&](const YAML::Node& v, const std::string& k) {
-               o.continuity_inliers = read_double(v, source, k);
-             }}});
-}
-
-void read_temporal(const YAML::Node& node, const std::string& source, TemporalOptions& o) {
-  read_map(node, source, "verification.temporal",
-           {{"frames",
-             [&](const YAML::Node& v, const std::string& k) { o.frames = read_int(v, source, k); }},
-            {"long_frames",
-             [&](const YAML::Node& v, const std::string& k) { o.long_frames = read_int(v, source, k); }},
-            {"tolerance",
-             [&](const YAML::Node& v, const std::string& k) { o.tolerance = read_int(v, source, k); }},
-            {"agree",
-             [&](const YAML::Node& v, const std::string& k) { o.agree = read_int(v, source, k); }}});
-}
-
-void read_geometric(const YAML::Node& node, const std::string& source, GeometricOptions& o) {
-  read_map(
-      node, source, "verification.geometric",
-      {{"max_features",
-        [&](const YAML::Node& v, const std::string& k) { o.max_features = read_int(v, source, k); }},
-       {"min_side",
-        [&](const YAML::Node& v, const std::string& k) { o.min_side = read_int(v, source, k); }},
-       {"max_side",
-        [&](const YAML::Node& v, const std::string& k) { o.max_side = read_int(v, source, k); }},
-       {"ratio",
-        [&](const YAML::Node& v, const std::string& k) { o.ratio = read_double(v, source, k); }},
-       {"ransac_threshold",
-        [&](const YAML::Node& v,
-            const std::string& k) { o.ransac_threshold = read_double(v, source, k); }},
-       {"min_inliers",
-        [&](const YAML::Node& v, const std::string& k) { o.min_inliers = read_int(v, source, k); }},
-       {"min_inlier_ratio", [&](const YAML::Node& v, const std::string& k) {
-          o.min_inlier_ratio = read_double(v, source, k);
-        }}});
-}
-
-void read_verification(const YAML::Node& node, const std::string& source,
-                       VerificationOptions& o) {
-  read_map(
-      node, source, "verification",
-      {{"stages",
-        [&](const YAML::Node& v, const std::string& k) {
-          const std::string text = read_string(v, source, k);
-          try {
-            parse_verification_stages(text, o);
-          } catch (const InvalidArgument& e) {
-            throw FormatError(concat(source, ": '", k, "': ", e.what(), at_line(v)));
-          }
-        }},
-       {"max_candidates", [&](const YAML::Node& v,
-                              const std::string& k) { o.max_candidates = read_int(v, source, k); }},
-       {"temporal", [&](const YAML::Node& v,
-                        const std::string&) { read_temporal(v, source, o.temporal_options); }},
-       {"geometric", [&](const YAML::Node& v, const std::string&) {
-          read_geometric(v, source, o.geometric_options);
-        }}});
+// Reads the map at `prefix` ("" for the document, "search", "search.nodes"):
+// its keys are the next parts of the option keys below prefix, each an
+// option or a section.
+void read_section(const YAML::Node& node, const std::string& source, const std::string& prefix,
+                  DetectorOptions& o) {
+  const Table& table = DetectorOptions::fields();
+  const std::string below = prefix.empty() ? "" : prefix + ".";
+  std::vector<Field> fields;
+  for (const OptionField<DetectorOptions>& f : table) {
+    if (f.name.compare(0, below.size(), below) != 0) continue;
+    const std::string rest = f.name.substr(below.size());
+    const std::string part = rest.substr(0, rest.find('.'));
+    bool seen = false;
+    for (const Field& g : fields) seen = seen || part == g.name;
+    if (seen) continue;
+    const std::string full = below + part;
+    if (part == rest) {
+      fields.push_back({part, [&source, &o, &f](const YAML::Node& v, const std::string& k) {
+                          read_value(f, v, source, k, o);
+                        }});
+    } else {
+      fields.push_back({part, [&source, &o, full](const YAML::Node& v, const std::string&) {
+                          read_section(v, source, full, o);
+                        }});
+    }
+  }
+  read_map(node, source, prefix, fields);
 }
 
 void read_root(const YAML::Node& root, const std::string& source, DetectorOptions& o) {
-  read_map(
-      root, source, "",
-      {{"segmentation", [&](const YAML::Node& v,
-                            const std::string&) { read_segmentation(v, source, o.segmentation); }},
-       {"descriptor",
-        [&](const YAML::Node& v, const std::string&) { read_descriptor(v, source, o.descriptor); }},
-       {"similarity",
-        [&](const YAML::Node& v, const std::string&) { read_similarity(v, source, o.similarity); }},
-       {"search",
-        [&](const YAML::Node& v, const std::string&) { read_search(v, source, o.search); }},
-       {"verification", [&](const YAML::Node& v,
-                            const std::string&) { read_verification(v, source, o.verification); }},
-       {"decision",
-        [&](const YAML::Node& v, const std::string&) { read_decision(v, source, o.decision); }}});
+  read_section(root, source, "", o);
 }
 
 // Counts parser events; used to bound the number of documents (below).
@@ -392,25 +272,6 @@ std::vector<YAML::Node> load_documents(const std::string& text, const std::strin
 
 // ---------------------------------------------------------------- writing
 
-// "exhaustive | nodes": the registered search modes, for the YAML comment.
-std::string mode_choices() {
-  std::string out;
-  for (const SearchMode& m : search_modes()) out += concat(out.empty() ? "" : " | ", m.name);
-  return out;
-}
-
-// Shortest decimal text that parses back to exactly `value`, always with a
-// '.' or exponent so it reads as a float; YAML spellings for inf and NaN.
-std::string format_double(double value) {
-  if (std::isnan(value)) return ".nan";
-  if (std::isinf(value)) return value > 0 ? ".inf" : "-.inf";
-  char buffer[64];
-  const auto [end, ec] = std::to_chars(buffer, buffer + sizeof(buffer), value);
-  std::string text = ec == std::errc() ? std::string(buffer, end) : concat(value);
-  if (text.find_first_of(".e") == std::string::npos) text += ".0";
-  return text;
-}
-
 }  // namespace
 
 DetectorOptions parse_config(const std::string& yaml_text, const std::string& source,
@@ -451,48 +312,69 @@ DetectorOptions load_config(const std::string& path, const DetectorOptions& base
 }
 
 std::string to_yaml(const DetectorOptions& options) {
-  const SegmentationOptions& seg = options.segmentation;
-  const SearchOptions& search = options.search;
-  const VerificationOptions& v = options.verification;
-  const GeometricOptions& geo = v.geometric_options;
   std::ostringstream out;
-  out << "segmentation:\n"
-      << "  superpixel_size: " << seg.superpixel_size << "  # S_p, pixels\n"
-      << "  iterations: " << seg.iterations << "\n"
-      << "  intensity_scale: " << format_double(seg.intensity_scale) << "\n"
-      << "  distance_scale: " << format_double(seg.distance_scale) << "\n"
-      << "descriptor:\n"
-      << "  storage: " << to_string(options.descriptor.storage)
-      << "  # exact (16-bit, 256 bins) | compact (8-bit, 128 bins)\n"
-      << "similarity:\n"
-      << "  metric: " << to_string(options.similarity.metric)
-      << "  # reference | l1 | normalized_l1\n"
-      << "search:\n"
-      << "  mode: " << search.mode << "  # " << mode_choices() << "\n"
-      << "  min_gap: " << search.min_gap << "  # frames\n"
-      << "  top_n: " << search.top_n << "\n"
-      << "  nodes: {threshold_0: " << format_double(search.nodes.threshold_0)
-      << ", alpha: " << format_double(search.nodes.alpha)
-      << ", beta: " << format_double(search.nodes.beta) << "}\n"
-      << "verification:\n"
-      << "  stages: " << verification_stages(v) << "  # none | temporal | geometric | "
-      << "temporal,geometric\n"
-      << "  max_candidates: " << v.max_candidates << "\n"
-      << "  temporal: {frames: " << v.temporal_options.frames
-      << ", long_frames: " << v.temporal_options.long_frames
-      << ", tolerance: " << v.temporal_options.tolerance
-      << ", agree: " << v.temporal_options.agree << "}\n"
-      << "  geometric: {max_features: " << geo.max_features << ", min_side: " << geo.min_side
-      << ", max_side: " << geo.max_side
-      << ", ratio: " << format_double(geo.ratio)
-      << ", ransac_threshold: " << format_double(geo.ransac_threshold)
-      << ", min_inliers: " << geo.min_inliers
-      << ", min_inlier_ratio: " << format_double(geo.min_inlier_ratio) << "}\n"
-      << "decision:\n"
-      << "  threshold: " << format_double(options.decision.threshold) << "\n"
-      << "  geometric_bonus: " << format_double(options.decision.geometric_bonus) << "\n"
-      << "  continuity_bonus: " << format_double(options.decision.continuity_bonus) << "\n"
-      << "  continuity_inliers: " << format_double(options.decision.continuity_inliers) << "\n";
+  std::vector<std::string> open;  // the sections the last key was in
+  for (const OptionField<DetectorOptions>& f : DetectorOptions::fields()) {
+    std::vector<std::string> parts;
+    std::stringstream key(f.name);
+    for (std::string part; std::getline(key, part, '.');) parts.push_back(part);
+    const std::size_t depth = parts.size() - 1;
+    std::size_t same = 0;
+    while (same < open.size() && same < depth && open[same] == parts[same]) ++same;
+    open.resize(same);
+    for (; open.size() < depth; open.push_back(parts[open.size()])) {
+      out << std::string(2 * open.size(), ' ') << parts[open.size()] << ":\n";
+    }
+    out << std::string(2 * depth, ' ') << parts.back() << ": " << f.text(options);
+    if (f.kind == OptionKind::kChoice) {
+      std::string choices;
+      for (const std::string& c : f.choices()) choices += concat(choices.empty() ? "" : " | ", c);
+      out << "  # " << choices;
+    } else if (!f.unit.empty()) {
+      out << "  # " << f.unit;
+    }
+    out << "\n";
+  }
+  return out.str();
+}
+
+std::string options_reference(const DetectorOptions& options, bool markdown) {
+  std::ostringstream out;
+  if (markdown) {
+    out << "# Detector options\n\n"
+        << "Generated by `lsgd options --markdown` from the option tables (`lsgd/options.h`);\n"
+        << "`tests/config_test.cc` fails when this file differs from them. Every key is\n"
+        << "optional in a YAML config (`--config`); `--option KEY=VALUE` sets one on any\n"
+        << "command. \"resume\": whether `lsgd run --database` accepts another value than\n"
+        << "the stored one (\"no, with ...\": the stored value matters only then).\n\n"
+        << "| key | default | unit | range | resume | what it does |\n"
+        << "|---|---|---|---|---|---|\n";
+  }
+  for (const OptionField<DetectorOptions>& f : DetectorOptions::fields()) {
+    std::string range;
+    if (f.kind == OptionKind::kChoice) {
+      for (const std::string& c : f.choices()) {
+        range += concat(range.empty() ? "" : markdown ? " \\| " : " | ", c);
+      }
+      if (!markdown) range = "one of " + range;
+    } else if (f.kind == OptionKind::kInteger) {
+      range = concat("[", static_cast<std::int64_t>(f.lo), ", ", static_cast<std::int64_t>(f.hi), "]");
+    } else {
+      range = concat(f.lo_open ? "(" : "[", f.lo, ", ", f.hi, "]");
+    }
+    const std::string resume = f.resumable ? "yes" : f.when.empty() ? "no" : "no, " + f.when;
+    if (markdown) {
+      std::string doc = f.doc;
+      for (std::size_t at = doc.find('|'); at != std::string::npos; at = doc.find('|', at + 2)) {
+        doc.replace(at, 1, "\\|");
+      }
+      out << "| `" << f.name << "` | " << f.text(options) << " | " << f.unit << " | " << range
+          << " | " << resume << " | " << doc << " |\n";
+    } else {
+      out << f.name << " = " << f.text(options) << (f.unit.empty() ? "" : " " + f.unit) << "  "
+          << range << ": " << f.doc << "\n";
+    }
+  }
   return out.str();
 }
 

@@ -6,7 +6,6 @@
 #include <sys/file.h>
 #include <sys/stat.h>
 #include <unistd.h>
-#include <yaml-cpp/yaml.h>
 #include <zlib.h>
 
 #include <algorithm>
@@ -226,28 +225,6 @@ std::int64_t file_size(const std::string& path) {
   return ::stat(path.c_str(), &st) == 0 ? static_cast<std::int64_t>(st.st_size) : 0;
 }
 
-// Option keys "a.b.c" -> scalar text of io::to_yaml's output.
-void flatten(const YAML::Node& node, const std::string& prefix,
-             std::map<std::string, std::string>& out) {
-  if (node.IsMap()) {
-    for (const auto& item : node) {
-      const std::string key = item.first.as<std::string>();
-      flatten(item.second, prefix.empty() ? key : prefix + "." + key, out);
-    }
-  } else {
-    out[prefix] = node.Scalar();
-  }
-}
-
-std::map<std::string, std::string> flat_options(const DetectorOptions& options) {
-  std::map<std::string, std::string> out;
-  flatten(YAML::Load(to_yaml(options)), "", out);
-  return out;
-}
-
-bool starts_with(const std::string& s, const char* prefix) {
-  return s.compare(0, std::strlen(prefix), prefix) == 0;
-}
 
 const char* kSchema =
     "CREATE TABLE meta(key TEXT PRIMARY KEY, value NOT NULL);"
@@ -800,18 +777,13 @@ DatabaseInfo Database::info() const {
 
 void Database::check_compatible(const DetectorOptions& options) const {
   const DetectorOptions& stored = impl_->options;
-  const auto mine = flat_options(stored);
-  const auto theirs = flat_options(options);
-  const std::string stages = verification_stages(stored.verification);
-  for (const auto& [key, value] : mine) {
-    if (starts_with(key, "decision.")) continue;
-    if (stored.search.mode != kNodesSearch && starts_with(key, "search.nodes."))
-      continue;
-    if (!stored.verification.temporal && starts_with(key, "verification.temporal.")) continue;
-    if (!stored.verification.geometric && starts_with(key, "verification.geometric.")) continue;
-    if (stages == "none" && key == "verification.max_candidates") continue;
-    const auto other = theirs.find(key);
-    const std::string given = other == theirs.end() ? "(missing)" : other->second;
+  // Every option but the resumable ones (decision.*), where it matters for
+  // the stored options (search.nodes.* only in nodes mode, ...).
+  for (const OptionField<DetectorOptions>& f : DetectorOptions::fields()) {
+    if (f.resumable || (f.applies && !f.applies(stored))) continue;
+    const std::string value = f.text(stored);
+    const std::string given = f.text(options);
+    const std::string& key = f.name;
     if (given != value) {
       internal::throw_invalid("database ", impl_->path, ": option ", key, " = ", given,
                               " differs from the stored ", value,

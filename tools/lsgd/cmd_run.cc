@@ -241,11 +241,7 @@ void run_database(const RunArgs& args, const io::Sequence& sequence) {
     db.emplace(io::Database::open(args.database));
     if (!db->note().empty()) std::cerr << "lsgd: note: " << args.database << ": " << db->note() << "\n";
     options = flags.config.empty() ? db->options() : io::load_config(flags.config);
-    if (!flags.mode.empty()) options.search.mode = flags.mode;
-    if (flags.min_gap) options.search.min_gap = *flags.min_gap;
-    if (flags.threshold) options.decision.threshold = *flags.threshold;
-    if (!flags.verify.empty()) parse_verification_stages(flags.verify, options.verification);
-    options.check();
+    flags.apply(options);
   } else {
     options = flags.resolve();
     db.emplace(io::Database::create(args.database, options));

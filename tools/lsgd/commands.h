@@ -14,5 +14,6 @@ void register_sweep(CLI::App& app);  // lsgd sweep: a grid of configurations on 
 void register_bench(CLI::App& app);  // lsgd bench: per-stage timing on a generated sequence
 void register_gt(CLI::App& app);     // lsgd gt: convert ground-truth formats, print statistics
 void register_db(CLI::App& app);     // lsgd db info: what a detector database holds
+void register_options(CLI::App& app);  // lsgd options: every detector option, documented
 
 }  // namespace lsgd::cli

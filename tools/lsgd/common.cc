@@ -40,16 +40,31 @@ void DetectorFlags::add_to(CLI::App& command) {
   command.add_option("--verify", verify,
                      "verification stages: none, temporal, geometric or temporal,geometric "
                      "(overrides verification.stages)");
+  command.add_option("--option", options,
+                     "KEY=VALUE: sets any detector option (`lsgd options` lists them), after "
+                     "--config; repeatable")
+      ->allow_extra_args(false);
 }
 
 DetectorOptions DetectorFlags::resolve() const {
-  DetectorOptions options = config.empty() ? DetectorOptions{} : io::load_config(config);
-  if (!mode.empty()) options.search.mode = mode;
-  if (min_gap) options.search.min_gap = *min_gap;
-  if (threshold) options.decision.threshold = *threshold;
-  if (!verify.empty()) parse_verification_stages(verify, options.verification);
-  options.check();
-  return options;
+  DetectorOptions resolved = config.empty() ? DetectorOptions{} : io::load_config(config);
+  apply(resolved);
+  return resolved;
+}
+
+void DetectorFlags::apply(DetectorOptions& o) const {
+  for (const std::string& setting : options) {
+    const std::size_t eq = setting.find('=');
+    if (eq == std::string::npos) {
+      throw InvalidArgument("--option " + setting + ": expected KEY=VALUE (keys: lsgd options)");
+    }
+    set_option(o, setting.substr(0, eq), setting.substr(eq + 1));
+  }
+  if (!mode.empty()) set_option(o, "search.mode", mode);
+  if (min_gap) o.search.min_gap = *min_gap;
+  if (threshold) o.decision.threshold = *threshold;
+  if (!verify.empty()) set_option(o, "verification.stages", verify);
+  o.check();
 }
 
 void SequenceFlags::add_to(CLI::App& command) {

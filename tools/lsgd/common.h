@@ -26,10 +26,14 @@ struct DetectorFlags {
   std::optional<std::int64_t> min_gap;  // overrides search.min_gap
   std::optional<double> threshold;      // overrides decision.threshold
   std::string verify;                   // none | temporal | geometric | temporal,geometric
+  std::vector<std::string> options;     // --option KEY=VALUE, any key of `lsgd options`
 
   void add_to(CLI::App& command);
   // Defaults, then the config file, then the flags; validated.
   DetectorOptions resolve() const;
+  // Sets the options the flags name on `options` (--option first, then the
+  // shortcuts --mode, --min-gap, --threshold, --verify) and validates.
+  void apply(DetectorOptions& options) const;
 };
 
 // Flags choosing which images are the frames, shared by run and eval:

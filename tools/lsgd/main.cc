@@ -24,6 +24,7 @@ int main(int argc, char** argv) {
   lsgd::cli::register_bench(app);
   lsgd::cli::register_gt(app);
   lsgd::cli::register_db(app);
+  lsgd::cli::register_options(app);
   // The detector runs on the calling thread; OpenCV's own thread pool (ORB,
   // RANSAC and resizing in the geometric stage) is off too, so that every
   // time the tool reports is single-thread and runs are repeatable. `lsgd

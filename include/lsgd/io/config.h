@@ -1,32 +1,15 @@
 // YAML configuration of the detector. Every key is optional (defaults are the
 // DetectorOptions defaults); unknown keys, wrong types and out-of-range values
-// are errors naming the file and key.
+// are errors naming the file and key. The keys, with their defaults, units,
+// ranges and documentation, are in docs/options.md (`lsgd options`), generated
+// from the option tables (lsgd/options.h). A section is a YAML map:
 //
-//   segmentation:
-//     superpixel_size: 40      # S_p, pixels
-//     iterations: 3
-//     intensity_scale: 20.0
-//     distance_scale: 1.0
-//   similarity:
-//     metric: reference        # reference | l1 | normalized_l1
 //   search:
-//     mode: exhaustive         # exhaustive | nodes
-//     min_gap: 50              # frames
-//     top_n: 10
-//     nodes: {threshold_0: 0.9, alpha: 0.8, beta: 1.0}
-//   descriptor:
-//     storage: exact           # exact | compact
+//     mode: nodes
+//     nodes:
+//       beta: 1.1
 //   verification:
-//     stages: temporal,geometric  # none | temporal | geometric | temporal,geometric
-//     max_candidates: 3
-//     temporal: {frames: 16, long_frames: 48, tolerance: 2, agree: 0}
-//     geometric: {max_features: 500, min_side: 240, max_side: 240, ratio: 0.8,
-//                 ransac_threshold: 3.0, min_inliers: 20, min_inlier_ratio: 0.25}
-//   decision:                  # standard deviations (decision.h)
-//     threshold: 7.0
-//     geometric_bonus: 3.5
-//     continuity_bonus: 2.5
-//     continuity_inliers: 0.2
+//     stages: temporal,geometric
 #pragma once
 
 #include <string>
@@ -48,5 +31,12 @@ DetectorOptions load_config(const std::string& path, const DetectorOptions& base
 
 // Writes every option as YAML that parse_config reads back to equal options.
 std::string to_yaml(const DetectorOptions& options);
+
+// The reference of every option (DetectorOptions::fields()): key, value in
+// `options` (the defaults unless given), unit, range or choices, whether a
+// resumed database may change it, and its line of documentation. Markdown is
+// docs/options.md (a test keeps the two equal); otherwise one plain line
+// per option.
+std::string options_reference(const DetectorOptions& options = {}, bool markdown = true);
 
 }  // namespace lsgd::io

@@ -1,0 +1,216 @@
+// Options declared once. Every option of the detector is one OptionField in
+// the table of its stage (the static fields() of the stage's options struct:
+// SegmentationOptions::fields() in segmentation.cc, and so on), with its
+// name, unit, range and one line of documentation. From those tables come:
+// - validation: each struct's check() runs check_options() on its table
+//   (plus the rules that tie two options together);
+// - the YAML reader and writer (lsgd::io::parse_config, to_yaml);
+// - `--option KEY=VALUE` on the command line (set_option());
+// - the database's check on resume (which options may differ, which matter);
+// - docs/options.md (`lsgd options --markdown`, checked by a test).
+// docs/design.md, "Add an option", is the recipe.
+#pragma once
+
+#include <cstdint>
+#include <functional>
+#include <limits>
+#include <string>
+#include <utility>
+#include <vector>
+
+namespace lsgd {
+
+enum class OptionKind { kInteger, kReal, kChoice };
+
+template <class S>
+struct OptionField {
+  std::string name;  // key within its table: "min_gap", "nodes.alpha"
+  OptionKind kind = OptionKind::kInteger;
+  std::string unit;  // "pixels", "frames", "sigma" or empty
+  std::string doc;   // one line
+  // Numbers: the valid range, [lo, hi] or (lo, hi] when lo_open.
+  double lo = 0;
+  double hi = 0;
+  bool lo_open = false;
+  // Integers: what the C++ type holds (values outside are not representable).
+  std::int64_t type_min = 0;
+  std::int64_t type_max = 0;
+  std::function<std::vector<std::string>()> choices;  // kChoice: the accepted names
+  std::function<std::string(const S&)> text;          // the value as text that reads back equal
+  std::function<double(const S&)> number;             // numbers: the value
+  std::function<void(S&, std::int64_t)> set_integer;  // kInteger (value within the type)
+  std::function<void(S&, double)> set_real;           // kReal
+  // kChoice: sets the named value; InvalidArgument for a name it does not accept.
+  std::function<void(S&, const std::string&)> set_choice;
+  // Whether the value matters under these options (null: always), e.g.
+  // search.nodes.* only in nodes mode; a resumed database ignores it otherwise.
+  std::function<bool(const S&)> applies;
+  std::string when;  // what `applies` tests, for the docs: "in nodes mode"
+  // May differ from the stored options when a database is resumed (decision.*).
+  bool resumable = false;
+};
+
+template <class S>
+using OptionTable = std::vector<OptionField<S>>;
+
+// Shortest decimal text that parses back to exactly `value`, always with a
+// '.' or an exponent so that it reads as a real; .inf, -.inf, .nan.
+std::string format_real(double value);
+
+namespace internal {
+[[noreturn]] void throw_out_of_range(const std::string& key, const std::string& value, double lo,
+                                     double hi, bool lo_open, bool integer,
+                                     const std::string& unit);
+[[noreturn]] void throw_bad_option_text(const std::string& key, const std::string& text,
+                                        const std::string& expected);
+bool parse_integer_text(const std::string& text, std::int64_t& value);
+std::string number_text(double value);  // as an ostream prints it, for messages
+bool parse_real_text(const std::string& text, double& value);
+}  // namespace internal
+
+// ---- builders for the tables
+
+template <class S, class T>
+OptionField<S> integer_option(const char* name, T S::*member, T lo, T hi, const char* unit,
+                              const char* doc) {
+  OptionField<S> f;
+  f.name = name;
+  f.kind = OptionKind::kInteger;
+  f.unit = unit;
+  f.doc = doc;
+  f.lo = static_cast<double>(lo);
+  f.hi = static_cast<double>(hi);
+  f.type_min = std::numeric_limits<T>::min();
+  f.type_max = std::numeric_limits<T>::max();
+  f.text = [member](const S& s) { return std::to_string(s.*member); };
+  f.number = [member](const S& s) { return static_cast<double>(s.*member); };
+  f.set_integer = [member](S& s, std::int64_t v) { s.*member = static_cast<T>(v); };
+  return f;
+}
+
+template <class S>
+OptionField<S> real_option(const char* name, double S::*member, double lo, double hi,
+                           bool lo_open, const char* unit, const char* doc) {
+  OptionField<S> f;
+  f.name = name;
+  f.kind = OptionKind::kReal;
+  f.unit = unit;
+  f.doc = doc;
+  f.lo = lo;
+  f.hi = hi;
+  f.lo_open = lo_open;
+  f.text = [member](const S& s) { return format_real(s.*member); };
+  f.number = [member](const S& s) { return s.*member; };
+  f.set_real = [member](S& s, double v) { s.*member = v; };
+  return f;
+}
+
+// An enum member: `values` in the order the docs list them, to_string(E) and
+// `parse` (const char* -> E, InvalidArgument for an unknown name).
+template <class S, class E>
+OptionField<S> enum_option(const char* name, E S::*member, std::vector<E> values,
+                           E (*parse)(const char*), const char* doc) {
+  OptionField<S> f;
+  f.name = name;
+  f.kind = OptionKind::kChoice;
+  f.doc = doc;
+  f.choices = [values] {
+    std::vector<std::string> names;
+    for (const E v : values) names.emplace_back(to_string(v));
+    return names;
+  };
+  f.text = [member](const S& s) { return std::string(to_string(s.*member)); };
+  f.set_choice = [member, parse](S& s, const std::string& v) { s.*member = parse(v.c_str()); };
+  return f;
+}
+
+// Appends the fields of `inner` (the table of member `member`) to `out`
+// under "prefix.", applying when `applies` says so (null: always; `when`
+// says it in words).
+template <class S, class Inner>
+void nest(OptionTable<S>& out, const std::string& prefix, Inner S::*member,
+          const OptionTable<Inner>& inner, std::function<bool(const S&)> applies = {},
+          const std::string& when = "") {
+  for (const OptionField<Inner>& f : inner) {
+    OptionField<S> g;
+    g.name = prefix + "." + f.name;
+    g.kind = f.kind;
+    g.unit = f.unit;
+    g.doc = f.doc;
+    g.lo = f.lo;
+    g.hi = f.hi;
+    g.lo_open = f.lo_open;
+    g.type_min = f.type_min;
+    g.type_max = f.type_max;
+    g.choices = f.choices;
+    g.resumable = f.resumable;
+    g.when = applies ? when : f.when;
+    if (f.text) g.text = [member, t = f.text](const S& s) { return t(s.*member); };
+    if (f.number) g.number = [member, n = f.number](const S& s) { return n(s.*member); };
+    if (f.set_integer) g.set_integer = [member, w = f.set_integer](S& s, std::int64_t v) { w(s.*member, v); };
+    if (f.set_real) g.set_real = [member, w = f.set_real](S& s, double v) { w(s.*member, v); };
+    if (f.set_choice) {
+      g.set_choice = [member, w = f.set_choice](S& s, const std::string& v) { w(s.*member, v); };
+    }
+    if (applies || f.applies) {
+      g.applies = [member, outer = applies, own = f.applies](const S& s) {
+        return (!outer || outer(s)) && (!own || own(s.*member));
+      };
+    }
+    out.push_back(std::move(g));
+  }
+}
+
+// ---- what the tables give
+
+// Checks every number of `s` against its range (InvalidArgument
+// "prefix.name = value is out of range: must be in [lo, hi] unit").
+template <class S>
+void check_options(const OptionTable<S>& table, const S& s, const std::string& prefix) {
+  for (const OptionField<S>& f : table) {
+    if (f.kind == OptionKind::kChoice) continue;
+    const double v = f.number(s);
+    if (!((f.lo_open ? v > f.lo : v >= f.lo) && v <= f.hi)) {  // also rejects NaN
+      internal::throw_out_of_range(prefix.empty() ? f.name : prefix + "." + f.name,
+                                   f.kind == OptionKind::kReal ? internal::number_text(v) : f.text(s),
+                                   f.lo, f.hi, f.lo_open, f.kind == OptionKind::kInteger, f.unit);
+    }
+  }
+}
+
+// Finds `key` in `table`; nullptr when it is not there.
+template <class S>
+const OptionField<S>* find_option(const OptionTable<S>& table, const std::string& key) {
+  for (const OptionField<S>& f : table) {
+    if (f.name == key) return &f;
+  }
+  return nullptr;
+}
+
+// Sets option `f` of `s` from text as a user types it ("50", "0.8",
+// "nodes"); InvalidArgument naming the key when the text is not a value of
+// the option's kind (the range is check()'s).
+template <class S>
+void set_option_text(const OptionField<S>& f, S& s, const std::string& text) {
+  switch (f.kind) {
+    case OptionKind::kInteger: {
+      std::int64_t v = 0;
+      if (!internal::parse_integer_text(text, v) || v < f.type_min || v > f.type_max) {
+        internal::throw_bad_option_text(f.name, text, "an integer");
+      }
+      f.set_integer(s, v);
+      return;
+    }
+    case OptionKind::kReal: {
+      double v = 0;
+      if (!internal::parse_real_text(text, v)) internal::throw_bad_option_text(f.name, text, "a number");
+      f.set_real(s, v);
+      return;
+    }
+    case OptionKind::kChoice:
+      f.set_choice(s, text);
+      return;
+  }
+}
+
+}  // namespace lsgd

@@ -10,6 +10,7 @@
 #include <fstream>
 #include <iomanip>
 #include <sstream>
+#include <map>
 #include <string>
 #include <vector>
 
@@ -210,6 +211,34 @@ TEST(SweepDataset, BadSpecsNameTheSpec) {
   }
 }
 
+// Dataset options after the parts: lsgd eval's layout and ground-truth flags.
+TEST(SweepDataset, OptionsAfterThePartsAreEvalsDatasetFlags) {
+  const auto k = parse_dataset_spec(
+      "kitti05=/kitti,/poses/05.txt,100,layout=kitti,kitti-sequence=5,camera=2,gt-format=kitti-poses,"
+      "first=10,every=2,subsample-match=block");
+  EXPECT_EQ(k.sequence, "/kitti");
+  EXPECT_EQ(k.ground_truth, "/poses/05.txt");
+  EXPECT_EQ(k.min_gap, 100);
+  EXPECT_EQ(k.sequence_options.layout, lsgd::io::Layout::kKitti);
+  EXPECT_EQ(k.sequence_options.kitti_sequence, "5");
+  EXPECT_EQ(k.sequence_options.camera, 2);
+  EXPECT_EQ(k.sequence_options.selection.first, 10);
+  EXPECT_EQ(k.sequence_options.selection.every, 2);
+  EXPECT_EQ(k.gt_options.format, lsgd::eval::GtFormat::kKittiPoses);
+  EXPECT_EQ(k.gt_options.match, lsgd::eval::SubsampleMatch::kBlock);
+  const auto f = parse_dataset_spec("cc=/cc,20,layout=fabmap,side=both,gt-rows=image");
+  EXPECT_EQ(f.sequence, "/cc/sequence.txt");
+  EXPECT_EQ(f.sequence_options.side, lsgd::io::Side::kBoth);
+  EXPECT_EQ(f.gt_options.rows, lsgd::eval::GtRows::kImage);
+  for (const char* spec : {"x=/d,50,every=0", "x=/d,50,colour=2", "x=/d,50,every=two",
+                           "x=/d,50,layout=tree", "x=/d,50,gt-format=csv", "x=/d,50,every=2,/g",
+                           "x=/d,50,=3"}) {
+    const std::string message = message_of<InvalidArgument>([&] { parse_dataset_spec(spec); });
+    EXPECT_NE(message.find(std::string("'") + spec + "'"), std::string::npos)
+        << spec << " -> " << message;
+  }
+}
+
 // ---------------------------------------------------------------- lsgd sweep, end to end
 
 #ifdef LSGD_CLI
@@ -344,6 +373,48 @@ TEST_F(SweepCli, FourCellsMatchDirectEvals) {
     }
     EXPECT_EQ(cell["config_yaml"], j["rows"][row - 1]["config_yaml"]);
   }
+}
+
+// A ground truth in another format (LSGDDN loopinf) and every second frame:
+// the sweep's row equals lsgd eval's with the same flags (one dataset module).
+TEST_F(SweepCli, ReadsEveryFormatAndSelectionThatEvalReads) {
+  // loopinf: line k is "k<TAB>j", j the first true match of query k or -1.
+  const lsgd::eval::GroundTruth gt =
+      lsgd::eval::read_pairs((dir_ / "groundtruth.txt").string(), frames_);
+  const fs::path loopinf = kTmp / "loopinf.txt";
+  {
+    std::ofstream out(loopinf);
+    for (std::int64_t q = 0; q < frames_; ++q) {
+      std::int64_t match = -1;
+      for (std::int64_t j = 0; j < q && match < 0; ++j) {
+        if (gt.is_loop(q, j)) match = j;
+      }
+      out << q << "\t" << match << "\n";
+    }
+  }
+  const fs::path csv = kTmp / "fmt.csv", json = kTmp / "fmt.json";
+  const std::string seq = (dir_ / "sequence.txt").string();
+  const CmdResult r = lsgd_cli("sweep --dataset 'street=" + seq + "," + loopinf.string() +
+                               ",10,gt-format=loopinf,every=2' --verify none --csv '" +
+                               csv.string() + "'");
+  ASSERT_EQ(r.code, 0) << r.err;
+  const auto rows = read_csv(csv);
+  ASSERT_EQ(rows.size(), 2u);
+  ASSERT_EQ(rows[0].size(), rows[1].size());
+  std::map<std::string, std::string> row;  // no --set: no key columns
+  for (std::size_t c = 0; c < rows[0].size(); ++c) row[rows[0][c]] = rows[1][c];
+  EXPECT_EQ(row["frames"], std::to_string((frames_ + 1) / 2));  // every second frame
+  const CmdResult e = lsgd_cli("eval --sequence '" + seq + "' --gt '" + loopinf.string() +
+                               "' --gt-format loopinf --every 2 --min-gap 10 --verify none --json '" +
+                               json.string() + "'");
+  ASSERT_EQ(e.code, 0) << e.err;
+  const auto cell = nlohmann::json::parse(slurp(json));
+  for (const char* metric : {"frames", "positives", "declared_loops", "declared_true",
+                             "declared_false", "recall_at_100_precision", "recall_at_1"}) {
+    ASSERT_EQ(row.count(metric), 1u) << metric;
+    EXPECT_DOUBLE_EQ(std::stod(row[metric]), cell[metric].get<double>()) << metric;
+  }
+  EXPECT_GT(cell["positives"].get<double>(), 5);
 }
 
 TEST_F(SweepCli, ParallelJobsGiveTheSameScores) {

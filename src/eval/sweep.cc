@@ -285,7 +285,28 @@ SweepDataset parse_dataset_spec(const std::string& spec) {
   bool name_ok = !d.name.empty();
   for (char c : d.name) name_ok = name_ok && (is_word_char(c) || c == '.' || c == '-');
   if (!name_ok) throw_invalid(context, ": name '", d.name, "' must be letters, digits, . _ -");
-  const std::vector<std::string> parts = split(spec.substr(eq + 1), ',');
+  std::vector<std::string> parts;
+  std::vector<std::string> options;  // KEY=VALUE after the positional parts
+  for (const std::string& part : split(spec.substr(eq + 1), ',')) {
+    (part.find('=') != std::string::npos || !options.empty() ? options : parts).push_back(part);
+  }
+  for (const std::string& option : options) {
+    const std::size_t at = option.find('=');
+    if (at == std::string::npos || at == 0) {
+      throw_invalid(context, ": '", option, "' after the dataset options is not KEY=VALUE");
+    }
+    try {
+      set_dataset_option(d.sequence_options, d.gt_options, option.substr(0, at),
+                         option.substr(at + 1));
+    } catch (const InvalidArgument& e) {
+      throw_invalid(context, ": ", e.what());
+    }
+  }
+  try {
+    d.sequence_options.check();
+  } catch (const InvalidArgument& e) {
+    throw_invalid(context, ": ", e.what());
+  }
   if (parts.size() != 2 && parts.size() != 3) {
     throw_invalid(context, ": expected NAME=SEQUENCE,GT,MIN_GAP or NAME=DIR,MIN_GAP (",
                   parts.size(), " comma-separated parts after '=')");

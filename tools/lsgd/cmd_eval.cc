@@ -17,6 +17,7 @@
 #include "lsgd/eval/groundtruth.h"
 #include "lsgd/eval/gt_formats.h"
 #include "lsgd/eval/gt_remap.h"
+#include "lsgd/eval/dataset.h"
 #include "lsgd/eval/report.h"
 #include "lsgd/eval/runner.h"
 #include "lsgd/io/config.h"
@@ -44,46 +45,11 @@ struct EvalArgs {
   CLI::App* command = nullptr;  // to tell which flags were given
 };
 
-// The one place the ground truth is read: `rows` frames in the dataset's own
-// numbering, -1 when only the file can say. Any supported format (pairs text,
-// MATLAB .mat, KITTI poses, LSGDDN loopinf), detected from the file unless
-// --gt-format names it.
-eval::GroundTruth read_ground_truth(const EvalArgs& args, std::int64_t rows) {
-  eval::GtOptions options;
-  options.format = eval::parse_gt_format(args.gt_format);
-  options.frames = rows;
-  return eval::load_groundtruth(args.gt, options);
-}
-
-eval::GtRows gt_rows(const EvalArgs& args) {
-  return args.gt_rows.empty() ? eval::GtRows::kPair : eval::parse_gt_rows(args.gt_rows);
-}
-
-// The ground truth of the evaluated frames: `rows` rows in the dataset's own
-// numbering (-1: as many as the file says), moved through the layout's choice
-// of images (FAB-MAP sides), then through --first/--last/--every.
-eval::GroundTruth evaluated_groundtruth(const EvalArgs& args, const io::SequenceOptions& options,
-                                        io::Layout layout, std::int64_t rows) {
-  eval::GroundTruth gt;
-  try {
-    gt = read_ground_truth(args, rows);
-  } catch (const FormatError& e) {
-    if (layout != io::Layout::kFabmap || rows < 0) throw;
-    throw FormatError(std::string(e.what()) + " (FAB-MAP with --gt-rows " +
-                      eval::to_string(gt_rows(args)) + " expects " + std::to_string(rows) +
-                      " rows; is the ground truth given per " +
-                      (gt_rows(args) == eval::GtRows::kPair ? "image? --gt-rows image)"
-                                                            : "pair? --gt-rows pair)"));
-  }
-  if (layout == io::Layout::kFabmap) {
-    const std::int64_t pairs = gt_rows(args) == eval::GtRows::kPair ? gt.frames() : gt.frames() / 2;
-    gt = eval::fabmap_groundtruth(gt, pairs, options.side);
-  }
-  const io::FrameSelection& s = options.selection;
-  if (!s.keeps_all()) {
-    gt = eval::subsample(gt, s.every, s.first, s.last,
-                         eval::parse_subsample_match(args.subsample_match));
-  }
+eval::GroundTruthOptions gt_options(const EvalArgs& args) {
+  eval::GroundTruthOptions gt;
+  gt.format = eval::parse_gt_format(args.gt_format);
+  if (!args.gt_rows.empty()) gt.rows = eval::parse_gt_rows(args.gt_rows);
+  gt.match = eval::parse_subsample_match(args.subsample_match);
   return gt;
 }
 
@@ -182,13 +148,15 @@ void check_files(const EvalArgs& args, const std::vector<std::string>& images) {
 
 void evaluate_detections(const EvalArgs& args, const io::SequenceOptions& options) {
   check_files(args, {});
-  eval::GroundTruth gt =
-      evaluated_groundtruth(args, options, options.layout, args.frames ? *args.frames : -1);
+  eval::GroundTruth gt = eval::evaluated_groundtruth(args.gt, gt_options(args), options,
+                                                     options.layout, args.frames ? *args.frames : -1);
   // A pairs file only implies frames up to its largest id; when frame ids map
   // one to one, detections of later (loop-free) frames extend it.
   if (!args.frames && options.layout != io::Layout::kFabmap && options.selection.keeps_all()) {
     const auto extent = static_cast<std::int64_t>(eval::read_detections(args.detections).size());
-    if (extent > gt.frames()) gt = evaluated_groundtruth(args, options, options.layout, extent);
+    if (extent > gt.frames()) {
+      gt = eval::evaluated_groundtruth(args.gt, gt_options(args), options, options.layout, extent);
+    }
   }
   const auto records = eval::read_detections(args.detections, gt.frames());
   const std::int64_t min_gap = *args.detector.min_gap;
@@ -210,18 +178,12 @@ void evaluate_detections(const EvalArgs& args, const io::SequenceOptions& option
 
 void evaluate_sequence(const EvalArgs& args, const io::SequenceOptions& options) {
   const DetectorOptions detector_options = args.detector.resolve();
-  const io::Layout layout = io::detect_layout(args.sequence, options);
-  const io::Sequence all = io::open_layout(args.sequence, options);
-  const io::Sequence sequence = io::subsample(all, options.selection);
-  check_files(args, all.images);
-  // Read the ground truth before the (long) run so a wrong file fails at once.
-  const auto frames = static_cast<std::int64_t>(all.images.size());
-  std::int64_t rows = frames;
-  if (layout == io::Layout::kFabmap) {
-    rows = eval::fabmap_gt_frames(options.side == io::Side::kBoth ? frames / 2 : frames,
-                                  gt_rows(args));
-  }
-  const eval::GroundTruth gt = evaluated_groundtruth(args, options, layout, rows);
+  // Reads the ground truth before the (long) run so a wrong file fails at once.
+  const eval::Dataset dataset = eval::open_dataset(args.sequence, options, args.gt, gt_options(args));
+  const io::Layout layout = dataset.layout;
+  const io::Sequence& sequence = dataset.frames;
+  const eval::GroundTruth& gt = dataset.gt;
+  check_files(args, dataset.all.images);
   const eval::FrameSource source = eval::sequence_source(sequence);
   std::unique_ptr<CsvWriter> csv;
   if (!args.output.empty()) csv = std::make_unique<CsvWriter>(args.output);

@@ -22,6 +22,7 @@
 #include "common.h"
 #include "files.h"
 #include "lsgd/error.h"
+#include "lsgd/eval/dataset.h"
 #include "lsgd/eval/groundtruth.h"
 #include "lsgd/eval/sweep.h"
 #include "lsgd/io/config.h"
@@ -41,11 +42,6 @@ struct SweepArgs {
   DetectorFlags detector;
 };
 
-// The one place ground truth is read (other formats plug in here).
-eval::GroundTruth load_ground_truth(const std::string& path, std::int64_t frames) {
-  return eval::read_pairs(path, frames);
-}
-
 struct Dataset {
   eval::SweepDataset spec;
   eval::FrameSource source;
@@ -57,12 +53,12 @@ struct Dataset {
 // Opens the sequence and reads the ground truth, so a wrong path fails before
 // any run (images are read by the runs, which skip bad ones as lsgd eval does).
 Dataset prepare(const eval::SweepDataset& spec) {
-  const io::Sequence sequence = io::open_sequence(spec.sequence);
-  Dataset d{spec, eval::sequence_source(sequence),
-            load_ground_truth(spec.ground_truth, static_cast<std::int64_t>(sequence.images.size())),
-            0, {}};
+  // Every layout and ground-truth format lsgd eval reads (eval/dataset.h).
+  eval::Dataset opened = eval::open_dataset(spec.sequence, spec.sequence_options, spec.ground_truth,
+                                            spec.gt_options);
+  Dataset d{spec, eval::sequence_source(opened.frames), std::move(opened.gt), 0,
+            std::move(opened.all.images)};
   for (std::int64_t q = 0; q < d.gt.frames(); ++q) d.positives += d.gt.has_loop(q, spec.min_gap);
-  d.images = sequence.images;
   return d;
 }
 

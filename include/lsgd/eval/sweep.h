@@ -17,6 +17,7 @@
 #include <vector>
 
 #include "lsgd/detector.h"
+#include "lsgd/eval/dataset.h"
 
 namespace lsgd::eval {
 
@@ -62,16 +63,20 @@ std::string sweep_yaml(const std::vector<std::string>& keys,
 // A dataset to sweep on.
 struct SweepDataset {
   std::string name;          // row label: letters, digits, . _ -
-  std::string sequence;      // folder of images or list file (io::open_sequence)
-  std::string ground_truth;  // pairs text file
+  std::string sequence;      // folder, list file or dataset layout (eval/dataset.h)
+  std::string ground_truth;  // any format lsgd eval reads
   std::int64_t min_gap = 0;  // temporal window w, frames
+  io::SequenceOptions sequence_options;  // layout, KITTI, FAB-MAP side, first/last/every
+  GroundTruthOptions gt_options;         // format, FAB-MAP rows, subsample match
 };
 
 // Parses "NAME=SEQUENCE,GT,MIN_GAP", or "NAME=DIR,MIN_GAP" for a folder DIR
 // holding sequence.txt and groundtruth.txt (the layout of the shared datasets
-// and of `lsgd demo --output`). Throws InvalidArgument naming the spec for a
-// missing part, a bad name or a window that is not an integer >= 0. Files are
-// not opened here.
+// and of `lsgd demo --output`), each optionally followed by ",KEY=VALUE"
+// dataset options (set_dataset_option: layout=kitti, gt-format=mat, every=2,
+// ...). Throws InvalidArgument naming the spec for a missing part, a bad
+// name, a window that is not an integer >= 0 or a bad option. Files are not
+// opened here.
 SweepDataset parse_dataset_spec(const std::string& spec);
 
 }  // namespace lsgd::eval

@@ -43,7 +43,7 @@
 #include <vector>
 
 #include "lsgd/descriptor.h"
-#include "lsgd/eval/synthetic.h"
+#include "synthetic/synthetic.h"
 #include "lsgd/frame_store.h"
 #include "lsgd/image.h"
 #include "lsgd/search.h"

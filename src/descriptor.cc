@@ -135,6 +135,16 @@ void describe(const GrayImage& image, const Segmentation& segmentation, Descript
   }
 }
 
+struct DescribeScratch::Buffers {
+  std::vector<Bin> second;               // second histogram set (HistogramRows)
+  std::vector<internal::LabelRun> runs;  // one row's runs of equal labels
+};
+
+DescribeScratch::DescribeScratch() : buffers_(std::make_unique<Buffers>()) {}
+DescribeScratch::~DescribeScratch() = default;
+DescribeScratch::DescribeScratch(DescribeScratch&&) noexcept = default;
+DescribeScratch& DescribeScratch::operator=(DescribeScratch&&) noexcept = default;
+
 namespace {
 
 // Counts each final row of `segmentation` into the histograms of `out`, run
@@ -144,7 +154,10 @@ namespace {
 class HistogramRows final : public RowSink {
  public:
   HistogramRows(const Segmentation& segmentation, Descriptor& out, DescribeScratch& scratch)
-      : segmentation_(segmentation), out_(out), second_(scratch.second), runs_(scratch.runs) {}
+      : segmentation_(segmentation),
+        out_(out),
+        second_(scratch.buffers().second),
+        runs_(scratch.buffers().runs) {}
 
   void row(int y, const std::uint8_t* p, const std::int32_t* labels, int width) override {
     if (y == 0) {  // the grid is known once the segmentation runs

@@ -39,7 +39,17 @@ GridSize grid_size(int width, int height, int superpixel_size) {
   return {static_cast<int>(height / step + 1), static_cast<int>(width / step + 1)};
 }
 
-Segmenter::Segmenter(const SegmentationOptions& options) : options_(options) { options_.check(); }
+struct Segmenter::Rows {
+  std::vector<internal::RowSegment> segments;
+};
+
+Segmenter::Segmenter(const SegmentationOptions& options)
+    : options_(options), rows_(std::make_unique<Rows>()) {
+  options_.check();
+}
+Segmenter::~Segmenter() = default;
+Segmenter::Segmenter(Segmenter&&) noexcept = default;
+Segmenter& Segmenter::operator=(Segmenter&&) noexcept = default;
 
 Segmentation Segmenter::segment(const GrayImage& image) {
   Segmentation out;
@@ -182,14 +192,14 @@ void Segmenter::iterate(const GrayImage& image, Segmentation& out, RowSink* sink
     const std::int32_t* const items = row_items_.data() + row_start_[y];
     const int count = static_cast<int>(row_start_[y + 1] - row_start_[y]);
     // Rows covered by the same centres (runs of ~10 rows) share the lists.
-    const bool same = y > 0 && count == static_cast<int>(segments_.size()) &&
+    const bool same = y > 0 && count == static_cast<int>(rows_->segments.size()) &&
                       std::equal(items, items + count, row_items_.data() + row_start_[y - 1]);
-    segments_.resize(static_cast<std::size_t>(count));
+    rows_->segments.resize(static_cast<std::size_t>(count));
     for (int i = 0; i < count; ++i) {
       const std::int32_t k = items[i];
       const Centre& c = out.centres[k];
       const float dy = static_cast<float>(y) - c.y;
-      internal::RowSegment& seg = segments_[static_cast<std::size_t>(i)];
+      internal::RowSegment& seg = rows_->segments[static_cast<std::size_t>(i)];
       seg.x0 = windows_[k].x0;
       seg.x1 = windows_[k].x1;
       seg.cx = c.x;
@@ -199,10 +209,10 @@ void Segmenter::iterate(const GrayImage& image, Segmentation& out, RowSink* sink
       seg.xterm = tables + windows_[k].xterm;
       seg.xterm_first = internal::x_terms_first(seg.x0, lanes);
     }
-    if (!same) internal::assign_lists(segments_.data(), count, image.width, lanes, lists_);
+    if (!same) internal::assign_lists(rows_->segments.data(), count, image.width, lanes, lists_);
     r.pixels = p;
     r.labels = labels;
-    r.segments = segments_.data();
+    r.segments = rows_->segments.data();
     r.count = count;
     r.lists = lists_.data();
     internal::assign_row(r);

@@ -17,7 +17,7 @@
 #include <opencv2/imgcodecs.hpp>
 
 #include "lsgd/eval/groundtruth.h"
-#include "lsgd/eval/synthetic.h"
+#include "synthetic/synthetic.h"
 
 namespace fs = std::filesystem;
 

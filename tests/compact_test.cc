@@ -15,7 +15,7 @@
 #include "lsgd/descriptor.h"
 #include "lsgd/detector.h"
 #include "lsgd/error.h"
-#include "lsgd/eval/synthetic.h"
+#include "synthetic/synthetic.h"
 #include "lsgd/frame_store.h"
 #include "lsgd/similarity.h"
 #include "test_util.h"

@@ -30,7 +30,7 @@
 #include <vector>
 
 #include "lsgd/error.h"
-#include "lsgd/eval/synthetic.h"
+#include "synthetic/synthetic.h"
 #include "test_util.h"
 
 namespace lsgd::io {

@@ -20,7 +20,7 @@
 #include "lsgd/eval/groundtruth.h"
 #include "lsgd/eval/gt_formats.h"
 #include "lsgd/eval/gt_remap.h"
-#include "lsgd/eval/synthetic.h"
+#include "synthetic/synthetic.h"
 
 namespace fs = std::filesystem;
 

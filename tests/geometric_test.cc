@@ -19,19 +19,18 @@
 
 namespace lsgd {
 
-// Reads the stored keypoint coordinates (private) of one frame.
-struct GeometricVerifierTestPeer {
-  static std::vector<cv::Point2f> points(const GeometricVerifier& v, std::int64_t frame) {
-    std::vector<cv::Point2f> out;
-    const auto f = static_cast<std::size_t>(frame);
-    for (auto i = v.offsets_[f]; i < v.offsets_[f + 1]; ++i) {
-      out.emplace_back(v.points_[2 * i], v.points_[2 * i + 1]);
-    }
-    return out;
-  }
-};
-
 namespace {
+
+// The stored keypoint coordinates of one frame (features(), as persisted).
+std::vector<cv::Point2f> stored_points(const GeometricVerifier& v, std::int64_t frame) {
+  std::vector<float> xy;
+  std::vector<std::uint8_t> orb;
+  v.features(frame, xy, orb);
+  std::vector<cv::Point2f> out;
+  for (std::size_t i = 0; i + 1 < xy.size(); i += 2) out.emplace_back(xy[i], xy[i + 1]);
+  return out;
+}
+
 
 using test::message_of;
 
@@ -298,7 +297,7 @@ TEST(GeometricVerifier, KeypointsAreStoredInOriginalPixels) {
   texture(window.width, window.height, 9).copyTo(a(window));
   GeometricVerifier v;
   v.add(gray_of(a));
-  const std::vector<cv::Point2f> points = GeometricVerifierTestPeer::points(v, 0);
+  const std::vector<cv::Point2f> points = stored_points(v, 0);
   ASSERT_GT(points.size(), 20u);
   const float slack = 4;  // coarse pyramid levels localise to a few pixels
   for (const cv::Point2f& p : points) {

@@ -24,7 +24,7 @@
 #include "lsgd/detector.h"
 #include "lsgd/error.h"
 #include "lsgd/eval/runner.h"
-#include "lsgd/eval/synthetic.h"
+#include "synthetic/synthetic.h"
 #include "lsgd/io/config.h"
 #include "test_util.h"
 

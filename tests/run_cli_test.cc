@@ -23,7 +23,7 @@
 #include <opencv2/imgcodecs.hpp>
 
 #include "cli_util.h"
-#include "lsgd/eval/synthetic.h"
+#include "synthetic/synthetic.h"
 
 namespace fs = std::filesystem;
 

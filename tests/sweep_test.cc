@@ -23,7 +23,7 @@
 
 #include "lsgd/error.h"
 #include "lsgd/eval/groundtruth.h"
-#include "lsgd/eval/synthetic.h"
+#include "synthetic/synthetic.h"
 #include "lsgd/io/config.h"
 #include "test_util.h"
 

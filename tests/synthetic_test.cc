@@ -1,4 +1,4 @@
-#include "lsgd/eval/synthetic.h"
+#include "synthetic/synthetic.h"
 
 #include <gtest/gtest.h>
 

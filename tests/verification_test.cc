@@ -11,7 +11,7 @@
 
 #include "lsgd/detector.h"
 #include "lsgd/error.h"
-#include "lsgd/eval/synthetic.h"
+#include "synthetic/synthetic.h"
 #include "test_util.h"
 
 namespace lsgd {

@@ -8,6 +8,7 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <memory>
 #include <vector>
 
 #include "lsgd/image.h"
@@ -94,9 +95,17 @@ Descriptor describe(const GrayImage& image, const Segmentation& segmentation);
 // Reuses the storage of segmentation, out and scratch: with one scratch per
 // stream of frames nothing is allocated once warm (the overload without one
 // allocates ~45 KB per call at 1241x376).
-struct DescribeScratch {
-  std::vector<Bin> second;               // second histogram set (see descriptor.cc)
-  std::vector<internal::LabelRun> runs;  // one row's runs of equal labels
+class DescribeScratch {
+ public:
+  DescribeScratch();
+  ~DescribeScratch();
+  DescribeScratch(DescribeScratch&&) noexcept;
+  DescribeScratch& operator=(DescribeScratch&&) noexcept;
+  struct Buffers;  // descriptor.cc: a second histogram set, one row's label runs
+  Buffers& buffers() { return *buffers_; }
+
+ private:
+  std::unique_ptr<Buffers> buffers_;
 };
 void segment_and_describe(Segmenter& segmenter, const GrayImage& image, Segmentation& segmentation,
                           Descriptor& out, DescribeScratch& scratch);

@@ -113,8 +113,6 @@ class GeometricVerifier {
   double working_scale(int width, int height) const;
 
  private:
-  friend struct GeometricVerifierTestPeer;  // tests read the stored keypoints
-
   GeometricOptions options_;
   // Contiguous storage: frame i owns keypoints [offsets_[i], offsets_[i+1]).
   std::vector<std::int64_t> offsets_{0};

@@ -4,31 +4,12 @@
 #pragma once
 
 #include <cstdint>
+#include <memory>
 #include <vector>
 
 #include "lsgd/image.h"
 #include "lsgd/options.h"
 
-namespace lsgd::internal {
-// One centre's span of one image row in the assignment step (implementation
-// detail of Segmenter, used by the SIMD kernel in src/internal/kernels.h).
-struct RowSegment {
-  int x0 = 0, x1 = -1;  // inclusive
-  float cx = 0, intensity = 0, row_term = 0;
-  std::int32_t label = 0;
-  // The centre's x-term table (internal::x_terms()): entry x - xterm_first for pixel x.
-  const float* xterm = nullptr;
-  int xterm_first = 0;
-};
-
-// One run of equal labels in a row (internal::label_runs in
-// src/internal/kernels.h): it starts at `start` and ends where the next run
-// starts.
-struct LabelRun {
-  std::int32_t start = 0;
-  std::int32_t label = 0;
-};
-}  // namespace lsgd::internal
 
 namespace lsgd {
 
@@ -104,6 +85,9 @@ class RowSink {
 class Segmenter {
  public:
   explicit Segmenter(const SegmentationOptions& options = {});
+  ~Segmenter();
+  Segmenter(Segmenter&&) noexcept;
+  Segmenter& operator=(Segmenter&&) noexcept;
 
   const SegmentationOptions& options() const { return options_; }
 
@@ -137,7 +121,8 @@ class Segmenter {
   std::vector<std::int64_t> row_start_;  // centres covering row y: row_items_[row_start_[y] ..)
   std::vector<std::int64_t> row_fill_;
   std::vector<std::int32_t> row_items_;
-  std::vector<internal::RowSegment> segments_;
+  struct Rows;                  // the assignment's row segments (segmentation.cc)
+  std::unique_ptr<Rows> rows_;
 };
 
 }  // namespace lsgd

@@ -30,7 +30,25 @@ namespace lsgd::internal {
 // (dx * dx) * inv_distance from the segment's x_terms() table (the same for
 // every row of a centre's window, +infinity outside it, so lanes outside the
 // window never take its label). The scalar reference computes everything.
-// (RowSegment is defined in lsgd/segmentation.h.)
+// One centre's span of one image row in the assignment step (implementation
+// detail of Segmenter, used by the SIMD kernel in src/internal/kernels.h).
+struct RowSegment {
+  int x0 = 0, x1 = -1;  // inclusive
+  float cx = 0, intensity = 0, row_term = 0;
+  std::int32_t label = 0;
+  // The centre's x-term table (internal::x_terms()): entry x - xterm_first for pixel x.
+  const float* xterm = nullptr;
+  int xterm_first = 0;
+};
+
+// One run of equal labels in a row (internal::label_runs in
+// src/internal/kernels.h): it starts at `start` and ends where the next run
+// starts.
+struct LabelRun {
+  std::int32_t start = 0;
+  std::int32_t label = 0;
+};
+
 struct AssignRow {
   const std::uint8_t* pixels = nullptr;  // the row, width pixels
   std::int32_t* labels = nullptr;        // out: width labels
@@ -84,8 +102,7 @@ int row_sums_scalar(const std::int32_t* labels, const std::uint8_t* pixels, int 
 
 // The runs of equal labels of one row: runs[i] starts at runs[i].start and
 // ends where runs[i + 1] starts (the last one at width). Returns the number
-// of runs; `runs` has room for width runs. (LabelRun is defined in
-// lsgd/segmentation.h.)
+// of runs; `runs` has room for width runs.
 int label_runs(const std::int32_t* labels, int width, LabelRun* runs);
 int label_runs_scalar(const std::int32_t* labels, int width, LabelRun* runs);
 

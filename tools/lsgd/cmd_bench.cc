@@ -21,7 +21,7 @@
 #include "files.h"
 #include "lsgd/descriptor.h"
 #include "lsgd/error.h"
-#include "lsgd/eval/synthetic.h"
+#include "synthetic/synthetic.h"
 #include "lsgd/segmentation.h"
 
 namespace lsgd::cli {

@@ -16,7 +16,7 @@
 #include "files.h"
 #include "lsgd/error.h"
 #include "lsgd/eval/runner.h"
-#include "lsgd/eval/synthetic.h"
+#include "synthetic/synthetic.h"
 #include "lsgd/io/config.h"
 
 namespace lsgd::cli {

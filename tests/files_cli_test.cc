@@ -114,6 +114,21 @@ TEST_F(Files, TwoOutputsAreNeverTheSameFile) {
                  "they are the same file", {});
   EXPECT_FALSE(fs::exists(out));  // nothing written, not even the CSV header
   expect_refused(eval + " --json " + q(out) + " --report " + q(out), "they are the same file", {});
+  // A link to a file not written yet is that file (one link, then a chain).
+  const fs::path link = kTmp / "link.html", chain = kTmp / "chain.csv";
+  fs::remove(link);
+  fs::remove(chain);
+  fs::create_symlink("both.json", link);
+  fs::create_symlink(link, chain);
+  expect_refused(eval + " --json " + q(out) + " --report " + q(link), "they are the same file", {});
+  expect_refused(eval + " --json " + q(out) + " --output " + q(chain), "they are the same file", {});
+  EXPECT_FALSE(fs::exists(out));
+  // ... and a link into a missing folder is an output in a missing folder.
+  const fs::path lost = kTmp / "lost.json";
+  fs::remove(lost);
+  fs::create_symlink(kTmp / "no-folder" / "x.json", lost);
+  expect_refused(eval + " --json " + q(lost),
+                 "folder '" + (kTmp / "no-folder").string() + "' does not exist", {});
 }
 
 // The database is the run's input and output: no other output may be it or

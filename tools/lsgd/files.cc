@@ -27,11 +27,27 @@ bool identify(const std::string& path, FileId& id, struct stat& st) {
   return true;
 }
 
-// The absolute, normalised spelling of a path that may not exist yet.
+// Where writing `path` lands: a symbolic link, also one whose target does
+// not exist yet, is followed to that target (at most 40 links, as the kernel).
+std::string target_of(const std::string& path) {
+  fs::path p = path;
+  for (int links = 0; links < 40; ++links) {
+    std::error_code ec;
+    if (!fs::is_symlink(fs::symlink_status(p, ec))) break;
+    const fs::path to = fs::read_symlink(p, ec);
+    if (ec) break;
+    p = to.is_absolute() ? to : p.parent_path() / to;
+  }
+  return p.string();
+}
+
+// The absolute, normalised spelling of a path that may not exist yet, after
+// its links.
 std::string spelling(const std::string& path) {
   std::error_code ec;
-  const fs::path p = fs::weakly_canonical(fs::absolute(path, ec), ec);
-  return ec ? fs::absolute(path).lexically_normal().string() : p.string();
+  const std::string target = target_of(path);
+  const fs::path p = fs::weakly_canonical(fs::absolute(target, ec), ec);
+  return ec ? fs::absolute(target).lexically_normal().string() : p.string();
 }
 
 std::string folder_of(const std::string& path) {
@@ -150,7 +166,7 @@ void CommandFiles::check() const {
                                      "': they are the same file (nothing was run)"));
       }
     } else {
-      check_folder(out.flag, out.path, folder_of(out.path));
+      check_folder(out.flag, out.path, folder_of(target_of(out.path)));
     }
     const auto [spelled_it, new_spelling] = spelled.emplace(spelling(out.path), &out);
     if (!new_spelling && spelled_it->second->flag != out.flag) {

@@ -14,6 +14,7 @@ packages=(
   libhwy-dev
   libmatio-dev  # MATLAB .mat ground truth (lsgd gt); brings zlib1g-dev
   libsqlite3-dev  # detector databases (lsgd run --database, lsgd_io)
+  libjpeg-dev  # libjpeg-turbo's warnings tell a damaged JPEG (lsgd_io)
   clang libclang-rt-14-dev  # scripts/ci-hardening.sh: libFuzzer targets in fuzz/
 )
 

@@ -306,6 +306,32 @@ TEST_F(SequenceTest, TruncatedJpegIsFormatErrorAtEveryLength) {
   }
 }
 
+// A damaged scan that still ends in an end-of-image marker (a cut file with
+// the marker appended, a block overwritten by a torn write) decodes with only
+// libjpeg warnings: refused with the warning, in every variant.
+TEST_F(SequenceTest, DamagedJpegScanIsFormatErrorWithLibjpegsWarning) {
+  cv::Mat image(120, 160, CV_8UC3);
+  cv::randu(image, 0, 255);
+  cv::GaussianBlur(image, image, cv::Size(5, 5), 2);
+  for (const std::vector<int>& params :
+       {std::vector<int>{}, std::vector<int>{cv::IMWRITE_JPEG_PROGRESSIVE, 1},
+        std::vector<int>{cv::IMWRITE_JPEG_RST_INTERVAL, 4}}) {
+    std::vector<uchar> encoded;
+    ASSERT_TRUE(cv::imencode(".jpg", image, encoded, params));
+    const std::string bytes(encoded.begin(), encoded.end());
+    for (const double f : {0.3, 0.5, 0.9}) {
+      const std::string cut = write(
+          "cut-eoi.jpg", bytes.substr(0, static_cast<std::size_t>(f * bytes.size())) + "\xFF\xD9");
+      expect_error<FormatError>([&] { read_image(cut); }, {cut, "damaged JPEG", "Corrupt JPEG"});
+    }
+    std::string torn = bytes;
+    std::fill(torn.begin() + static_cast<std::ptrdiff_t>(torn.size() / 2),
+              torn.begin() + static_cast<std::ptrdiff_t>(torn.size() / 2 + 512), '\0');
+    const std::string zeroed = write("torn.jpg", torn);
+    expect_error<FormatError>([&] { read_image(zeroed); }, {zeroed, "damaged JPEG"});
+  }
+}
+
 // What cannot be a frame is refused before it is opened: a pipe would block
 // forever, a device never ends, a huge file would be read into memory.
 TEST_F(SequenceTest, SpecialAndHugeFilesAreRefusedBeforeReading) {

@@ -6,6 +6,8 @@
 #include <array>
 #include <cctype>
 #include <cerrno>
+#include <csetjmp>
+#include <cstdio>
 #include <cstring>
 #include <cstddef>
 #include <filesystem>
@@ -13,6 +15,9 @@
 #include <iterator>
 #include <opencv2/core.hpp>
 #include <opencv2/imgcodecs.hpp>
+
+#include <jpeglib.h>
+#include <jerror.h>
 #include <string>
 #include <system_error>
 #include <vector>
@@ -237,6 +242,65 @@ bool jpeg_reaches_eoi(const std::vector<unsigned char>& b) {
   }
 }
 
+// What libjpeg says about a JPEG's data: it decodes damaged scans with only
+// warnings (and fills what it lost), so a file whose entropy-coded data was
+// cut, overwritten or bit-flipped can still decode to a plausible frame.
+// Reads every scan to its DCT coefficients (no inverse DCT, no colour
+// conversion: the entropy decoding that finds the damage, about a third of a
+// full decode) and returns the first warning that means lost data, or "".
+// JPEG has no checksum: a flip that still decodes without a warning cannot be
+// told from a real image (docs/reliability.md).
+struct JpegCheck {
+  jpeg_error_mgr pub;
+  std::jmp_buf jump;
+  std::string damage;  // the first warning that means lost data
+};
+
+void jpeg_fail(j_common_ptr info) {
+  JpegCheck* check = reinterpret_cast<JpegCheck*>(info->err);
+  char text[JMSG_LENGTH_MAX];
+  (*info->err->format_message)(info, text);
+  check->damage = text;
+  std::longjmp(check->jump, 1);
+}
+
+void jpeg_message(j_common_ptr info, int level) {
+  if (level >= 0) return;  // trace messages
+  JpegCheck* check = reinterpret_cast<JpegCheck*>(info->err);
+  const int code = info->err->msg_code;
+  // Extraneous bytes before a marker: the Huffman decoder finished the scan
+  // before its data did, i.e. it lost its place (a flipped bit in the scan
+  // shows up as this far more often than as a bad code).
+  const bool lost = code == JWRN_HIT_MARKER || code == JWRN_HUFF_BAD_CODE ||
+                    code == JWRN_JPEG_EOF || code == JWRN_MUST_RESYNC ||
+                    code == JWRN_ARITH_BAD_CODE || code == JWRN_BOGUS_PROGRESSION ||
+                    code == JWRN_NOT_SEQUENTIAL || code == JWRN_EXTRANEOUS_DATA;
+  if (lost && check->damage.empty()) {
+    char text[JMSG_LENGTH_MAX];
+    (*info->err->format_message)(info, text);
+    check->damage = text;
+  }
+}
+
+std::string jpeg_damage(const std::vector<unsigned char>& bytes) {
+  jpeg_decompress_struct info{};
+  JpegCheck check{};
+  info.err = jpeg_std_error(&check.pub);
+  check.pub.error_exit = jpeg_fail;
+  check.pub.emit_message = jpeg_message;
+  if (setjmp(check.jump) != 0) {
+    jpeg_destroy_decompress(&info);
+    return check.damage;
+  }
+  jpeg_create_decompress(&info);
+  jpeg_mem_src(&info, bytes.data(), static_cast<unsigned long>(bytes.size()));
+  jpeg_read_header(&info, TRUE);
+  jpeg_read_coefficients(&info);
+  jpeg_finish_decompress(&info);
+  jpeg_destroy_decompress(&info);
+  return check.damage;
+}
+
 void check_decoded(const cv::Mat& image, const std::string& path) {
   if (image.depth() != CV_8U) {
     throw FormatError(concat("image '", path, "' has ", depth_name(image.depth()),
@@ -317,6 +381,11 @@ cv::Mat read_image(const std::string& path) {
       !jpeg_reaches_eoi(bytes)) {
     throw FormatError(concat("image '", path, "' is a truncated or damaged JPEG: its ",
                              bytes.size(), " bytes end before the end-of-image marker"));
+  }
+  if (bytes.size() >= 3 && bytes[0] == 0xFF && bytes[1] == 0xD8 && bytes[2] == 0xFF) {
+    if (const std::string damage = jpeg_damage(bytes); !damage.empty()) {
+      throw FormatError(concat("image '", path, "' is a damaged JPEG: ", damage));
+    }
   }
   cv::Mat image;
   try {

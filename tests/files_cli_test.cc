@@ -178,6 +178,33 @@ TEST_F(Files, UnwritableOutputsStopTheCommandFirst) {
   }
 }
 
+// A result that cannot be written whole is an error (exit 1 naming the file),
+// never a success; a device given as an output is written, never replaced.
+TEST_F(Files, AFullDiskFailsTheCommandAndDevicesStayDevices) {
+  const std::string eval = "eval --sequence " + q(dir_ / "sequence.txt") + " --gt " +
+                           q(dir_ / "gt.txt") + " --min-gap 5 --verify none";
+  const std::string gt = q(dir_ / "gt.txt");
+  if (fs::exists("/dev/full")) {
+    for (const std::string& args :
+         {"gt convert " + gt + " --output /dev/full", "gt stats " + gt + " --json /dev/full",
+          eval + " --json /dev/full", eval + " --json /dev/null --report /dev/full",
+          eval + " --json /dev/null --output /dev/full",
+          "sweep --dataset 's=" + (dir_ / "sequence.txt").string() + "," +
+              (dir_ / "gt.txt").string() + ",5' --verify none --markdown /dev/full"}) {
+      const CmdResult r = lsgd(args);
+      EXPECT_EQ(r.code, 1) << args;
+      EXPECT_NE(r.err.find("/dev/full"), std::string::npos) << args << "\n" << r.err;
+    }
+  }
+  const CmdResult r = lsgd(eval + " --json /dev/null --report /dev/null");
+  EXPECT_EQ(r.code, 0) << r.err;
+  EXPECT_EQ(lsgd("gt convert " + gt + " --output /dev/null").code, 0);
+  struct stat st {};
+  ASSERT_EQ(::stat("/dev/null", &st), 0);
+  EXPECT_TRUE(S_ISCHR(st.st_mode)) << "/dev/null was replaced";
+  EXPECT_FALSE(fs::exists("/dev/null.tmp"));
+}
+
 // lsgd demo --output DIR writes frames and files there: a folder it did not
 // write (here a dataset with the same file names) is refused.
 TEST_F(Files, DemoNeverWritesIntoAForeignFolder) {

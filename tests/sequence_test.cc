@@ -138,13 +138,14 @@ TEST_F(SequenceTest, FolderListsImagesInNaturalOrder) {
                            "8.TIFF", "notes.txt", "11.png.bak", "noext"}) {
     write(name, "x");
   }
-  fs::create_directories(dir_ / "9.png");  // a folder with an image name
+  fs::create_directories(dir_ / "9.png");  // a folder with an image name keeps its place
   write("sub/0.png", "x");                 // subfolders are not searched
   const Sequence seq = open_sequence(dir_.string());
   EXPECT_EQ(seq.source, dir_.string());
   std::vector<std::string> expected;
   for (const char* name :
-       {"1.JpEg", "2.PNG", "3.jpg", "4.bmp", "5.pgm", "6.ppm", "7.tif", "8.TIFF", "10.png"}) {
+       {"1.JpEg", "2.PNG", "3.jpg", "4.bmp", "5.pgm", "6.ppm", "7.tif", "8.TIFF", "9.png",
+        "10.png"}) {
     expected.push_back(path(name));
   }
   EXPECT_EQ(seq.images, expected);
@@ -332,6 +333,16 @@ TEST_F(SequenceTest, DamagedJpegScanIsFormatErrorWithLibjpegsWarning) {
   }
 }
 
+// A text file without newlines (or a binary file given as a list) is not
+// read into memory: a line longer than kMaxLineBytes is an error naming the
+// file and the line.
+TEST_F(SequenceTest, OverlongLineInAListIsFormatErrorNamingIt) {
+  const std::string list = write("long.txt", "a.png\n" + std::string(kMaxLineBytes + 1, 'x'));
+  expect_error<FormatError>([&] { read_image_list(list); }, {list, "line 2", "longer than"});
+  const std::string ok = write("ok.txt", "a.png\n" + std::string(4000, 'y') + ".png");
+  EXPECT_EQ(read_image_list(ok).size(), 2u);
+}
+
 // What cannot be a frame is refused before it is opened: a pipe would block
 // forever, a device never ends, a huge file would be read into memory.
 TEST_F(SequenceTest, SpecialAndHugeFilesAreRefusedBeforeReading) {
@@ -363,12 +374,18 @@ TEST_F(SequenceTest, BrokenLinksStayInTheFolderListing) {
   fs::create_symlink(folder / "4.png", folder / "3.png");        // a loop
   fs::create_symlink(folder / "3.png", folder / "4.png");
   ASSERT_TRUE(cv::imwrite((folder / "5.png").string(), random_image(CV_8UC1)));
-  fs::create_directories(folder / "6.png");  // a folder with an image name is not a frame
+  // A folder, or a link to one, with an image name keeps its place too.
+  fs::create_directories(folder / "6.png");
+  fs::create_symlink(folder / "6.png", folder / "7.png");
+  ASSERT_TRUE(cv::imwrite((folder / "8.png").string(), random_image(CV_8UC1)));
   const auto images = list_images(folder.string());
-  ASSERT_EQ(images.size(), 5u);
+  ASSERT_EQ(images.size(), 8u);
   EXPECT_EQ(fs::path(images[4]).filename(), "5.png");
+  EXPECT_EQ(fs::path(images[7]).filename(), "8.png");
   expect_error<IoError>([&] { read_image(images[1]); }, {images[1], "does not exist"});
   expect_error<IoError>([&] { read_image(images[2]); }, {images[2], "cannot be accessed"});
+  expect_error<IoError>([&] { read_image(images[5]); }, {images[5], "is a folder"});
+  expect_error<IoError>([&] { read_image(images[6]); }, {images[6], "is a folder"});
   EXPECT_EQ(read_image(images[4]).cols, random_image(CV_8UC1).cols);
 }
 

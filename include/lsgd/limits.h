@@ -19,5 +19,8 @@ constexpr std::int64_t kMaxSession = kMaxFrameId;
 constexpr std::int64_t kMaxImageFileBytes = std::int64_t{1} << 30;
 // A YAML configuration file: 1 MiB.
 constexpr std::int64_t kMaxConfigBytes = std::int64_t{1} << 20;
+// One line of a text input (list file, ground truth, detections, poses,
+// times): 64 KiB (a path is at most 4,096 bytes on Linux).
+constexpr std::int64_t kMaxLineBytes = std::int64_t{1} << 16;
 
 }  // namespace lsgd

@@ -1,3 +1,4 @@
+#include "lsgd/io/files.h"
 #include "lsgd/eval/detections.h"
 
 #include <algorithm>
@@ -152,7 +153,7 @@ class RecordReader {
 
  private:
   bool read_line(std::string& text) {
-    if (!std::getline(in_, text)) return false;
+    if (!io::read_line(in_, text, path_, number_ + 1)) return false;
     ++number_;
     return true;
   }

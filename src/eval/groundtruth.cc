@@ -1,3 +1,4 @@
+#include "lsgd/io/files.h"
 #include "lsgd/eval/groundtruth.h"
 
 #include <algorithm>
@@ -67,7 +68,7 @@ GroundTruth read_pairs(const std::string& path, std::int64_t frames) {
   io::skip_utf8_bom(in);
   GroundTruth gt(frames);
   std::string line;
-  for (std::int64_t number = 1; std::getline(in, line); ++number) {
+  for (std::int64_t number = 1; io::read_line(in, line, path, number); ++number) {
     const auto first = line.find_first_not_of(" \t\r");
     if (first == std::string::npos || line[first] == '#') continue;
     std::istringstream fields(line);
@@ -89,14 +90,13 @@ GroundTruth read_pairs(const std::string& path, std::int64_t frames) {
 }
 
 void write_pairs(const GroundTruth& gt, const std::string& path) {
-  std::ofstream out(path);
-  if (!out) throw IoError(concat("cannot write ground-truth file '", path, "'"));
+  std::ostringstream out;
   out << "# lsgd pairs: frames=" << gt.frames() << " pairs=" << gt.pairs()
       << "; one line per loop: q m (0-based, q > m)\n";
   for (const std::int64_t q : gt.queries()) {
     for (std::int64_t m : gt.matches(q)) out << q << ' ' << m << '\n';
   }
-  if (!out) throw IoError(concat("error while writing '", path, "'"));
+  io::write_output_file(path, out.str(), "ground-truth file");
 }
 
 }  // namespace lsgd::eval

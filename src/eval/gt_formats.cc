@@ -1,3 +1,4 @@
+#include "lsgd/io/files.h"
 #include "lsgd/eval/gt_formats.h"
 
 #include <matio.h>
@@ -100,7 +101,7 @@ struct TextShape {
 TextShape text_shape(std::istream& in, const std::string& path) {
   TextShape shape;
   std::string line;
-  for (std::int64_t number = 1; std::getline(in, line); ++number) {
+  for (std::int64_t number = 1; io::read_line(in, line, path, number); ++number) {
     const auto fields = fields_of(line);
     if (fields.empty()) continue;
     if (shape.lines == 0) shape.columns = fields.size();
@@ -139,7 +140,7 @@ GroundTruth read_pairs_counted(const std::string& path, std::int64_t frames) {
   std::ifstream in = open_text(path, "ground-truth file");
   long long max_id = -1;
   std::string line;
-  while (std::getline(in, line)) {
+  for (std::int64_t number = 1; io::read_line(in, line, path, number); ++number) {
     const auto fields = fields_of(line);
     long long a = 0, b = 0;
     if (fields.size() == 2 && parse_int(fields[0], a) && parse_int(fields[1], b)) {
@@ -1058,7 +1059,7 @@ std::vector<Pose> read_kitti_poses(const std::string& path) {
   std::vector<Pose> poses;
   std::size_t columns = 0;
   std::string line;
-  for (std::int64_t number = 1; std::getline(in, line); ++number) {
+  for (std::int64_t number = 1; io::read_line(in, line, path, number); ++number) {
     const auto fields = fields_of(line);
     if (fields.empty()) continue;
     if (columns == 0) columns = fields.size();
@@ -1128,7 +1129,7 @@ GroundTruth read_loopinf(const std::string& path, std::int64_t frames) {
   std::ifstream in = open_text(path, "loopinf file");
   std::vector<std::pair<long long, std::int64_t>> loops;  // (loop frame, line number) per frame
   std::string line;
-  for (std::int64_t number = 1; std::getline(in, line); ++number) {
+  for (std::int64_t number = 1; io::read_line(in, line, path, number); ++number) {
     const auto fields = fields_of(line);
     if (fields.empty()) continue;
     long long k = 0, j = 0;

@@ -1,3 +1,4 @@
+#include "lsgd/io/files.h"
 #include "lsgd/eval/report.h"
 
 #include <algorithm>
@@ -752,23 +753,7 @@ std::string render_report(const ReportInput& in) {
 }
 
 void write_report(const ReportInput& input, const std::string& path) {
-  const std::string html = render_report(input);
-  const std::string temp = path + ".tmp";
-  {
-    std::ofstream out(temp, std::ios::binary | std::ios::trunc);
-    if (!out) throw IoError(concat("cannot write report '", path, "': ", std::strerror(errno)));
-    out.write(html.data(), static_cast<std::streamsize>(html.size()));
-    out.close();
-    if (!out) {
-      std::remove(temp.c_str());
-      throw IoError(concat("error while writing report '", path, "'"));
-    }
-  }
-  if (std::rename(temp.c_str(), path.c_str()) != 0) {
-    const std::string reason = std::strerror(errno);
-    std::remove(temp.c_str());
-    throw IoError(concat("cannot write report '", path, "': ", reason));
-  }
+  io::write_output_file(path, render_report(input), "report");
 }
 
 }  // namespace lsgd::eval

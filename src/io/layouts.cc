@@ -1,3 +1,4 @@
+#include "lsgd/io/files.h"
 #include "lsgd/io/layouts.h"
 
 #include <cstdio>
@@ -85,7 +86,7 @@ std::int64_t count_timestamps(const fs::path& times) {
   skip_utf8_bom(in);
   std::int64_t count = 0;
   std::string line;
-  for (std::int64_t number = 1; std::getline(in, line); ++number) {
+  for (std::int64_t number = 1; read_line(in, line, times.string(), number); ++number) {
     if (line.find_first_not_of(" \t\r") == std::string::npos) continue;
     std::istringstream fields(line);
     double t = 0;

@@ -1,3 +1,4 @@
+#include "lsgd/io/files.h"
 #include "lsgd/io/sequence.h"
 
 #include <sys/stat.h>
@@ -117,11 +118,10 @@ std::vector<std::string> list_images(const std::string& path, NameOrder order) {
   if (ec) throw IoError(concat("cannot read folder '", path, "': ", ec.message()));
   std::vector<std::string> names;
   for (const fs::directory_iterator end; it != end; it.increment(ec)) {
-    // Everything with an image name but a folder is a frame: a dangling or
-    // looping link too, so that it is reported when read (and skipped) instead
-    // of vanishing and shifting every later frame id.
-    std::error_code type_ec;
-    if (it->is_directory(type_ec) && !type_ec) continue;
+    // Everything with an image name is a frame: a dangling or looping link,
+    // or a folder (or a link to one) named like an image too, so that it is
+    // reported when read (and skipped) instead of vanishing and shifting
+    // every later frame id.
     if (has_image_extension(it->path())) names.push_back(it->path().filename().string());
     if (static_cast<std::int64_t>(names.size()) > kMaxFrames) {
       throw FormatError(concat("folder '", path, "' holds more than ", kMaxFrames,
@@ -153,7 +153,7 @@ std::vector<std::string> read_image_list(const std::string& path) {
   std::vector<std::string> images;
   std::string line;
   bool first_line = true;
-  while (std::getline(in, line)) {
+  for (std::int64_t number = 1; read_line(in, line, path, number); ++number) {
     if (first_line && line.rfind("\xEF\xBB\xBF", 0) == 0) line.erase(0, 3);  // UTF-8 BOM
     first_line = false;
     const std::string entry = trim(line);

@@ -216,7 +216,13 @@ class SweepOutput {
 
   void markdown(const std::string& text) {
     std::cout << text << std::flush;
-    if (markdown_) *markdown_ << text << std::flush;
+    if (!std::cout) throw IoError("error while writing the table to standard output");
+    if (markdown_) {
+      *markdown_ << text << std::flush;
+      if (!*markdown_) {
+        throw IoError("error while writing Markdown file '" + args_.markdown + "': is the disk full?");
+      }
+    }
   }
 
   void write_row(std::size_t i) {
@@ -247,7 +253,7 @@ class SweepOutput {
           << exact(m.ms_per_frame_p95) << ',' << rows_[i].nodes << ',' << rows_[i].bytes_per_frame
           << ',' << rows_[i].skipped << '\n'
           << std::flush;
-    if (!*csv_) throw IoError("error while writing CSV file '" + args_.csv + "'");
+    if (!*csv_) throw IoError("error while writing CSV file '" + args_.csv + "': is the disk full?");
   }
 
   nlohmann::json row_json(std::size_t i) const {

@@ -12,6 +12,7 @@
 #include <CLI/CLI.hpp>
 
 #include "bench_support.h"
+#include "lsgd/io/files.h"
 #include "lsgd/error.h"
 #include "lsgd/io/config.h"
 
@@ -327,10 +328,7 @@ void print_metrics(const eval::Metrics& m, std::int64_t nodes, std::ostream& out
 }
 
 void write_json(const nlohmann::json& json, const std::string& path) {
-  std::ofstream out(path);
-  if (!out) throw IoError("cannot write JSON file '" + path + "'");
-  out << json.dump(2) << '\n';
-  if (!out) throw IoError("error while writing JSON file '" + path + "'");
+  io::write_output_file(path, json.dump(2) + "\n", "JSON file");
 }
 
 }  // namespace lsgd::cli

@@ -496,6 +496,33 @@ TEST(ReadMatV5, InconsistentSparseIndicesAreFormatErrors) {
                        "column 2 ends before it starts"));
 }
 
+// Found by the issue 15 re-run: a flipped byte in a compressed variable can
+// still inflate to plausible matrices (made-up pairs) unless the stream is
+// read to its end, where zlib checks its Adler-32; and a sparse matrix whose
+// values claim more bytes than the variable holds was read as if intact.
+TEST(ReadMatV5, CompressedStreamsPassTheirCheckAndClaimedValuesExist) {
+  const V5Writer w;
+  const std::string sparse = w.element(5, w.words({3, 2})) + w.element(5, w.words({0, 1, 2, 2, 2})) +
+                             w.element(9, w.doubles({1, 1}));
+  for (const std::string& data : {w.element(9, w.doubles(four_by_four())), sparse}) {
+    const std::uint32_t cls = data == sparse ? 5 : 6;
+    std::string bytes = w.file(w.matrix(cls, {4, 4}, data), true);
+    bytes[bytes.size() - 2] ^= 0x5A;  // inside the Adler-32 at the stream's end
+    const fs::path p = write_file("adler.mat", bytes);
+    const std::string e = message_of<lsgd::FormatError>([&] { lsgd::eval::read_mat(p.string()); });
+    EXPECT_TRUE(contains(e, p.string()) && contains(e, "incorrect data check")) << e;
+  }
+  for (bool z : {false, true}) {
+    // Values of 3 doubles claimed, 2 present: the claim runs past the variable.
+    const std::string claimed = w.element(5, w.words({3, 2})) +
+                                w.element(5, w.words({0, 1, 2, 2, 2})) + w.word(9) + w.word(24) +
+                                w.doubles({1, 1});
+    const fs::path p = write_file("claims.mat", w.file(w.matrix(5, {4, 4}, claimed), z));
+    const std::string e = message_of<lsgd::FormatError>([&] { lsgd::eval::read_mat(p.string()); });
+    EXPECT_TRUE(contains(e, p.string()) && contains(e, "values")) << "z " << z << ": " << e;
+  }
+}
+
 // ---- KITTI poses ------------------------------------------------------------------
 
 std::string pose_line(double x, double y, double z, bool timestamp, double t = 0) {

@@ -296,6 +296,27 @@ class Inflater {
                                z_.msg ? concat(": ", z_.msg) : "", ")"));
     }
   }
+  // Reads the rest of the stream, at most `limit` bytes, to its end, where
+  // zlib checks the stream's Adler-32: a damaged stream that still inflated
+  // to plausible bytes is a FormatError here.
+  void finish(std::uint64_t limit) {
+    char buffer[4096];
+    for (;;) {
+      z_.next_out = reinterpret_cast<Bytef*>(buffer);
+      z_.avail_out = sizeof buffer;
+      const int rc = inflate(&z_, Z_NO_FLUSH);
+      const std::uint64_t produced = sizeof buffer - z_.avail_out;
+      if (rc == Z_STREAM_END && produced <= limit) return;
+      if (rc == Z_OK && produced <= limit && produced > 0) {
+        limit -= produced;
+        continue;
+      }
+      throw FormatError(concat("'", path_, "' is corrupt: compressed data ",
+                               produced > limit ? "holds more than its variable" :
+                               rc == Z_DATA_ERROR ? "fails its check" : "ends early",
+                               " (zlib ", rc, z_.msg ? concat(": ", z_.msg) : "", ")"));
+    }
+  }
   // Reads one sub-element tag: {type, byte count, inline data, 1 if small}.
   std::array<std::uint32_t, 4> tag() {
     std::uint32_t w[2];
@@ -479,6 +500,10 @@ class V5Source {
   }
   // Skips the padding after a (not small) sub-element of `bytes` bytes.
   void skip_padding(std::uint64_t bytes, const char* what) { skip((8 - bytes % 8) % 8, what); }
+  // After the variable was read: a compressed stream must end (and pass its
+  // check) within what the variable declared.
+  virtual void finish() {}
+  std::uint64_t left() const { return left_; }
 
  protected:
   virtual void pull(void* out, std::size_t n) = 0;
@@ -513,6 +538,7 @@ class V5ZlibSource final : public V5Source {
 
  private:
   void pull(void* out, std::size_t n) override { z_.read(out, n); }
+  void finish() override { z_.finish(left()); }
   Inflater z_;
 };
 
@@ -638,6 +664,9 @@ void read_v5_sparse(V5Source& src, const std::string& name, std::size_t n, Groun
         }
       }
     });
+    // Values beyond the entries (a larger nzmax) must be there too: a count
+    // that claims more than the variable holds is damage, not slack.
+    if (!values.small) src.skip((count - nnz) * sizeof(T), "values");
   });
 }
 
@@ -747,6 +776,7 @@ bool read_v5_variable(V5Source& src, const std::string& name, std::size_t n, Gro
     throw FormatError(concat("'", src.path(), "': variable '", name, "' has class ", cls,
                              ", not a numeric, logical or sparse matrix"));
   }
+  src.finish();
   return true;
 }
 

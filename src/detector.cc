@@ -388,11 +388,12 @@ void Detector::restore_frame(int width, int height, const Descriptor& descriptor
   }
   // add_features() below validates too; checked here first so that a bad
   // frame leaves the store unchanged.
-  if (points.size() % 2 != 0 || orb.size() != points.size() / 2 * 32 ||
+  if (points.size() % 2 != 0 || orb.size() != points.size() / 2 * kOrbBytes ||
       !std::all_of(points.begin(), points.end(), [](float v) { return std::isfinite(v); })) {
     internal::throw_invalid("restore_frame: frame ", frame, " has ", points.size(),
                             " keypoint coordinates and ", orb.size(),
-                            " ORB bytes: not 2 finite coordinates and 32 bytes per keypoint");
+                            " ORB bytes: not 2 finite coordinates and ", kOrbBytes,
+                            " bytes per keypoint");
   }
   store_.add(descriptor, node);
   if (options_.verification.geometric) geometric_.add_features(points, orb, width, height);

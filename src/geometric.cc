@@ -16,7 +16,6 @@ namespace lsgd {
 
 namespace {
 
-constexpr int kDescriptorBytes = 32;  // ORB: 256 binary tests
 constexpr int kNoMatch = -1;
 constexpr int kMinMatches = 8;  // the 8-point fundamental matrix needs 8
 // ORB on the (possibly upscaled) image: OpenCV's pyramid (8 levels, x1.2)
@@ -54,7 +53,7 @@ struct NearestTable {
   std::vector<int> col_best, col_dist;            // per candidate
 };
 
-inline void load4(const std::uint8_t* d, std::uint64_t w[4]) { std::memcpy(w, d, 32); }
+inline void load4(const std::uint8_t* d, std::uint64_t w[4]) { std::memcpy(w, d, kOrbBytes); }
 
 // The kernel is written once and compiled twice: with the POPCNT instruction
 // (chosen at run time when the CPU has it: every x86-64 CPU since 2008) and
@@ -62,11 +61,11 @@ inline void load4(const std::uint8_t* d, std::uint64_t w[4]) { std::memcpy(w, d,
 #define LSGD_NEAREST_BODY                                                                   \
   for (int i = 0; i < qn; ++i) {                                                            \
     std::uint64_t a[4];                                                                     \
-    load4(q + static_cast<std::size_t>(i) * kDescriptorBytes, a);                           \
+    load4(q + static_cast<std::size_t>(i) * kOrbBytes, a);                           \
     int b1 = std::numeric_limits<int>::max(), b2 = b1, bi = kNoMatch;                       \
     for (int j = 0; j < cn; ++j) {                                                          \
       std::uint64_t b[4];                                                                   \
-      load4(c + static_cast<std::size_t>(j) * kDescriptorBytes, b);                         \
+      load4(c + static_cast<std::size_t>(j) * kOrbBytes, b);                         \
       const int d = __builtin_popcountll(a[0] ^ b[0]) + __builtin_popcountll(a[1] ^ b[1]) + \
                     __builtin_popcountll(a[2] ^ b[2]) + __builtin_popcountll(a[3] ^ b[3]);  \
       if (d < b1) {                                                                         \
@@ -284,7 +283,7 @@ void GeometricVerifier::add(const GrayImage& image) {
     descriptors.release();
   }
   const int n = descriptors.empty() ? 0 : std::min<int>(descriptors.rows, keypoints.size());
-  if (n > 0 && (descriptors.type() != CV_8UC1 || descriptors.cols != kDescriptorBytes)) {
+  if (n > 0 && (descriptors.type() != CV_8UC1 || descriptors.cols != kOrbBytes)) {
     internal::throw_invalid("GeometricVerifier::add: unexpected ORB descriptor layout");
   }
 
@@ -302,7 +301,7 @@ void GeometricVerifier::add(const GrayImage& image) {
     points_.insert(points_.end(), points.begin(), points.end());
     for (int i = 0; i < n; ++i) {
       const std::uint8_t* row = descriptors.ptr<std::uint8_t>(i);
-      descriptors_.insert(descriptors_.end(), row, row + kDescriptorBytes);
+      descriptors_.insert(descriptors_.end(), row, row + kOrbBytes);
     }
     scales_.push_back(static_cast<float>(scale));
     offsets_.push_back(offsets_.back() + n);
@@ -360,8 +359,8 @@ GeometricCheck GeometricVerifier::verify(std::int64_t query, std::int64_t candid
   std::vector<cv::Point2f> a, b;
   if (qn > 0 && cn > 0) {
     NearestTable t;
-    nearest(descriptors_.data() + qo * kDescriptorBytes, qn,
-            descriptors_.data() + co * kDescriptorBytes, cn, t);
+    nearest(descriptors_.data() + qo * kOrbBytes, qn,
+            descriptors_.data() + co * kOrbBytes, cn, t);
     for (int i = 0; i < qn; ++i) {
       const int j = t.best[i];
       if (j == kNoMatch || t.col_best[j] != i) continue;  // not mutual
@@ -414,8 +413,8 @@ void GeometricVerifier::features(std::int64_t frame, std::vector<float>& points,
   const int n = keypoints(frame);  // throws InvalidArgument for ids not added
   const auto begin = static_cast<std::size_t>(offsets_[static_cast<std::size_t>(frame)]);
   points.assign(points_.begin() + 2 * begin, points_.begin() + 2 * (begin + n));
-  descriptors.assign(descriptors_.begin() + begin * kDescriptorBytes,
-                     descriptors_.begin() + (begin + n) * kDescriptorBytes);
+  descriptors.assign(descriptors_.begin() + begin * kOrbBytes,
+                     descriptors_.begin() + (begin + n) * kOrbBytes);
 }
 
 void GeometricVerifier::add_features(const std::vector<float>& points,
@@ -425,10 +424,10 @@ void GeometricVerifier::add_features(const std::vector<float>& points,
     internal::throw_invalid("GeometricVerifier::add_features: image size ", width, "x", height);
   }
   const std::size_t n = points.size() / 2;
-  if (points.size() != 2 * n || descriptors.size() != n * kDescriptorBytes) {
+  if (points.size() != 2 * n || descriptors.size() != n * kOrbBytes) {
     internal::throw_invalid("GeometricVerifier::add_features: ", points.size(), " coordinates and ",
                             descriptors.size(), " descriptor bytes do not describe whole keypoints (",
-                            "2 coordinates and ", kDescriptorBytes, " bytes each)");
+                            "2 coordinates and ", kOrbBytes, " bytes each)");
   }
   for (const float v : points) {
     if (!std::isfinite(v)) internal::throw_invalid("GeometricVerifier::add_features: coordinate ", v);

@@ -5,6 +5,7 @@
 #include "internal/check.h"
 #include "lsgd/search/dynamic_nodes.h"
 #include "lsgd/search/exhaustive.h"
+#include "lsgd/limits.h"
 
 namespace lsgd {
 
@@ -108,7 +109,7 @@ const OptionTable<SearchOptions>& SearchOptions::fields() {
     };
     OptionTable<S> t = {
         mode,
-        integer_option<S, std::int64_t>("min_gap", &S::min_gap, 0, 1000000000, "frames",
+        integer_option<S, std::int64_t>("min_gap", &S::min_gap, 0, kMaxWindowFrames, "frames",
                                         "temporal window w: frame j is a candidate for query i "
                                         "only if j < i - w"),
         integer_option("top_n", &S::top_n, 1, 1000, "", "best candidates returned"),

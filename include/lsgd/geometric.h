@@ -24,6 +24,10 @@
 
 namespace lsgd {
 
+// Bytes of one ORB descriptor (256 binary tests): what the verifier keeps,
+// and the database stores, per keypoint.
+constexpr int kOrbBytes = 32;
+
 struct GeometricOptions {
   // ORB keypoints kept per frame, [16, 20000].
   int max_features = 500;

@@ -17,6 +17,8 @@ constexpr std::int64_t kMaxFrameId = (std::int64_t{1} << 53) - 1;
 constexpr std::int64_t kMaxSession = kMaxFrameId;
 // An image file: 1 GiB (a 16384 x 16384 BGRA image uncompressed).
 constexpr std::int64_t kMaxImageFileBytes = std::int64_t{1} << 30;
+// A temporal window, tolerance or frame step: 10^9 frames.
+constexpr std::int64_t kMaxWindowFrames = 1'000'000'000;
 // A YAML configuration file: 1 MiB.
 constexpr std::int64_t kMaxConfigBytes = std::int64_t{1} << 20;
 // One line of a text input (list file, ground truth, detections, poses,

@@ -21,6 +21,7 @@
 #include "internal/check.h"
 #include "lsgd/error.h"
 #include "lsgd/io/sequence.h"
+#include "lsgd/limits.h"
 
 namespace lsgd::eval {
 
@@ -921,7 +922,7 @@ std::string to_string(GtFormat format) {
 void GtOptions::check() const {
   internal::check_range<std::int64_t>("ground truth frames", frames, -1, kMaxFrames);
   internal::check_range_open_low("ground truth poses_distance", poses_distance, 0.0, 1e6, "metres");
-  internal::check_range<std::int64_t>("ground truth poses_min_gap", poses_min_gap, 0, 1'000'000'000,
+  internal::check_range<std::int64_t>("ground truth poses_min_gap", poses_min_gap, 0, kMaxWindowFrames,
                                       "frames");
   if (static_cast<int>(format) < 0 || static_cast<int>(format) > 4) {
     internal::throw_invalid("ground truth format = ", static_cast<int>(format), " is invalid");
@@ -1117,7 +1118,7 @@ std::vector<Pose> read_kitti_poses(const std::string& path) {
 GroundTruth groundtruth_from_poses(const std::vector<Pose>& poses, double distance,
                                    std::int64_t min_gap) {
   internal::check_range_open_low("poses distance", distance, 0.0, 1e6, "metres");
-  internal::check_range<std::int64_t>("poses min_gap", min_gap, 0, 1'000'000'000, "frames");
+  internal::check_range<std::int64_t>("poses min_gap", min_gap, 0, kMaxWindowFrames, "frames");
   const auto n = static_cast<std::int64_t>(poses.size());
   GroundTruth gt(n);
   const auto cell_of = [distance](const Pose& p) {
@@ -1196,7 +1197,7 @@ GroundTruth read_loopinf(const std::string& path, std::int64_t frames) {
 // ---- statistics ---------------------------------------------------------------------
 
 GtStats gt_stats(const GroundTruth& gt, std::int64_t min_gap) {
-  internal::check_range<std::int64_t>("min_gap", min_gap, 0, 1'000'000'000, "frames");
+  internal::check_range<std::int64_t>("min_gap", min_gap, 0, kMaxWindowFrames, "frames");
   GtStats s;
   s.frames = gt.frames();
   s.pairs = gt.pairs();

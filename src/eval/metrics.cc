@@ -1,4 +1,5 @@
 #include "lsgd/eval/metrics.h"
+#include "lsgd/limits.h"
 
 #include <algorithm>
 #include <cmath>
@@ -186,8 +187,8 @@ Metrics evaluate(const std::vector<FrameRecord>& records, const GroundTruth& gt,
 }
 
 void ReferenceProtocolOptions::check() const {
-  internal::check_range<std::int64_t>("min_gap", min_gap, 0, 1'000'000'000, "frames");
-  internal::check_range<std::int64_t>("tolerance", tolerance, 1, 1'000'000'000, "frames");
+  internal::check_range<std::int64_t>("min_gap", min_gap, 0, kMaxWindowFrames, "frames");
+  internal::check_range<std::int64_t>("tolerance", tolerance, 1, kMaxWindowFrames, "frames");
 }
 
 Metrics evaluate_lsgddn_reference(const std::vector<FrameRecord>& records, const GroundTruth& gt,

@@ -32,7 +32,6 @@ namespace {
 
 using internal::concat;
 
-constexpr int kOrbBytes = 32;                                             // per keypoint
 constexpr std::size_t kFeatureBytes = 2 * sizeof(float) + kOrbBytes;      // x, y, descriptor
 constexpr std::int64_t kNull = std::numeric_limits<std::int64_t>::min();  // NULL in checksums
 // Appends between checkpoints (Impl::checkpoint): the most frames that live

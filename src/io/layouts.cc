@@ -11,6 +11,7 @@
 
 #include "internal/check.h"
 #include "lsgd/error.h"
+#include "lsgd/limits.h"
 
 namespace lsgd::io {
 namespace {
@@ -264,7 +265,7 @@ std::string to_string(Side side) {
 
 void FrameSelection::check() const {
   internal::check_range<std::int64_t>("first", first, 0, 1'000'000'000'000);
-  internal::check_range<std::int64_t>("every", every, 1, 1'000'000'000);
+  internal::check_range<std::int64_t>("every", every, 1, kMaxWindowFrames);
   if (last != -1 && last < first) {
     internal::throw_invalid("last = ", last, " must be >= first = ", first, " (or -1: the end)");
   }

@@ -22,6 +22,7 @@
 #include "lsgd/eval/runner.h"
 #include "lsgd/io/config.h"
 #include "lsgd/io/layouts.h"
+#include "lsgd/limits.h"
 
 namespace lsgd::cli {
 namespace {
@@ -296,7 +297,7 @@ void register_eval(CLI::App& app) {
   cmd->add_option("--tolerance", args->tolerance,
                   "lsgddn-reference: a report j is correct when |j - g| < T for a ground-truth "
                   "loop g (default 50)")
-      ->check(CLI::Range(std::int64_t{1}, std::int64_t{1'000'000'000}));
+      ->check(CLI::Range(std::int64_t{1}, lsgd::kMaxWindowFrames));
   cmd->add_option("--subsample-match", args->subsample_match,
                   "with --every/--first/--last: exact (frames a, b match iff the kept images "
                   "match; default) or block (iff any frames of their blocks of K match)")

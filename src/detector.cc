@@ -147,7 +147,7 @@ double Detector::similarity(std::int64_t a, std::int64_t b) const {
 
 Result Detector::process_gray(double convert_ms, std::int64_t start_ns) {
   if (store_.size() > 0 && (gray_.width != width_ || gray_.height != height_)) {
-    internal::throw_invalid("frame ", store_.size(), " is ", gray_.width, "x", gray_.height,
+    internal::throw_invalid("the frame is ", gray_.width, "x", gray_.height,
                             " but the first frame was ", width_, "x", height_,
                             ": every frame must have the same size");
   }

@@ -142,6 +142,14 @@ TEST_F(Files, TheDatabaseAndItsCompanionsAreNeverOverwritten) {
   expect_refused(run + " --database " + q(db) + " --output " + q(db), "same file", {db});
   expect_refused(run + " --database " + q(db) + " --output " + q(db.string() + "-wal"),
                  "SQLite wal file", {db});
+  // Through a link, SQLite keeps the companions beside the linked file.
+  const fs::path link = kTmp / "link.db";
+  fs::remove(link);
+  fs::create_symlink(db, link);
+  expect_refused(run + " --database " + q(link) + " --output " + q(db.string() + "-shm"),
+                 "SQLite shm file", {db});
+  expect_refused(run + " --database " + q(link) + " --output " + q(db.string() + "-wal"),
+                 "SQLite wal file", {db});
   // A database about to be created is an output as well.
   const fs::path fresh = kTmp / "new.db";
   fs::remove(fresh);

@@ -42,8 +42,14 @@ std::string describe(const YAML::Node& node) {
       return "a sequence";
     case YAML::NodeType::Map:
       return "a map";
-    case YAML::NodeType::Scalar:
-      return concat(node.Tag() == "!" ? "the quoted string '" : "'", node.Scalar(), "'");
+    case YAML::NodeType::Scalar: {
+      // A long value is shown by its start: a message is one line.
+      const std::string& text = node.Scalar();
+      const std::string shown =
+          text.size() <= 80 ? text : concat(text.substr(0, 60), "...' (", text.size(), " bytes)");
+      return concat(node.Tag() == "!" ? "the quoted string '" : "'", shown,
+                    text.size() <= 80 ? "'" : "");
+    }
     default:
       return "an undefined value";
   }

@@ -258,9 +258,13 @@ FrameRun run_frames(Detector& detector, const eval::FrameSource& source, const s
 }
 
 void throw_no_frame(std::int64_t images, const std::string& first_error) {
+  // The hint fits when the entries were not images at all.
+  const bool not_images = first_error.find("not a decodable image") != std::string::npos ||
+                          first_error.find("does not exist") != std::string::npos ||
+                          first_error.find("not a regular file") != std::string::npos;
   throw Error("no frame was processed: all " + std::to_string(images) +
-              " images were skipped (the first: " + first_error +
-              "); is --sequence a folder of images or a list of their paths?");
+              " images were skipped (the first: " + first_error + ")" +
+              (not_images ? "; is --sequence a folder of images or a list of their paths?" : ""));
 }
 
 

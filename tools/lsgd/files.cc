@@ -88,9 +88,15 @@ void CommandFiles::inputs(const std::vector<std::string>& paths, const std::stri
 void CommandFiles::database(const std::string& path, const std::string& flag, bool also_output) {
   if (path.empty()) return;
   inputs_.push_back({path, flag, "the database given by " + flag});
-  for (const char* suffix : {"-wal", "-shm", "-journal"}) {
-    inputs_.push_back({path + suffix, flag,
-                       concat("the database's SQLite ", suffix + 1, " file (", flag, ")")});
+  // SQLite keeps its companions beside the file a link names (its unix VFS
+  // resolves links), so they are guarded there and beside the link.
+  std::vector<std::string> bases = {path};
+  if (const std::string target = target_of(path); target != path) bases.push_back(target);
+  for (const std::string& base : bases) {
+    for (const char* suffix : {"-wal", "-shm", "-journal"}) {
+      inputs_.push_back({base + suffix, flag,
+                         concat("the database's SQLite ", suffix + 1, " file (", flag, ")")});
+    }
   }
   if (also_output) outputs_.push_back({path, flag, ""});
 }

@@ -185,6 +185,7 @@ void Segmenter::iterate(const GrayImage& image, Segmentation& out, RowSink* sink
   r.lanes = lanes;
   r.inv_distance = inv_ds;
   r.inv_intensity = static_cast<float>(1.0 / options_.intensity_scale);
+  std::vector<internal::RowSegment>& segments = rows_->segments;
   for (int y = 0; y < image.height; ++y) {
     const std::size_t row = static_cast<std::size_t>(y) * image.width;
     const std::uint8_t* p = image.pixels.data() + row;
@@ -192,14 +193,14 @@ void Segmenter::iterate(const GrayImage& image, Segmentation& out, RowSink* sink
     const std::int32_t* const items = row_items_.data() + row_start_[y];
     const int count = static_cast<int>(row_start_[y + 1] - row_start_[y]);
     // Rows covered by the same centres (runs of ~10 rows) share the lists.
-    const bool same = y > 0 && count == static_cast<int>(rows_->segments.size()) &&
+    const bool same = y > 0 && count == static_cast<int>(segments.size()) &&
                       std::equal(items, items + count, row_items_.data() + row_start_[y - 1]);
-    rows_->segments.resize(static_cast<std::size_t>(count));
+    segments.resize(static_cast<std::size_t>(count));
     for (int i = 0; i < count; ++i) {
       const std::int32_t k = items[i];
       const Centre& c = out.centres[k];
       const float dy = static_cast<float>(y) - c.y;
-      internal::RowSegment& seg = rows_->segments[static_cast<std::size_t>(i)];
+      internal::RowSegment& seg = segments[static_cast<std::size_t>(i)];
       seg.x0 = windows_[k].x0;
       seg.x1 = windows_[k].x1;
       seg.cx = c.x;
@@ -209,10 +210,10 @@ void Segmenter::iterate(const GrayImage& image, Segmentation& out, RowSink* sink
       seg.xterm = tables + windows_[k].xterm;
       seg.xterm_first = internal::x_terms_first(seg.x0, lanes);
     }
-    if (!same) internal::assign_lists(rows_->segments.data(), count, image.width, lanes, lists_);
+    if (!same) internal::assign_lists(segments.data(), count, image.width, lanes, lists_);
     r.pixels = p;
     r.labels = labels;
-    r.segments = rows_->segments.data();
+    r.segments = segments.data();
     r.count = count;
     r.lists = lists_.data();
     internal::assign_row(r);

@@ -343,6 +343,38 @@ TEST_F(SequenceTest, OverlongLineInAListIsFormatErrorNamingIt) {
   EXPECT_EQ(read_image_list(ok).size(), 2u);
 }
 
+// read_image decodes JPEGs with libjpeg itself (to see its warnings in the
+// same pass): the pixels must be exactly cv::imdecode's, for colour and gray,
+// optimised, progressive and restart-interval files.
+TEST_F(SequenceTest, JpegDecodingEqualsOpenCvs) {
+  cv::Mat colour(77, 131, CV_8UC3);
+  cv::randu(colour, 0, 255);
+  cv::GaussianBlur(colour, colour, cv::Size(5, 5), 2);
+  cv::Mat gray;
+  cv::cvtColor(colour, gray, cv::COLOR_BGR2GRAY);
+  const std::vector<std::vector<int>> variants = {
+      {},
+      {cv::IMWRITE_JPEG_PROGRESSIVE, 1},
+      {cv::IMWRITE_JPEG_RST_INTERVAL, 4},
+      {cv::IMWRITE_JPEG_CHROMA_QUALITY, 20},
+      {cv::IMWRITE_JPEG_OPTIMIZE, 1},
+      {cv::IMWRITE_JPEG_QUALITY, 30}};
+  int k = 0;
+  for (const cv::Mat& image : {colour, gray}) {
+    for (const std::vector<int>& params : variants) {
+      std::vector<uchar> encoded;
+      ASSERT_TRUE(cv::imencode(".jpg", image, encoded, params));
+      const std::string file = write("eq" + std::to_string(k++) + ".jpg",
+                                     std::string(encoded.begin(), encoded.end()));
+      const cv::Mat ours = read_image(file);
+      const cv::Mat theirs = cv::imdecode(encoded, cv::IMREAD_UNCHANGED);
+      ASSERT_EQ(ours.type(), theirs.type()) << file;
+      ASSERT_EQ(ours.size(), theirs.size()) << file;
+      EXPECT_EQ(cv::norm(ours, theirs, cv::NORM_INF), 0.0) << file;
+    }
+  }
+}
+
 // What cannot be a frame is refused before it is opened: a pipe would block
 // forever, a device never ends, a huge file would be read into memory.
 TEST_F(SequenceTest, SpecialAndHugeFilesAreRefusedBeforeReading) {

@@ -282,7 +282,14 @@ void jpeg_message(j_common_ptr info, int level) {
   }
 }
 
-std::string jpeg_damage(const std::vector<unsigned char>& bytes) {
+// Decodes a JPEG with libjpeg-turbo in one pass, watching its warnings:
+// returns the first one that means lost data ("" when none). A gray or
+// three-component (YCbCr, RGB) JPEG is decoded into `out` (8-bit gray or
+// BGR) as OpenCV's decoder does it (the same library, default DCT and
+// upsampling: tests/sequence_test.cc checks equality with cv::imdecode);
+// other colour spaces (CMYK) are only checked, with `out` left empty, and
+// decoded by OpenCV after.
+std::string decode_jpeg(const std::vector<unsigned char>& bytes, cv::Mat& out) {
   jpeg_decompress_struct info{};
   JpegCheck check{};
   info.err = jpeg_std_error(&check.pub);
@@ -290,14 +297,30 @@ std::string jpeg_damage(const std::vector<unsigned char>& bytes) {
   check.pub.emit_message = jpeg_message;
   if (setjmp(check.jump) != 0) {
     jpeg_destroy_decompress(&info);
+    out.release();
     return check.damage;
   }
   jpeg_create_decompress(&info);
   jpeg_mem_src(&info, bytes.data(), static_cast<unsigned long>(bytes.size()));
   jpeg_read_header(&info, TRUE);
-  jpeg_read_coefficients(&info);
+  const bool gray = info.num_components == 1;
+  const bool colour = info.num_components == 3 &&
+                      (info.jpeg_color_space == JCS_YCbCr || info.jpeg_color_space == JCS_RGB);
+  if (gray || colour) {
+    info.out_color_space = gray ? JCS_GRAYSCALE : JCS_EXT_BGR;
+    jpeg_start_decompress(&info);
+    out.create(static_cast<int>(info.output_height), static_cast<int>(info.output_width),
+               gray ? CV_8UC1 : CV_8UC3);
+    while (info.output_scanline < info.output_height) {
+      JSAMPROW row = out.ptr<JSAMPLE>(static_cast<int>(info.output_scanline));
+      jpeg_read_scanlines(&info, &row, 1);
+    }
+  } else {
+    jpeg_read_coefficients(&info);  // the entropy decoding, where damage shows
+  }
   jpeg_finish_decompress(&info);
   jpeg_destroy_decompress(&info);
+  if (!check.damage.empty()) out.release();
   return check.damage;
 }
 
@@ -377,23 +400,26 @@ Sequence open_sequence(const std::string& path) {
 cv::Mat read_image(const std::string& path) {
   const std::vector<unsigned char> bytes = read_bytes(path);
   if (bytes.empty()) throw FormatError(concat("image '", path, "' is an empty file (0 bytes)"));
-  if (bytes.size() >= 3 && bytes[0] == 0xFF && bytes[1] == 0xD8 && bytes[2] == 0xFF &&
-      !jpeg_reaches_eoi(bytes)) {
+  const bool jpeg = bytes.size() >= 3 && bytes[0] == 0xFF && bytes[1] == 0xD8 && bytes[2] == 0xFF;
+  if (jpeg && !jpeg_reaches_eoi(bytes)) {
     throw FormatError(concat("image '", path, "' is a truncated or damaged JPEG: its ",
                              bytes.size(), " bytes end before the end-of-image marker"));
   }
-  if (bytes.size() >= 3 && bytes[0] == 0xFF && bytes[1] == 0xD8 && bytes[2] == 0xFF) {
-    if (const std::string damage = jpeg_damage(bytes); !damage.empty()) {
+  cv::Mat image;
+  // One decoding pass that also sees libjpeg's warnings (OpenCV drops them).
+  if (jpeg) {
+    if (const std::string damage = decode_jpeg(bytes, image); !damage.empty()) {
       throw FormatError(concat("image '", path, "' is a damaged JPEG: ", damage));
     }
   }
-  cv::Mat image;
-  try {
-    // IMREAD_UNCHANGED keeps gray/BGR/BGRA and the stored depth; it does not
-    // apply EXIF orientation, so frames are used exactly as stored.
-    image = cv::imdecode(bytes, cv::IMREAD_UNCHANGED);
-  } catch (const cv::Exception& e) {
-    throw FormatError(concat("'", path, "' is not a decodable image: ", e.what()));
+  if (image.empty()) {  // not a JPEG, or one libjpeg only checked (CMYK)
+    try {
+      // IMREAD_UNCHANGED keeps gray/BGR/BGRA and the stored depth; it does not
+      // apply EXIF orientation, so frames are used exactly as stored.
+      image = cv::imdecode(bytes, cv::IMREAD_UNCHANGED);
+    } catch (const cv::Exception& e) {
+      throw FormatError(concat("'", path, "' is not a decodable image: ", e.what()));
+    }
   }
   if (image.empty()) {
     throw FormatError(concat("'", path,

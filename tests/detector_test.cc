@@ -157,20 +157,19 @@ TEST(Detector, GrayVersionOfABgrFrameMatchesIt) {
 
 // The extension point: a mode registered from outside the library runs in
 // the detector through CandidateSearch alone.
-// "test-copy": exhaustive search under another name; results must be identical.
+// "test-copy": exhaustive search under another name (it forwards to the
+// built-in one); results must be identical.
 class CopyOfExhaustive final : public CandidateSearch {
  public:
-  explicit CopyOfExhaustive(const SearchOptions& o) : options_(o) {}
+  explicit CopyOfExhaustive(const SearchOptions& o) : inner_(make_exhaustive_search(o)) {}
   const char* name() const override { return "test-copy"; }
-  bool scores_every_frame() const override { return true; }
+  bool scores_every_frame() const override { return inner_->scores_every_frame(); }
   Outcome search(const Query& q, std::vector<Candidate>& out, std::vector<double>& row) override {
-    search_exhaustive(q.store, q.descriptor, q.id, options_, q.metric, scratch_, out, &row);
-    return {};
+    return inner_->search(q, out, row);
   }
 
  private:
-  SearchOptions options_;
-  std::vector<Candidate> scratch_;
+  std::unique_ptr<CandidateSearch> inner_;
 };
 
 // "test-blocks": a shortlist with groups: frame i is in group i / 4, and the

@@ -1,8 +1,12 @@
 #include "lsgd/decision.h"
 
+#include <algorithm>
+#include <cmath>
 #include <cstdlib>
+#include <limits>
 
 #include "internal/check.h"
+#include "internal/clock.h"
 
 namespace lsgd {
 
@@ -42,6 +46,170 @@ void ContinuityState::record(std::int64_t q, std::int64_t frame, int frame_inlie
     const double v = frame_inliers > 0 ? frame_inliers : 0;
     inliers = continued ? 0.8 * inliers + 0.2 * v : v;
   }
+}
+
+LoopDecision::LoopDecision(const DecisionOptions& options) : options_(options) { options_.check(); }
+
+void LoopDecision::record(std::int64_t frame, std::int64_t loop, int inliers, bool continued) {
+  state_.record(frame, loop, inliers, continued);
+  history_.resize(static_cast<std::size_t>(frame));
+  history_.push_back({state_.loop, state_.inliers});
+}
+
+Decision LoopDecision::decide(const DecisionQuery& q, const std::vector<VerificationStage*>& stages) {
+  const DecisionOptions& d = options_;
+  const std::vector<Candidate>& candidates = *q.candidates;
+  Decision out;
+  out.evidence.appearance = std::numeric_limits<double>::quiet_NaN();
+  const std::size_t n = std::min(candidates.size(), static_cast<std::size_t>(q.max_candidates));
+  std::vector<VerificationStage*> confirms;
+  for (VerificationStage* s : stages) {
+    if (s->role() == VerificationStage::Role::kConfirm && s->examines()) confirms.push_back(s);
+  }
+
+  // 1. The gates, in rank order.
+  gated_.assign(n, 0);  // 1: a gate rejected it
+  for (VerificationStage* gate : stages) {
+    if (gate->role() != VerificationStage::Role::kGate || !gate->examines()) continue;
+    for (std::size_t i = 0; i < n; ++i) {
+      if (gated_[i]) continue;
+      const Candidate& c = candidates[i];
+      const StageCheck check = gate->check(q.frame, c);
+      out.verdicts.push_back({c.frame, gate->name(), check.accepted, check.reason, check.ms});
+      gated_[i] = check.accepted ? 0 : 1;
+    }
+  }
+  std::size_t first = 0;  // the best candidate the gates let through
+  while (first < n && gated_[first]) ++first;
+
+  // 2. Confirmation, continuation first when it could score higher.
+  double first_support = -1;  // support of candidates[first] when checked
+  bool first_rejected = false;
+  if (!confirms.empty()) {
+    const bool continuity = q.continuity && d.continuity_bonus > 0;
+    const auto continues = [&](const Candidate& c) {
+      return continuity && state_.continues(q.frame, c.frame, q.tolerance);
+    };
+    // The best-scored frame that continues the previous frame's loop,
+    // outside the temporal window; frame -1 when there is none.
+    Candidate continuation;
+    if (continuity && state_.continues(q.frame, state_.loop + 1, q.tolerance)) {
+      const std::int64_t limit = q.frame - q.min_gap;
+      for (std::int64_t j = state_.loop; j <= std::min(limit - 1, state_.loop + 1 + q.tolerance); ++j) {
+        const double score = q.appearance(j);
+        if (std::isnan(score)) {
+          continuation = {};
+          break;
+        }
+        const Candidate c{j, score};
+        if (continuation.frame < 0 || better(c, continuation)) continuation = c;
+      }
+    }
+    examined_.clear();
+    bool has_continuation = false;
+    for (std::size_t i = 0; i < n; ++i) {
+      if (gated_[i]) continue;
+      const Candidate& c = candidates[i];
+      if (continuation.frame >= 0 && continues(c)) {
+        if (has_continuation) continue;  // the window is examined once
+        has_continuation = true;
+        examined_.push_back(better(continuation, c) ? continuation : c);
+      } else {
+        examined_.push_back(c);
+      }
+    }
+    if (continuation.frame >= 0 && !has_continuation) examined_.push_back(continuation);
+    const auto potential = [&](const Candidate& c) {
+      return c.score + d.geometric_bonus + (continues(c) ? d.continuity_bonus : 0.0);
+    };
+    std::stable_sort(examined_.begin(), examined_.end(),
+                     [&](const Candidate& a, const Candidate& b) { return potential(a) > potential(b); });
+    for (const Candidate& c : examined_) {
+      const double score = potential(c);
+      if (score < d.threshold) break;  // sorted: no later one can reach it either
+      const bool continuing = continues(c);
+      bool accepted = true;
+      double support = -1;
+      for (VerificationStage* stage : confirms) {
+        StageCheck check = stage->check(q.frame, c);
+        if (continuing && check.support >= 0) {
+          const double needed = d.continuity_inliers * state_.inliers;
+          check.accepted = check.support > 0 && check.support >= needed;
+          check.reason += internal::concat("; continues the loop of frame ", q.frame - 1,
+                                           ": needs ", needed, " inliers (", d.continuity_inliers,
+                                           " of its average ", state_.inliers, ")");
+        }
+        out.verdicts.push_back({c.frame, stage->name(), check.accepted, check.reason, check.ms});
+        if (check.support >= 0) support = support < 0 ? check.support : std::min(support, check.support);
+        if (!check.accepted) {
+          accepted = false;
+          break;
+        }
+      }
+      if (first < n && c.frame == candidates[first].frame) {
+        first_support = support;
+        first_rejected = !accepted;
+      }
+      if (accepted) {
+        out.best = {c.frame, score};
+        out.evidence = {c.score, static_cast<int>(support), true, continuing};
+        break;
+      }
+    }
+  }
+
+  // 3. Nothing confirmed: the best candidate through the gates, unconfirmed.
+  if (out.best.frame < 0 && first < n) {
+    const Candidate& c = candidates[first];
+    double score = c.score;
+    // Rejected by a confirming stage, or appearance alone on a degenerate
+    // grid: never a loop.
+    const bool untrusted = confirms.empty() && q.cells < kMinAppearanceCells;
+    if (first_rejected || untrusted) score = std::min(score, std::nextafter(d.threshold, -1.0));
+    out.best = {c.frame, score};
+    out.evidence.appearance = c.score;
+    out.evidence.inliers = static_cast<int>(first_support);
+  }
+  out.loop = out.best.frame >= 0 && out.best.score >= d.threshold;
+  record(q.frame, out.loop ? out.best.frame : -1, out.evidence.inliers,
+         out.loop && out.evidence.continues);
+  return out;
+}
+
+// State, version 1: the loop declared for the frame (int64, -1: none) and its
+// loop's inlier average (float64). A frame without a record (written before
+// the decision kept one) declared no loop.
+void LoopDecision::save_frame(std::int64_t frame, StateWriter& out) const {
+  if (frame < 0 || frame >= static_cast<std::int64_t>(history_.size())) {
+    internal::throw_invalid("decision: frame ", frame, " was not decided (", history_.size(),
+                            " frames)");
+  }
+  out.put_i64(history_[static_cast<std::size_t>(frame)].frame);
+  out.put_f64(history_[static_cast<std::size_t>(frame)].inliers);
+}
+
+void LoopDecision::check_frame(std::int64_t frame, int, int, std::uint32_t version,
+                               StateReader in) const {
+  if (!in.present()) return;
+  check_state_version(in.what(), name(), version, 1);
+  const std::int64_t loop = in.get_i64();
+  const double inliers = in.get_f64();
+  in.finish();
+  if (loop < -1 || loop >= frame || !std::isfinite(inliers) || inliers < 0) {
+    internal::throw_invalid(in.what(), ": loop ", loop, " with ", inliers,
+                            " inliers is not an earlier frame or -1");
+  }
+}
+
+void LoopDecision::restore_frame(std::int64_t frame, int, int, std::uint32_t, StateReader in) {
+  ContinuityState s{frame, -1, 0};
+  if (in.present()) {
+    s.loop = in.get_i64();
+    s.inliers = in.get_f64();
+  }
+  state_ = s;
+  history_.resize(static_cast<std::size_t>(frame));
+  history_.push_back({s.loop, s.inliers});
 }
 
 }  // namespace lsgd

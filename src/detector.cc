@@ -1,26 +1,16 @@
 #include "lsgd/detector.h"
 
 #include <algorithm>
-#include <chrono>
 #include <cmath>
 #include <limits>
 #include <opencv2/core.hpp>
 
 #include "internal/check.h"
+#include "internal/clock.h"
 
 namespace lsgd {
-namespace {
-
-using Clock = std::chrono::steady_clock;
-
-std::int64_t now_ns() {
-  return std::chrono::duration_cast<std::chrono::nanoseconds>(Clock::now().time_since_epoch())
-      .count();
-}
-
-double ms_since(std::int64_t start_ns) { return (now_ns() - start_ns) * 1e-6; }
-
-}  // namespace
+using internal::ms_since;
+using internal::now_ns;
 
 const OptionTable<DetectorOptions>& DetectorOptions::fields() {
   using S = DetectorOptions;
@@ -87,7 +77,7 @@ namespace {
 
 SequenceOptions sequence_options(const VerificationOptions& v) {
   SequenceOptions s;
-  s.enabled = v.temporal;
+  s.enabled = v.has(kTemporalStage);
   s.frames = v.temporal_options.frames;
   s.long_frames = v.temporal_options.long_frames;
   s.tolerance = v.temporal_options.tolerance;
@@ -102,8 +92,17 @@ Detector::Detector(const DetectorOptions& options)
       search_(make_search(options.search)),
       evidence_(sequence_options(options.verification), options.search.min_gap,
                 !search_->scores_every_frame()),
-      temporal_(options.verification.temporal_options),
-      geometric_(options.verification.geometric_options) {}
+      stages_(make_stages(options.verification)),
+      decision_(options.decision) {
+  for (const auto& stage : stages_) stage_list_.push_back(stage.get());
+}
+
+const VerificationStage* Detector::stage(const std::string& name) const {
+  for (const auto& stage : stages_) {
+    if (name == stage->name()) return stage.get();
+  }
+  return nullptr;
+}
 
 // Marks the detector busy for one call that changes it; a second call while
 // one runs (another thread) throws instead of corrupting the state.
@@ -201,7 +200,7 @@ Result Detector::process_gray(double convert_ms, std::int64_t start_ns) {
 void Detector::score_candidates(Result& result) {
   const SimilarityMetric metric = options_.similarity.metric;
   const int top_n = options_.search.top_n;
-  if (options_.verification.temporal) {
+  if (options_.verification.has(kTemporalStage)) {
     if (search_->scores_every_frame()) {
       evidence_.best_places(top_n, result.candidates);
     } else {
@@ -214,151 +213,62 @@ void Detector::score_candidates(Result& result) {
   for (const Candidate& c : raw_) result.candidates.push_back({c.frame, evidence_.single_frame(c.score)});
 }
 
-// Examines the best candidates (decision.h): the agreement gate (temporal,
-// agree > 0) and the geometric check can reject a candidate; a confirmed one
-// earns the bonuses. Geometry is only checked for a candidate that could
-// reach the threshold with them. When the previous frame declared a loop, the
-// best frame that continues it stands in for every candidate that does, and
-// is examined even when no candidate does (dynamic nodes may not hold it; a
-// weak continuation may rank low); the candidate that could earn the highest
-// score goes first. The first confirmed candidate is reported; when none is,
-// the best candidate the agreement gate let through is reported with its
-// appearance score (below the threshold if geometry rejected it), so that the
-// ranking of unconfirmed reports is the temporal stage's own.
+// The verification stages and the loop decision (decision.h).
 void Detector::verify(Result& result) {
-  const VerificationOptions& v = options_.verification;
-  const DecisionOptions& d = options_.decision;
-  const int tolerance = v.temporal_options.tolerance;
-  if (v.geometric) geometric_.add(gray_);
-  result.evidence.appearance = std::numeric_limits<double>::quiet_NaN();
-  const std::size_t n =
-      std::min(result.candidates.size(), static_cast<std::size_t>(v.max_candidates));
-
-  // 1. The agreement gate.
-  gated_.assign(n, 0);  // 1: the gate rejected it
-  if (v.temporal && v.temporal_options.agree > 0) {
-    for (std::size_t i = 0; i < n; ++i) {
-      const Candidate& c = result.candidates[i];
-      const std::int64_t start = now_ns();
-      const auto check = temporal_.agree(result.frame, c);
-      result.verification.push_back(
-          {c.frame, "temporal", check.accepted, check.reason, ms_since(start)});
-      gated_[i] = check.accepted ? 0 : 1;
-    }
-  }
-  std::size_t first = 0;  // the best candidate the gate let through
-  while (first < n && gated_[first]) ++first;
-
-  // 2. Geometric confirmation, continuation first when it could score higher.
-  int first_inliers = -1;   // inliers of result.candidates[first] when checked
-  bool first_rejected = false;
-  if (v.geometric) {
-    const bool continuity = v.temporal && d.continuity_bonus > 0;
-    const auto continues = [&](const Candidate& c) {
-      return continuity && continuity_.continues(result.frame, c.frame, tolerance);
-    };
-    const Candidate continuation =
-        continuity && continuity_.continues(result.frame, continuity_.loop + 1, tolerance)
-            ? continuation_candidate(result.frame)
-            : Candidate{};
-    examined_.clear();
-    bool has_continuation = false;
-    for (std::size_t i = 0; i < n; ++i) {
-      if (gated_[i]) continue;
-      const Candidate& c = result.candidates[i];
-      if (continuation.frame >= 0 && continues(c)) {
-        if (has_continuation) continue;  // the window is examined once
-        has_continuation = true;
-        examined_.push_back(better(continuation, c) ? continuation : c);
-      } else {
-        examined_.push_back(c);
-      }
-    }
-    if (continuation.frame >= 0 && !has_continuation) examined_.push_back(continuation);
-    const auto potential = [&](const Candidate& c) {
-      return c.score + d.geometric_bonus + (continues(c) ? d.continuity_bonus : 0.0);
-    };
-    std::stable_sort(examined_.begin(), examined_.end(),
-                     [&](const Candidate& a, const Candidate& b) { return potential(a) > potential(b); });
-    for (const Candidate& c : examined_) {
-      const double score = potential(c);
-      if (score < d.threshold) break;  // sorted: no later one can reach it either
-      GeometricCheck check = geometric_.verify(result.frame, c.frame);
-      const bool continuing = continues(c);
-      if (continuing) {
-        const double needed = d.continuity_inliers * continuity_.inliers;
-        check.accepted = check.inliers > 0 && check.inliers >= needed;
-        check.reason += internal::concat("; continues the loop of frame ", result.frame - 1,
-                                         ": needs ", needed, " inliers (", d.continuity_inliers,
-                                         " of its average ", continuity_.inliers, ")");
-      }
-      result.verification.push_back({c.frame, "geometric", check.accepted, check.reason, check.ms});
-      if (first < n && c.frame == result.candidates[first].frame) {
-        first_inliers = check.inliers;
-        first_rejected = !check.accepted;
-      }
-      if (check.accepted) {
-        result.best = {c.frame, score};
-        result.evidence = {c.score, check.inliers, true, continuing};
-        break;
-      }
-    }
-  }
-
-  // 3. Nothing confirmed: the best candidate through the gate, unconfirmed.
-  if (result.best.frame < 0 && first < n) {
-    const Candidate& c = result.candidates[first];
-    double score = c.score;
-    // Rejected by geometry, or appearance alone on a degenerate grid: never a loop.
-    const bool untrusted = !v.geometric && descriptor_.grid.cells() < kMinAppearanceCells;
-    if (first_rejected || untrusted) score = std::min(score, std::nextafter(d.threshold, -1.0));
-    result.best = {c.frame, score};
-    result.evidence.appearance = c.score;
-    result.evidence.inliers = first_inliers;
-  }
-  result.loop = result.best.frame >= 0 && result.best.score >= d.threshold;
-  continuity_.record(result.frame, result.loop ? result.best.frame : -1, result.evidence.inliers,
-                     result.loop && result.evidence.continues);
-  if (v.temporal) {
-    temporal_.push(result.frame, result.candidates.empty() ? -1 : result.candidates.front().frame);
-  }
+  const StageQuery query{result.frame, gray_, store_, descriptor_.view()};
+  for (const auto& stage : stages_) stage->begin(query);
+  const bool sequence = options_.verification.has(kTemporalStage);
+  const SimilarityMetric metric = options_.similarity.metric;
+  DecisionQuery q;
+  q.frame = result.frame;
+  q.candidates = &result.candidates;
+  q.max_candidates = options_.verification.max_candidates;
+  q.min_gap = options_.search.min_gap;
+  q.continuity = sequence;
+  q.tolerance = options_.verification.temporal_options.tolerance;
+  q.cells = descriptor_.grid.cells();
+  q.appearance = [&](std::int64_t j) {
+    return sequence ? evidence_.sequence(store_, descriptor_.view(), j, metric)
+                    : evidence_.single_frame(
+                          lsgd::similarity(descriptor_.view(), store_.view(j), metric));
+  };
+  Decision decision = decision_.decide(q, stage_list_);
+  result.loop = decision.loop;
+  result.best = decision.best;
+  result.evidence = decision.evidence;
+  result.verification = std::move(decision.verdicts);
+  for (const auto& stage : stages_) stage->end(result.frame, result.candidates);
 }
 
-// The best-scored frame that continues the previous frame's loop
-// (ContinuityState::continues; outside the temporal window), scored as the
-// candidates are; frame -1 when there is none.
-Candidate Detector::continuation_candidate(std::int64_t query) {
-  const SimilarityMetric metric = options_.similarity.metric;
-  const int tolerance = options_.verification.temporal_options.tolerance;
-  const std::int64_t limit = query - options_.search.min_gap;
-  Candidate best;
-  for (std::int64_t j = continuity_.loop; j <= std::min(limit - 1, continuity_.loop + 1 + tolerance);
-       ++j) {
-    const double score =
-        options_.verification.temporal
-            ? evidence_.sequence(store_, descriptor_.view(), j, metric)
-            : evidence_.single_frame(lsgd::similarity(descriptor_.view(), store_.view(j), metric));
-    if (std::isnan(score)) return {};
-    const Candidate c{j, score};
-    if (best.frame < 0 || better(c, best)) best = c;
+std::vector<Stateful*> Detector::stateful() const {
+  std::vector<Stateful*> out;
+  if (search_->has_state()) out.push_back(search_.get());
+  for (const auto& stage : stages_) {
+    if (stage->has_state()) out.push_back(stage.get());
   }
-  return best;
+  out.push_back(const_cast<LoopDecision*>(&decision_));
+  return out;
+}
+
+std::vector<std::uint8_t> Detector::frame_state(std::int64_t frame) const {
+  if (frame < 0 || frame >= store_.size()) {
+    internal::throw_invalid("frame_state: frame ", frame, " is not stored (", store_.size(),
+                            " frames)");
+  }
+  std::vector<StateRecord> records;
+  StateWriter writer;
+  for (const Stateful* c : stateful()) {
+    writer.clear();
+    c->save_frame(frame, writer);
+    records.push_back({c->name(), c->state_version(), writer.bytes()});
+  }
+  return encode_records(records);
 }
 
 void Detector::restore_frame(int width, int height, const Descriptor& descriptor,
-                             const std::vector<float>& points, const std::vector<std::uint8_t>& orb,
-                             std::int64_t node) {
+                             const std::vector<std::uint8_t>& state) {
   const Exclusive exclusive(busy_, "restore_frame");
   const std::int64_t frame = store_.size();
-  const bool groups = search_->has_groups();
-  const std::int64_t max_node = groups ? store_.groups() : 0;
-  if (node < 0 || node > max_node) {
-    internal::throw_invalid("restore_frame: frame ", frame, " has node ", node, ": expected 0 to ",
-                            max_node,
-                            groups ? " (an earlier node or the next new one)"
-                                   : internal::concat(" (the search mode ", search_->name(),
-                                                      " has no groups)"));
-  }
   if (width <= 0 || height <= 0 || (frame > 0 && (width != width_ || height != height_))) {
     internal::throw_invalid("restore_frame: frame ", frame, " is ", width, "x", height,
                             " but the detector holds ", width_, "x", height_, " frames");
@@ -382,56 +292,45 @@ void Detector::restore_frame(int width, int height, const Descriptor& descriptor
                             " pixels per cell, but ", width, "x", height, " frames have ",
                             static_cast<double>(width) * height / expected.cells());
   }
-  if (!options_.verification.geometric && (!points.empty() || !orb.empty())) {
-    internal::throw_invalid("restore_frame: frame ", frame,
-                            " has ORB features but geometric verification is off");
+  std::vector<StateRecord> records;
+  try {
+    records = decode_records(state.data(), state.size());
+  } catch (const InvalidArgument& e) {
+    internal::throw_invalid("restore_frame: frame ", frame, ": ", e.what());
   }
-  // add_features() below validates too; checked here first so that a bad
-  // frame leaves the store unchanged.
-  if (points.size() % 2 != 0 || orb.size() != points.size() / 2 * kOrbBytes ||
-      !std::all_of(points.begin(), points.end(), [](float v) { return std::isfinite(v); })) {
-    internal::throw_invalid("restore_frame: frame ", frame, " has ", points.size(),
-                            " keypoint coordinates and ", orb.size(),
-                            " ORB bytes: not 2 finite coordinates and ", kOrbBytes,
-                            " bytes per keypoint");
-  }
-  store_.add(descriptor, node);
-  if (options_.verification.geometric) geometric_.add_features(points, orb, width, height);
-  width_ = width;
-  height_ = height;
-}
-
-void Detector::restore_nodes(std::vector<std::vector<std::int64_t>> nodes) {
-  const Exclusive exclusive(busy_, "restore_nodes");
-  search_->restore_groups(std::move(nodes), store_.size());
-}
-
-void Detector::restore_continuity(const ContinuityState& state) {
-  const Exclusive exclusive(busy_, "restore_continuity");
-  if (state.query != store_.size() - 1 || state.loop < -1 || state.loop >= state.query ||
-      !std::isfinite(state.inliers) || state.inliers < 0) {
-    internal::throw_invalid("restore_continuity: frame ", state.query, " with loop ", state.loop,
-                            " and ", state.inliers, " inliers, but ", store_.size(),
-                            " frames are stored");
-  }
-  continuity_ = state;
-}
-
-void Detector::restore_temporal(std::int64_t last_query, std::vector<std::int64_t> places) {
-  const Exclusive exclusive(busy_, "restore_temporal");
-  if (!options_.verification.temporal) {
-    internal::throw_invalid("restore_temporal: temporal verification is off");
-  }
-  if (last_query != store_.size() - 1) {
-    internal::throw_invalid("restore_temporal: last query ", last_query, " but ", store_.size(),
-                            " frames are stored");
-  }
-  for (const std::int64_t place : places) {
-    if (place >= store_.size()) {
-      internal::throw_invalid("restore_temporal: place ", place, " is not stored");
+  const std::vector<Stateful*> components = stateful();
+  for (const StateRecord& r : records) {
+    if (std::none_of(components.begin(), components.end(),
+                     [&](const Stateful* c) { return r.component == c->name(); })) {
+      internal::throw_invalid("restore_frame: frame ", frame, " has state of '", r.component,
+                              "', which these options do not have (search mode ", search_->name(),
+                              ", verification stages ", verification_stages(options_.verification),
+                              ")");
     }
   }
-  temporal_.restore(last_query, std::move(places));
+  // Every component checks its record before any changes, so that a
+  // refused frame leaves the detector unchanged.
+  const auto reader = [&](const Stateful* c) {
+    const std::string what = internal::concat("restore_frame: frame ", frame, "'s ", c->name(),
+                                              " state");
+    for (const StateRecord& r : records) {
+      if (r.component == c->name()) return StateReader(r.bytes.data(), r.bytes.size(), what);
+    }
+    return StateReader(what);
+  };
+  const auto version = [&](const Stateful* c) {
+    for (const StateRecord& r : records) {
+      if (r.component == c->name()) return r.version;
+    }
+    return c->state_version();
+  };
+  for (const Stateful* c : components) c->check_frame(frame, width, height, version(c), reader(c));
+  for (Stateful* c : components) c->restore_frame(frame, width, height, version(c), reader(c));
+  // The search's group places the frame beside the group's other frames.
+  const std::int64_t group = search_->has_groups() ? search_->group_of(frame) : 0;
+  store_.add(descriptor, std::clamp<std::int64_t>(group, 0, store_.groups()));
+  width_ = width;
+  height_ = height;
 }
 
 }  // namespace lsgd

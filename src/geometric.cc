@@ -313,19 +313,23 @@ void GeometricVerifier::add(const GrayImage& image) {
   }
 }
 
-double GeometricVerifier::working_scale(int width, int height) const {
+double GeometricOptions::working_scale(int width, int height) const {
   const int shorter = std::min(width, height);
   const int longer = std::max(width, height);
   if (shorter <= 0) return 1;
   double scale = 1;
-  if (shorter < options_.min_side) {
-    scale = static_cast<double>(options_.min_side) / shorter;
-  } else if (options_.max_side > 0 && shorter > options_.max_side) {
-    scale = static_cast<double>(options_.max_side) / shorter;
+  if (shorter < min_side) {
+    scale = static_cast<double>(min_side) / shorter;
+  } else if (max_side > 0 && shorter > max_side) {
+    scale = static_cast<double>(max_side) / shorter;
   }
   // Cap the longer side so that a thin strip is not blown up to gigabytes.
   if (scale > 1) scale = std::max(1.0, std::min(scale, static_cast<double>(kMaxImageSide) / longer));
   return scale;
+}
+
+double GeometricVerifier::working_scale(int width, int height) const {
+  return options_.working_scale(width, height);
 }
 
 std::int64_t GeometricVerifier::size() const {

@@ -5,6 +5,7 @@
 #include <sstream>
 
 #include "internal/check.h"
+#include "lsgd/stage.h"
 
 namespace lsgd {
 
@@ -39,9 +40,12 @@ const OptionTable<VerificationOptions>& VerificationOptions::fields() {
     OptionField<S> stages;
     stages.name = "stages";
     stages.kind = OptionKind::kChoice;
-    stages.doc = "verification stages after the search (either order)";
+    stages.list = true;
+    stages.doc = "verification stages after the search (any order; lsgd/stage.h)";
     stages.choices = [] {
-      return std::vector<std::string>{"none", "temporal", "geometric", "temporal,geometric"};
+      std::vector<std::string> names;
+      for (const StageType& t : verification_stage_types()) names.emplace_back(t.name);
+      return names;
     };
     stages.text = [](const S& s) { return verification_stages(s); };
     stages.set_choice = [](S& s, const std::string& text) { parse_verification_stages(text, s); };
@@ -50,112 +54,73 @@ const OptionTable<VerificationOptions>& VerificationOptions::fields() {
         integer_option("max_candidates", &S::max_candidates, 1, 100, "",
                        "candidates examined best first; the first no stage rejects is reported"),
     };
-    t.back().applies = [](const S& s) { return s.temporal || s.geometric; };
+    t.back().applies = [](const S& s) { return !s.stages.empty(); };
     t.back().when = "with a stage";
     nest<S, TemporalOptions>(t, "temporal", &S::temporal_options, TemporalOptions::fields(),
-                             [](const S& s) { return s.temporal; }, "with the temporal stage");
+                             [](const S& s) { return s.has(kTemporalStage); }, "with the temporal stage");
     nest<S, GeometricOptions>(t, "geometric", &S::geometric_options, GeometricOptions::fields(),
-                              [](const S& s) { return s.geometric; }, "with the geometric stage");
+                              [](const S& s) { return s.has(kGeometricStage); }, "with the geometric stage");
     return t;
   }();
   return table;
 }
 
+bool VerificationOptions::has(const std::string& stage) const {
+  return std::find(stages.begin(), stages.end(), stage) != stages.end();
+}
+
 void VerificationOptions::check() const {
   check_options(fields(), *this, "verification");
+  for (std::size_t i = 0; i < stages.size(); ++i) {
+    check_verification_stage(stages[i]);
+    if (std::find(stages.begin(), stages.begin() + static_cast<std::ptrdiff_t>(i), stages[i]) !=
+        stages.begin() + static_cast<std::ptrdiff_t>(i)) {
+      internal::throw_invalid("verification.stages lists '", stages[i], "' twice");
+    }
+  }
   temporal_options.check();
   geometric_options.check();
 }
 
 void parse_verification_stages(const std::string& text, VerificationOptions& options) {
-  bool temporal = false, geometric = false;
+  std::vector<std::string> named;
   if (text != "none") {
-    std::istringstream parts(text);
-    std::string stage;
-    while (std::getline(parts, stage, ',')) {
-      if (stage == "temporal") {
-        temporal = true;
-      } else if (stage == "geometric") {
-        geometric = true;
-      } else {
-        internal::throw_invalid("verification stage '", stage, "' in '", text,
-                                "' is unknown: expected none, temporal, geometric or "
-                                "temporal,geometric");
-      }
+    if (text.empty() || text.back() == ',') {
+      internal::throw_invalid("verification stages '", text, "': expected none or a "
+                              "comma-separated list of ", verification_stage_names());
     }
-    if (!temporal && !geometric) {
-      internal::throw_invalid("verification '", text,
-                              "' names no stage: use none, temporal, "
-                              "geometric or temporal,geometric");
+    std::istringstream parts(text);
+    for (std::string stage; std::getline(parts, stage, ',');) {
+      if (stage.empty() || stage == "none") {
+        internal::throw_invalid("verification stages '", text, "': expected none or a "
+                                "comma-separated list of ", verification_stage_names());
+      }
+      try {
+        check_verification_stage(stage);
+      } catch (const InvalidArgument& e) {
+        internal::throw_invalid(e.what(), " (in '", text, "')");
+      }
+      if (std::find(named.begin(), named.end(), stage) != named.end()) {
+        internal::throw_invalid("verification stages '", text, "' name '", stage, "' twice");
+      }
+      named.push_back(stage);
+    }
+    if (named.empty()) {
+      internal::throw_invalid("verification stages '", text, "' name no stage: use none or ",
+                              verification_stage_names());
     }
   }
-  options.temporal = temporal;
-  options.geometric = geometric;
+  // Registration order: the same stages read the same whatever the order.
+  options.stages.clear();
+  for (const StageType& t : verification_stage_types()) {
+    if (std::find(named.begin(), named.end(), t.name) != named.end()) options.stages.emplace_back(t.name);
+  }
 }
 
 std::string verification_stages(const VerificationOptions& options) {
-  if (options.temporal && options.geometric) return "temporal,geometric";
-  if (options.temporal) return "temporal";
-  if (options.geometric) return "geometric";
-  return "none";
-}
-
-TemporalVerifier::TemporalVerifier(const TemporalOptions& options) : options_(options) {
-  options_.check();
-}
-
-TemporalVerifier::Check TemporalVerifier::agree(std::int64_t query,
-                                                const Candidate& candidate) const {
-  Check check;
-  const int k = options_.agree;
-  if (k == 0) {
-    check.accepted = true;
-    check.reason = internal::concat("sequence score ", candidate.score, " (no agreement gate)");
-    return check;
-  }
-  if (last_query_ != query - 1 || places_.size() < static_cast<std::size_t>(k)) {
-    check.reason = internal::concat("needs ", k, " previous queries");
-    return check;
-  }
-  const std::int64_t slack = options_.tolerance + 1;
-  for (int t = 1; t <= k; ++t) {
-    const std::int64_t place = places_[places_.size() - t];
-    const std::int64_t expected = candidate.frame - t;
-    if (place < 0 || std::llabs(place - expected) > slack) {
-      check.reason = internal::concat("query ", query - t, " was placed at ", place,
-                                      ", not within ", slack, " of frame ", expected);
-      return check;
-    }
-  }
-  check.accepted = true;
-  check.reason = internal::concat(k, " previous queries agree; sequence score ", candidate.score);
-  return check;
-}
-
-void TemporalVerifier::push(std::int64_t query, std::int64_t place) {
-  if (query != last_query_ + 1) places_.clear();  // a gap: earlier places no longer adjacent
-  last_query_ = query;
-  places_.push_back(place);
-  while (places_.size() > static_cast<std::size_t>(std::max(options_.agree, 1))) {
-    places_.pop_front();
-  }
-}
-
-void TemporalVerifier::restore(std::int64_t last_query, std::vector<std::int64_t> places) {
-  const std::size_t capacity = static_cast<std::size_t>(std::max(options_.agree, 1));
-  if (places.size() > capacity) {
-    internal::throw_invalid("TemporalVerifier::restore: ", places.size(), " places but at most ",
-                            capacity, " are kept (agree = ", options_.agree, ")");
-  }
-  if (last_query < -1 || last_query + 1 < static_cast<std::int64_t>(places.size())) {
-    internal::throw_invalid("TemporalVerifier::restore: last query ", last_query, " cannot have ",
-                            places.size(), " places");
-  }
-  for (const std::int64_t place : places) {
-    if (place < -1) internal::throw_invalid("TemporalVerifier::restore: place ", place, " < -1");
-  }
-  places_.assign(places.begin(), places.end());
-  last_query_ = last_query;
+  std::string text;
+  for (const std::string& stage : options.stages) text += (text.empty() ? "" : ",") + stage;
+  return text.empty() ? "none" : text;
 }
 
 }  // namespace lsgd

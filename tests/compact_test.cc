@@ -240,99 +240,108 @@ TEST(CompactDetector, TenKilobytesPerKittiFrameAndResultsCloseToExact) {
   EXPECT_EQ(exact.bytes_per_frame(), cells * (kBins * 2 + 4));
 }
 
+// A frame's state blob with the given records (state.h).
+std::vector<std::uint8_t> records(std::vector<StateRecord> r) { return encode_records(r); }
+
+std::vector<std::uint8_t> node_state(std::int64_t node) {
+  StateWriter w;
+  w.put_i64(node);
+  return records({{kNodesSearch, 1, w.bytes()}});
+}
+
 TEST(CompactDetector, RestoreFramePlacesFramesByNode) {
   DetectorOptions o;
   o.segmentation.superpixel_size = 16;
   o.descriptor.storage = HistogramStorage::kCompact;
+  o.verification.stages = {};
   const std::vector<Descriptor> exact = street(1, 1);
   const Descriptor c = compacted(exact[0]);
   {
-    Detector d(o);  // exhaustive: every frame in group 0
-    const std::string m =
-        message_of<InvalidArgument>([&] { d.restore_frame(160, 120, c, {}, {}, 1); });
-    EXPECT_NE(m.find("node 1: expected 0 to 0 (the search mode exhaustive has no groups)"), std::string::npos)
+    Detector d(o);  // exhaustive: no groups, no search state
+    const std::string m = message_of<InvalidArgument>([&] { d.restore_frame(160, 120, c, node_state(1)); });
+    EXPECT_NE(m.find("frame 0 has state of 'nodes', which these options do not have (search mode "
+                     "exhaustive, verification stages none)"),
+              std::string::npos)
         << m;
     EXPECT_EQ(d.size(), 0);
   }
   o.search.mode = kNodesSearch;
   Detector d(o);
   for (const std::int64_t bad : {-1, 1}) {
-    const std::string m =
-        message_of<InvalidArgument>([&] { d.restore_frame(160, 120, c, {}, {}, bad); });
-    EXPECT_NE(m.find("(an earlier node or the next new one)"), std::string::npos) << m;
+    const std::string m = message_of<InvalidArgument>([&] { d.restore_frame(160, 120, c, node_state(bad)); });
+    EXPECT_NE(m.find("frame 0's nodes state: node " + std::to_string(bad) +
+                     " does not exist yet (0 nodes before this frame)"),
+              std::string::npos)
+        << m;
   }
+  // A nodes detector needs each frame's node.
+  const std::string m = message_of<InvalidArgument>([&] { d.restore_frame(160, 120, c, records({})); });
+  EXPECT_NE(m.find("frame 0's nodes state: there is no record"), std::string::npos) << m;
   EXPECT_EQ(d.size(), 0);
+  EXPECT_EQ(d.nodes(), 0);
   // A group's chunks hold 1, 1, 1, 1, 2, 3, ... frames (half what it has), so
   // node 0's fifth and sixth frames (ids 5 and 7) share a chunk, side by side.
   for (const std::int64_t node : {0, 0, 0, 0, 1, 0, 2, 0, 1}) {
-    d.restore_frame(160, 120, c, {}, {}, node);
+    d.restore_frame(160, 120, c, node_state(node));
   }
   EXPECT_EQ(d.store().groups(), 3);
+  EXPECT_EQ(d.nodes(), 3);
+  EXPECT_EQ(d.search().members(1), (std::vector<std::int64_t>{4, 8}));
   const std::size_t stride = static_cast<std::size_t>(c.grid.cells()) * kCompactBins;
   EXPECT_EQ(d.store().view(7).compact, d.store().view(5).compact + stride);
-  EXPECT_THROW(d.restore_frame(160, 120, c, {}, {}, 4), InvalidArgument);
+  EXPECT_THROW(d.restore_frame(160, 120, c, node_state(4)), InvalidArgument);
   EXPECT_EQ(d.size(), 9);
-}
-
-// restore_frame's node is only a placement: frames restored without it (all
-// in group 0) and nodes restored afterwards must still run.
-// Node membership that process() could not have built is refused, leaving
-// the detector unchanged: a frame in no node or in two, a node starting
-// before the one created earlier, a frame not stored. A node that does not
-// exist is an InvalidArgument, not std::out_of_range.
-TEST(CompactDetector, RestoredNodesMustCoverEveryFrameOnce) {
-  DetectorOptions o;
-  o.segmentation.superpixel_size = 16;
-  o.descriptor.storage = HistogramStorage::kCompact;
-  o.search.mode = kNodesSearch;
-  const std::vector<Descriptor> exact = street(8, 40);
-  Detector d(o);
-  for (const Descriptor& e : exact) d.restore_frame(160, 120, compacted(e));
-  const auto refused = [&](std::vector<std::vector<std::int64_t>> nodes) {
-    return message_of<InvalidArgument>([&] { d.restore_nodes(std::move(nodes)); });
-  };
-  EXPECT_NE(refused({{0, 2, 4}, {1, 3}, {5}, {6}}).find("frame 7 is in no node"),
-            std::string::npos);
-  EXPECT_NE(refused({{0, 2, 4}, {1, 3, 4}, {5}, {6, 7}}).find("frame 4 is in node 0 and in node 1"),
-            std::string::npos);
-  EXPECT_NE(refused({{1, 3}, {0, 2, 4}, {5}, {6, 7}}).find("node 1 starts at frame 0"),
-            std::string::npos);
-  EXPECT_NE(refused({{0, 1, 2, 3, 4, 5, 6, 7, 8}}).find("frame 8 of node 0 is not stored"),
-            std::string::npos);
-  EXPECT_EQ(d.nodes(), 0);
-  EXPECT_NE(message_of<InvalidArgument>([&] { d.search().members(5); })
-                .find("node 5 does not exist (0 nodes)"),
-            std::string::npos);
-  d.restore_nodes({{0, 2, 4}, {1, 3}, {5}, {6, 7}});
-  EXPECT_EQ(d.search().members(1), (std::vector<std::int64_t>{1, 3}));
-  EXPECT_THROW(d.search().members(-1), InvalidArgument);
-}
-
-TEST(CompactDetector, NodesRestoredWithoutPlacementStillRun) {
-  DetectorOptions o;
-  o.segmentation.superpixel_size = 16;
-  o.descriptor.storage = HistogramStorage::kCompact;
-  o.search.mode = kNodesSearch;
-  o.search.min_gap = 2;
-  o.search.nodes.alpha = 10;
-  const std::vector<Descriptor> exact = street(8, 40);
-  Detector d(o);
-  for (const Descriptor& e : exact) d.restore_frame(160, 120, compacted(e));
-  d.restore_nodes({{0, 2, 4}, {1, 3}, {5}, {6, 7}});
-  EXPECT_EQ(d.store().groups(), 1);
-  eval::SyntheticOptions wo;
-  wo.width = 160;
-  wo.height = 120;
-  const eval::SyntheticWorld world(wo);
-  for (int i = 0; i < 3; ++i) {
-    // alpha = 10: no node passes the first-frame test, so each query creates
-    // node 4 + i, which the store has no group for.
-    const Result r = d.process(world.render(40 * i));
-    EXPECT_TRUE(r.node_created);
-    EXPECT_EQ(r.node, 4 + i);
-    EXPECT_LE(d.store().groups(), d.nodes());
+  for (std::int64_t f = 0; f < 9; ++f) {
+    // Saved as restored: the node, then the decision (no loop).
+    StateWriter w;
+    w.put_i64(d.search().group_of(f));
+    StateWriter loop;
+    loop.put_i64(-1);
+    loop.put_f64(0);
+    EXPECT_EQ(d.frame_state(f), records({{kNodesSearch, 1, w.bytes()}, {"decision", 1, loop.bytes()}}));
   }
-  EXPECT_EQ(d.size(), 11);
+  EXPECT_THROW(d.frame_state(9), InvalidArgument);
+  EXPECT_THROW(d.search().members(3), InvalidArgument);
+}
+
+// A damaged or foreign state blob is refused, detector unchanged: cut,
+// trailing bytes, a repeated record, a newer version, a record too short.
+TEST(CompactDetector, RestoreFrameRefusesDamagedState) {
+  DetectorOptions o;
+  o.segmentation.superpixel_size = 16;
+  o.descriptor.storage = HistogramStorage::kCompact;
+  o.search.mode = kNodesSearch;
+  o.verification.stages = {kTemporalStage};
+  const Descriptor c = compacted(street(1, 1)[0]);
+  Detector d(o);
+  const std::vector<std::uint8_t> good = node_state(0);
+  const auto refused = [&](const std::vector<std::uint8_t>& state) {
+    return message_of<InvalidArgument>([&] { d.restore_frame(160, 120, c, state); });
+  };
+  std::vector<std::uint8_t> cut(good.begin(), good.end() - 1);
+  EXPECT_NE(refused(cut).find("is cut in a record"), std::string::npos) << refused(cut);
+  std::vector<std::uint8_t> longer = good;
+  longer.push_back(0);
+  EXPECT_NE(refused(longer).find("1 bytes after its 1 records"), std::string::npos);
+  StateWriter w;
+  w.put_i64(0);
+  EXPECT_NE(refused(records({{kNodesSearch, 1, w.bytes()}, {kNodesSearch, 1, w.bytes()}}))
+                .find("two records of 'nodes'"),
+            std::string::npos);
+  EXPECT_NE(refused(records({{kNodesSearch, 2, w.bytes()}}))
+                .find("version 2 of nodes's state is not one this lsgd reads (1 to 1)"),
+            std::string::npos);
+  EXPECT_NE(refused(records({{kNodesSearch, 1, {1, 2, 3}}})).find("too few for its content"),
+            std::string::npos);
+  StateWriter place;
+  place.put_i64(0);  // not an earlier frame
+  EXPECT_NE(refused(records({{kNodesSearch, 1, w.bytes()}, {kTemporalStage, 1, place.bytes()}}))
+                .find("place 0 is not an earlier frame or -1"),
+            std::string::npos);
+  EXPECT_EQ(d.size(), 0);
+  EXPECT_EQ(d.nodes(), 0);
+  d.restore_frame(160, 120, c, good);  // the temporal place may be absent (older databases)
+  EXPECT_EQ(d.size(), 1);
 }
 
 TEST(CompactDetector, RestoreFrameChecksStorageAndSize) {
@@ -340,16 +349,21 @@ TEST(CompactDetector, RestoreFrameChecksStorageAndSize) {
   o.segmentation.superpixel_size = 16;
   o.descriptor.storage = HistogramStorage::kCompact;
   Detector d(o);
+  // The default stages: the geometric stage needs the frame's features (none here).
+  const std::vector<std::uint8_t> state = records({{kGeometricStage, 1, {}}});
   const std::vector<Descriptor> exact = street(1, 1);
-  const std::string m = message_of<InvalidArgument>([&] { d.restore_frame(160, 120, exact[0]); });
+  const std::string m = message_of<InvalidArgument>([&] { d.restore_frame(160, 120, exact[0], state); });
   EXPECT_NE(m.find("descriptor.storage is compact"), std::string::npos) << m;
   Descriptor c = compacted(exact[0]);
   c.cell_pixels *= 2;
   EXPECT_NE(
-      message_of<InvalidArgument>([&] { d.restore_frame(160, 120, c); }).find("pixels per cell"),
+      message_of<InvalidArgument>([&] { d.restore_frame(160, 120, c, state); }).find("pixels per cell"),
       std::string::npos);
+  EXPECT_NE(message_of<InvalidArgument>([&] { d.restore_frame(160, 120, compacted(exact[0]), records({})); })
+                .find("frame 0's geometric state: there is no record of its features"),
+            std::string::npos);
   EXPECT_EQ(d.size(), 0);
-  EXPECT_NO_THROW(d.restore_frame(160, 120, compacted(exact[0])));
+  EXPECT_NO_THROW(d.restore_frame(160, 120, compacted(exact[0]), state));
   EXPECT_EQ(d.size(), 1);
 }
 

@@ -34,8 +34,7 @@ void expect_equal(const DetectorOptions& a, const DetectorOptions& b) {
   EXPECT_EQ(a.search.nodes.threshold_0, b.search.nodes.threshold_0);
   EXPECT_EQ(a.search.nodes.alpha, b.search.nodes.alpha);
   EXPECT_EQ(a.search.nodes.beta, b.search.nodes.beta);
-  EXPECT_EQ(a.verification.temporal, b.verification.temporal);
-  EXPECT_EQ(a.verification.geometric, b.verification.geometric);
+  EXPECT_EQ(a.verification.stages, b.verification.stages);
   EXPECT_EQ(a.verification.max_candidates, b.verification.max_candidates);
   EXPECT_EQ(a.verification.temporal_options.frames, b.verification.temporal_options.frames);
   EXPECT_EQ(a.verification.temporal_options.tolerance, b.verification.temporal_options.tolerance);
@@ -71,8 +70,7 @@ DetectorOptions custom_options() {
   o.search.nodes.threshold_0 = 0.123456789012345678;
   o.search.nodes.alpha = 2.0 / 7.0;
   o.search.nodes.beta = 1.1;
-  o.verification.temporal = true;
-  o.verification.geometric = false;
+  o.verification.stages = {kTemporalStage};
   o.verification.max_candidates = 5;
   o.verification.temporal_options = {11, 4, 2, 30};
   o.verification.geometric_options.max_features = 321;
@@ -225,7 +223,7 @@ TEST(LoadConfig, ShippedConfigsLoad) {
   const std::string dir = std::string(LSGD_SOURCE_DIR) + "/configs/";
   const DetectorOptions paper = load_config(dir + "paper.yaml");
   EXPECT_EQ(paper.segmentation.iterations, 10);
-  EXPECT_FALSE(paper.verification.temporal);
+  EXPECT_FALSE(paper.verification.has(kTemporalStage));
   const DetectorOptions reference = load_config(dir + "reference-code.yaml");
   EXPECT_EQ(reference.segmentation.superpixel_size, 50);
   const DetectorOptions compact = load_config(dir + "compact.yaml");
@@ -324,8 +322,7 @@ TEST(ParseConfig, VerificationSection) {
       "verification:\n  stages: temporal,geometric\n  temporal: {frames: 5}\n"
       "  geometric: {min_inliers: 12}\n",
       kSource);
-  EXPECT_TRUE(o.verification.temporal);
-  EXPECT_TRUE(o.verification.geometric);
+  EXPECT_EQ(o.verification.stages, (std::vector<std::string>{kTemporalStage, kGeometricStage}));
   EXPECT_EQ(o.verification.temporal_options.frames, 5);
   EXPECT_EQ(o.verification.geometric_options.min_inliers, 12);
   EXPECT_THROW(parse_config("verification:\n  stages: sift\n", kSource), lsgd::FormatError);
@@ -434,7 +431,7 @@ TEST(OptionTables, SetOptionNamesUnknownKeysAndWrongValues) {
 // options only when the stored options use the stage.
 TEST(OptionTables, ResumableAndAppliesSayWhatAResumeCompares) {
   DetectorOptions exhaustive;
-  exhaustive.verification.temporal = false;
+  exhaustive.verification.stages = {kGeometricStage};
   for (const OptionField<DetectorOptions>& f : DetectorOptions::fields()) {
     SCOPED_TRACE(f.name);
     EXPECT_EQ(f.resumable, f.name.rfind("decision.", 0) == 0);

@@ -123,19 +123,12 @@ void expect_same_state(const Detector& a, const Detector& b) {
   for (std::int64_t k = 0; k < a.nodes(); ++k) {
     EXPECT_EQ(a.search().members(k), b.search().members(k));
   }
-  EXPECT_EQ(a.temporal_verifier().last_query(), b.temporal_verifier().last_query());
-  EXPECT_EQ(a.temporal_verifier().places(), b.temporal_verifier().places());
   EXPECT_EQ(a.continuity().query, b.continuity().query);
   EXPECT_EQ(a.continuity().loop, b.continuity().loop);
   EXPECT_EQ(a.continuity().inliers, b.continuity().inliers);
-  ASSERT_EQ(a.geometric_verifier().size(), b.geometric_verifier().size());
-  std::vector<float> pa, pb;
-  std::vector<std::uint8_t> da, db;
-  for (std::int64_t f = 0; f < a.geometric_verifier().size(); ++f) {
-    a.geometric_verifier().features(f, pa, da);
-    b.geometric_verifier().features(f, pb, db);
-    EXPECT_EQ(pa, pb);
-    EXPECT_EQ(da, db);
+  // Every component's state: nodes, temporal places, ORB features, loops.
+  for (std::int64_t f = 0; f < a.size(); ++f) {
+    ASSERT_EQ(a.frame_state(f), b.frame_state(f)) << "frame " << f;
   }
 }
 
@@ -599,13 +592,46 @@ std::string older_database(int format) {
   }
   sqlite3* db = nullptr;
   EXPECT_EQ(sqlite3_open(path.c_str(), &db), SQLITE_OK);
+  // Formats 1 to 3 kept the components' state in columns of their own: the
+  // version-1 records of the state column, moved there.
+  for (int id = 0; id < 12; ++id) {
+    sqlite3_stmt* st = nullptr;
+    EXPECT_EQ(sqlite3_prepare_v2(db, ("SELECT state FROM frames WHERE id = " + std::to_string(id)).c_str(),
+                                 -1, &st, nullptr),
+              SQLITE_OK);
+    EXPECT_EQ(sqlite3_step(st), SQLITE_ROW);
+    const auto* blob = static_cast<const std::uint8_t*>(sqlite3_column_blob(st, 0));
+    const std::vector<StateRecord> records =
+        decode_records(blob, static_cast<std::size_t>(sqlite3_column_bytes(st, 0)));
+    sqlite3_finalize(st);
+    EXPECT_EQ(sqlite3_prepare_v2(db,
+                                 "UPDATE frames SET place = ?1, features = ?2, loop = ?3, "
+                                 "loop_inliers = ?4, state = NULL WHERE id = ?5",
+                                 -1, &st, nullptr),
+              SQLITE_OK);
+    for (const StateRecord& r : records) {
+      StateReader in(r.bytes.data(), r.bytes.size(), r.component);
+      if (r.component == kTemporalStage) sqlite3_bind_int64(st, 1, in.get_i64());
+      if (r.component == kGeometricStage) {
+        sqlite3_bind_blob(st, 2, r.bytes.data(), static_cast<int>(r.bytes.size()), SQLITE_TRANSIENT);
+        if (r.bytes.empty()) sqlite3_bind_zeroblob(st, 2, 0);
+      }
+      if (r.component == "decision") {
+        sqlite3_bind_int64(st, 3, in.get_i64());
+        sqlite3_bind_double(st, 4, in.get_f64());
+      }
+    }
+    sqlite3_bind_int64(st, 5, id);
+    EXPECT_EQ(sqlite3_step(st), SQLITE_DONE);
+    sqlite3_finalize(st);
+  }
   // Each row's checksum as that format computed it (database.cc row_checksum).
   std::string sql;
   for (int id = 0; id < 12; ++id) {
     sqlite3_stmt* st = nullptr;
     EXPECT_EQ(sqlite3_prepare_v2(db,
                                  ("SELECT id, session, node, place, loop, loop_inliers, name, "
-                                  "histogram, pixels, features FROM frames WHERE id = " +
+                                  "histogram, pixels, features, frame FROM frames WHERE id = " +
                                   std::to_string(id))
                                      .c_str(),
                                  -1, &st, nullptr),
@@ -629,6 +655,7 @@ std::string older_database(int format) {
       std::memcpy(&bits, &inliers, sizeof bits);
       add_int(bits);
     }
+    if (format >= 3) add_int(sqlite3_column_int64(st, 10));
     for (int c = 6; c < 10; ++c) {
       const bool null = sqlite3_column_type(st, c) == SQLITE_NULL;
       const void* data = c == 6 ? static_cast<const void*>(sqlite3_column_text(st, c))
@@ -641,7 +668,8 @@ std::string older_database(int format) {
     sql += "UPDATE frames SET crc32 = " + std::to_string(crc) + " WHERE id = " +
            std::to_string(id) + ";";
   }
-  sql += "ALTER TABLE frames DROP COLUMN frame;";
+  sql += "ALTER TABLE frames DROP COLUMN state;";
+  if (format < 3) sql += "ALTER TABLE frames DROP COLUMN frame;";
   if (format < 2) {
     sql += "ALTER TABLE frames DROP COLUMN loop; ALTER TABLE frames DROP COLUMN loop_inliers;";
   }
@@ -701,6 +729,38 @@ TEST(Database, Format1IsReadAndUpgradedInPlace) {
   EXPECT_EQ(again.frame_ids(), ids);
 }
 
+// A format 3 file (the components' state in columns of their own) restores
+// exactly as the format 4 file it was made from, is upgraded in place when
+// opened for writing, and its old rows then still read.
+TEST(Database, Format3IsReadAsTheComponentsRecordsAndUpgradedInPlace) {
+  const std::string path = older_database(3);
+  DetectorOptions o = options(kExhaustiveSearch, "temporal,geometric");
+  o.search.min_gap = 2;
+  o.verification.geometric_options.max_features = 32;
+  Detector fresh(o);
+  run(fresh, 0, 12);
+  {
+    const Database ro = Database::open(path, Database::Mode::kReadOnly);
+    EXPECT_EQ(ro.info().format_version, 3);
+    Detector d(ro.options());
+    ro.restore(d);
+    expect_same_state(fresh, d);
+  }
+  {
+    Database db = Database::open(path);
+    EXPECT_EQ(db.info().format_version, kDatabaseFormatVersion);
+    Detector d(db.options());
+    db.restore(d);
+    run(d, 12, 20, &db);
+    run(fresh, 12, 20);
+  }
+  const Database again = Database::open(path, Database::Mode::kReadOnly);
+  again.verify();
+  Detector d(again.options());
+  again.restore(d);
+  expect_same_state(fresh, d);
+}
+
 // A format 2 file (before frame ids) reads with frame id = row id, is
 // upgraded in place when opened for writing, and its frames then continue
 // with the caller's ids.
@@ -754,20 +814,21 @@ TEST(DatabaseDamage, EditedRowsAndMeta) {
   expect_edit_detected("UPDATE frames SET pixels = zeroblob(4) WHERE id = 0", "pixels blob");
   expect_flip_detected("histogram", 5, 100, "frame 5: checksum");
   expect_flip_detected("pixels", 7, 0, "frame 7: checksum");
-  expect_flip_detected("features", 9, 3, "frame 9: checksum");
-  expect_edit_detected("UPDATE frames SET features = x'00' WHERE id = 2", "features blob");
+  expect_flip_detected("state", 9, 3, "frame 9: checksum");
+  expect_flip_detected("state", 10, 40, "frame 10: checksum");
+  expect_edit_detected("UPDATE frames SET state = NULL WHERE id = 11", "frame 11: checksum");
+  expect_edit_detected("UPDATE frames SET state = x'00' WHERE id = 8", "frame 8: checksum");
+  expect_edit_detected("UPDATE frames SET state = 7 WHERE id = 8", "frame 8: state is not a blob");
+  expect_edit_detected("UPDATE frames SET features = x'00' WHERE id = 2",
+                       "frame 2: has both a state and the place, features or loop columns");
   expect_edit_detected("UPDATE frames SET node = node + 7 WHERE id = 4", "frame 4");
   expect_edit_detected("UPDATE frames SET session = 3 WHERE id = 4", "frame 4: checksum");
   expect_edit_detected("UPDATE frames SET name = 'x' WHERE id = 4", "frame 4: checksum");
   expect_edit_detected("DELETE FROM frames WHERE id = 6", "frame ids are not 0 .. 10");
   expect_edit_detected("UPDATE meta SET value = 'x1' WHERE key = 'format_version'",
                        "format_version 'x1' is not an integer");
-  expect_edit_detected("UPDATE meta SET value = 4 WHERE key = 'format_version'",
-                       "format version 4 is newer");
-  expect_edit_detected("UPDATE frames SET loop = 1 WHERE id = 11", "frame 11: checksum");
-  expect_edit_detected("UPDATE frames SET loop_inliers = loop_inliers + 1 WHERE id = 11",
-                       "frame 11: checksum");
-  expect_edit_detected("UPDATE frames SET loop = 11 WHERE id = 11", "not an earlier frame");
+  expect_edit_detected("UPDATE meta SET value = 5 WHERE key = 'format_version'",
+                       "format version 5 is newer");
   expect_edit_detected("UPDATE frames SET loop_inliers = 'x' WHERE id = 5", "loop_inliers");
   expect_edit_detected("UPDATE meta SET value = 0 WHERE key = 'format_version'",
                        "unknown format version 0");

@@ -61,8 +61,7 @@ DetectorOptions small_options(const std::string& mode = kExhaustiveSearch, std::
   o.search.min_gap = min_gap;
   o.search.top_n = top_n;
   // The faithful method: these tests check the search itself.
-  o.verification.temporal = false;
-  o.verification.geometric = false;
+  o.verification.stages = {};
   return o;
 }
 
@@ -197,9 +196,6 @@ class Blocks final : public CandidateSearch {
   const std::vector<std::int64_t>& members(std::int64_t g) const override {
     return groups_.at(static_cast<std::size_t>(g));
   }
-  void restore_groups(std::vector<std::vector<std::int64_t>> groups, std::int64_t) override {
-    groups_ = std::move(groups);
-  }
 
  private:
   SearchOptions options_;
@@ -232,7 +228,7 @@ TEST(SearchModes, ARegisteredModeRunsInTheDetectorThroughTheInterfaceAlone) {
   EXPECT_THROW(register_search_mode({"test-none", "no make", nullptr}), InvalidArgument);
 
   DetectorOptions copy = small_options(kExhaustiveSearch, 2, 4);
-  copy.verification.temporal = true;  // sequence evidence over the search's row
+  copy.verification.stages = {kTemporalStage};  // sequence evidence over the search's row
   DetectorOptions original = copy;
   copy.search.mode = "test-copy";
   Detector a(copy), b(original);
@@ -244,7 +240,7 @@ TEST(SearchModes, ARegisteredModeRunsInTheDetectorThroughTheInterfaceAlone) {
   }
 
   DetectorOptions blocks = small_options("test-blocks", 2, 4);
-  blocks.verification.temporal = true;  // realigned candidates, sampled statistics
+  blocks.verification.stages = {kTemporalStage};  // realigned candidates, sampled statistics
   Detector c(blocks);
   for (int i = 0; i < 60; ++i) {
     const Result r = c.process(random_frame(700 + i % 23));

@@ -38,8 +38,7 @@ DetectorOptions options() {
   o.segmentation.superpixel_size = 16;
   o.search.min_gap = 0;
   o.search.top_n = 20;
-  o.verification.temporal = false;
-  o.verification.geometric = false;
+  o.verification.stages = {};
   return o;
 }
 

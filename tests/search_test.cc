@@ -258,10 +258,12 @@ TEST(SearchModes, TheBuiltInModesAreRegisteredAndMadeByName) {
   EXPECT_TRUE(make_search(o)->scores_every_frame());
   EXPECT_FALSE(make_search(o)->has_groups());
   EXPECT_THROW(make_search(o)->members(0), InvalidArgument);
-  EXPECT_THROW(make_search(o)->restore_groups({}, 0), InvalidArgument);
+  EXPECT_FALSE(make_search(o)->has_state());
+  EXPECT_EQ(make_search(o)->group_of(0), -1);
   o.mode = kNodesSearch;
   EXPECT_FALSE(make_search(o)->scores_every_frame());
   EXPECT_TRUE(make_search(o)->has_groups());
+  EXPECT_TRUE(make_search(o)->has_state());
   for (const char* bad : {"foo", "", "Nodes", "dynamic", "exhaustive "}) {
     const std::string message = message_of<InvalidArgument>([&] { check_search_mode(bad); });
     EXPECT_NE(message.find(std::string("'") + bad + "'"), std::string::npos) << message;

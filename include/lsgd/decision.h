@@ -25,9 +25,12 @@
 #pragma once
 
 #include <cstdint>
+#include <functional>
 #include <string>
+#include <vector>
 
 #include "lsgd/options.h"
+#include "lsgd/stage.h"
 
 namespace lsgd {
 
@@ -73,6 +76,75 @@ struct ContinuityState {
   // Records the decision for `query`: a loop to `frame` with `inliers`
   // (frame -1: no loop).
   void record(std::int64_t query, std::int64_t frame, int inliers, bool continued);
+};
+
+// One query as the decision sees it.
+struct DecisionQuery {
+  std::int64_t frame = 0;  // the query's id
+  // Its candidates best first, scored by appearance (sigma; evidence.h).
+  const std::vector<Candidate>* candidates = nullptr;
+  int max_candidates = 3;   // verification.max_candidates
+  std::int64_t min_gap = 0;  // search.min_gap: the continuation stays outside the window
+  // Continuity needs sequence evidence (the temporal stage); its slack in
+  // frames is temporal.tolerance.
+  bool continuity = false;
+  int tolerance = 0;
+  int cells = 0;  // the descriptor grid's cells (kMinAppearanceCells)
+  // The appearance score of frame j for this query, as the candidates are
+  // scored (NaN: not available).
+  std::function<double(std::int64_t)> appearance;
+};
+
+// What the decision found for one query (fields of Result).
+struct Decision {
+  bool loop = false;
+  Candidate best;
+  LoopEvidence evidence;
+  std::vector<StageVerdict> verdicts;  // in the order examined
+};
+
+// The loop decision over the verification stages (the comment at the top of
+// this file): the gates examine the best candidates in rank order, the
+// confirming stages the candidates that could reach the threshold, the
+// continuation of the previous frame's loop first when it could score
+// higher. The first candidate every confirming stage accepts is reported;
+// when none is, the best candidate the gates let through is reported with its
+// appearance score (below the threshold if a confirming stage rejected it).
+// Its state (persistence, state.h, under "decision"): the loop declared for
+// every frame and its loop's inliers.
+class LoopDecision final : public Stateful {
+ public:
+  explicit LoopDecision(const DecisionOptions& options);
+
+  // Decides query q.frame (the frame after the last one decided) with
+  // `stages` (every stage's check(); begin() has run), and records the
+  // decision. The stages' end() is the caller's.
+  Decision decide(const DecisionQuery& q, const std::vector<VerificationStage*>& stages);
+
+  // The state after the last frame decided.
+  const ContinuityState& continuity() const { return state_; }
+
+  const char* name() const override { return "decision"; }
+  bool has_state() const override { return true; }
+  void save_frame(std::int64_t frame, StateWriter& out) const override;
+  void check_frame(std::int64_t frame, int width, int height, std::uint32_t version,
+                   StateReader in) const override;
+  void restore_frame(std::int64_t frame, int width, int height, std::uint32_t version,
+                     StateReader in) override;
+
+ private:
+  void record(std::int64_t frame, std::int64_t loop, int inliers, bool continued);
+
+  DecisionOptions options_;
+  ContinuityState state_;
+  struct Loop {
+    std::int64_t frame;
+    double inliers;
+  };
+  std::vector<Loop> history_;  // state_.loop and state_.inliers after every frame
+  // Scratch reused across frames.
+  std::vector<char> gated_;          // 1 for a candidate a gate rejected
+  std::vector<Candidate> examined_;  // candidates the confirming stages check, in order
 };
 
 }  // namespace lsgd

@@ -16,6 +16,8 @@
 #include "lsgd/search.h"
 #include "lsgd/segmentation.h"
 #include "lsgd/similarity.h"
+#include "lsgd/stage.h"
+#include "lsgd/state.h"
 #include "lsgd/verification.h"
 
 namespace cv {
@@ -79,7 +81,7 @@ struct Result {
 
 // Threads: a Detector is used by one thread at a time, its const calls
 // included (process() changes what they read). Use one Detector per thread,
-// or a mutex around every call. process() and the restore_*() calls detect an
+// or a mutex around every call. process() and restore_frame() detect an
 // overlapping call on the same Detector and throw InvalidArgument instead of
 // corrupting it (the call already running completes normally). Different
 // Detectors share nothing and run in parallel freely. Not copyable.
@@ -108,48 +110,37 @@ class Detector {
   // Similarity of two stored frames with the configured metric.
   double similarity(std::int64_t a, std::int64_t b) const;
 
-  // ---- Persistence (lsgd::io::Database): the state process() accumulates,
-  // readable, and restorable into a detector with the same options so that
-  // processing continues exactly as if it had never stopped.
+  // The verification stages (verification.stages), in the order they run;
+  // nullptr for a stage the options do not name.
+  const VerificationStage* stage(const std::string& name) const;
+  // The decision's state after the last frame (the loop declared for it).
+  const ContinuityState& continuity() const { return decision_.continuity(); }
+
+  // ---- Persistence (lsgd::io::Database): a stored frame is its descriptor
+  // plus the per-frame state of every component that keeps state (the search
+  // mode, the verification stages, the decision; state.h), so that a
+  // detector with the same options restored frame by frame continues exactly
+  // as if it had never stopped.
   int width() const { return width_; }  // size of the first frame; 0 before it
   int height() const { return height_; }
-  const TemporalVerifier& temporal_verifier() const { return temporal_; }
-  const GeometricVerifier& geometric_verifier() const { return geometric_; }
-  // The decision's state after the last frame (loop declared for it, its
-  // loop's inliers).
-  const ContinuityState& continuity() const { return continuity_; }
+  // The components' records for stored frame `frame` (any stored frame), as
+  // one blob (encode_records). InvalidArgument for a frame not stored.
+  std::vector<std::uint8_t> frame_state(std::int64_t frame) const;
   // Stores frame size() as process() would have, without its image: its
-  // descriptor and, when geometric verification is on, its ORB features
-  // (GeometricVerifier::features; must be empty when it is off). Dynamic nodes
-  // and temporal places are restored separately, after the frames. `node` is
-  // the frame's dynamic node in nodes mode (0 otherwise): it places the frame
-  // beside the node's other frames in the store (0 <= node <= the highest
-  // node given so far + 1). It is a placement only: frames restored with node
-  // 0 and their nodes restored afterwards give the same results, a little
-  // slower. Throws InvalidArgument (detector unchanged) for another frame
-  // size, a descriptor whose grid or sizes do not match, inconsistent
-  // features or a node out of range.
+  // descriptor and frame_state()'s blob, each record handed to the component
+  // of its name (check_frame() of every one first). Throws InvalidArgument,
+  // detector unchanged, for another frame size, a descriptor whose grid or
+  // sizes do not match, a damaged blob, a record of a component these options
+  // do not have, or a record its component refuses.
   void restore_frame(int width, int height, const Descriptor& descriptor,
-                     const std::vector<float>& points = {},
-                     const std::vector<std::uint8_t>& orb = {}, std::int64_t node = 0);
-  // The search's groups (CandidateSearch::restore_groups; dynamic nodes) as
-  // process() builds them: in nodes mode every stored frame in exactly one
-  // node, nodes in the order of their first frames. InvalidArgument
-  // otherwise (or for a mode without groups), detector unchanged.
-  void restore_nodes(std::vector<std::vector<std::int64_t>> nodes);
-  // Temporal places (TemporalVerifier::restore); last_query must be size() - 1.
-  // Only with temporal verification.
-  void restore_temporal(std::int64_t last_query, std::vector<std::int64_t> places);
-  // The decision's state (continuity()); state.query must be size() - 1 and
-  // state.loop an earlier frame or -1. The appearance statistics need no
-  // restoring: the next process() recomputes them from the stored frames.
-  void restore_continuity(const ContinuityState& state);
+                     const std::vector<std::uint8_t>& state);
 
  private:
   Result process_gray(double convert_ms, std::int64_t start_ns);
   void score_candidates(Result& result);
   void verify(Result& result);
-  Candidate continuation_candidate(std::int64_t query);
+  // The components with per-frame state, in the order their records are saved.
+  std::vector<Stateful*> stateful() const;
 
   DetectorOptions options_;
   int width_ = 0;  // size of the first frame; every later frame must match
@@ -158,9 +149,9 @@ class Detector {
   FrameStore store_;
   std::unique_ptr<CandidateSearch> search_;  // made from options_.search
   AppearanceEvidence evidence_;
-  TemporalVerifier temporal_;
-  GeometricVerifier geometric_;
-  ContinuityState continuity_;
+  std::vector<std::unique_ptr<VerificationStage>> stages_;  // made from options_.verification
+  std::vector<VerificationStage*> stage_list_;              // the same, for the decision
+  LoopDecision decision_;
   // Scratch reused across frames (no allocation per frame once warm).
   GrayImage gray_;
   Segmentation segmentation_;
@@ -168,10 +159,8 @@ class Detector {
   Descriptor exact_;       // the frame's histograms as computed
   Descriptor descriptor_;  // ... and as stored (descriptor.storage)
   std::vector<Candidate> raw_;  // the search's candidates, by similarity
-  std::vector<Candidate> examined_;  // candidates verify() checks geometrically, in order
-  std::vector<char> gated_;          // verify(): 1 for a candidate the agreement gate rejected
   std::vector<double> row_;     // exhaustive: the query's similarity to every candidate
-  // Set while process() or a restore_*() call runs: a second, overlapping
+  // Set while process() or restore_frame() runs: a second, overlapping
   // call throws (class Exclusive in detector.cc).
   std::atomic<bool> busy_{false};
   class Exclusive;

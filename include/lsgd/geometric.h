@@ -51,6 +51,8 @@ struct GeometricOptions {
   // loop accepted on corridor has >= 69 %, so a large random match set cannot
   // pass (docs/results.md: no measured number changes).
   double min_inlier_ratio = 0.25;
+  // Working-size pixels per original pixel for an image of this size.
+  double working_scale(int width, int height) const;
   void check() const;
   static const OptionTable<GeometricOptions>& fields();  // lsgd/options.h
 };

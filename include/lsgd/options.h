@@ -36,6 +36,7 @@ struct OptionField {
   std::int64_t type_min = 0;
   std::int64_t type_max = 0;
   std::function<std::vector<std::string>()> choices;  // kChoice: the accepted names
+  bool list = false;  // kChoice: "none" or a comma-separated list of choices
   std::function<std::string(const S&)> text;          // the value as text that reads back equal
   std::function<double(const S&)> number;             // numbers: the value
   std::function<void(S&, std::int64_t)> set_integer;  // kInteger (value within the type)
@@ -143,6 +144,7 @@ void nest(OptionTable<S>& out, const std::string& prefix, Inner S::*member,
     g.type_min = f.type_min;
     g.type_max = f.type_max;
     g.choices = f.choices;
+    g.list = f.list;
     g.resumable = f.resumable;
     g.when = applies ? when : f.when;
     if (f.text) g.text = [member, t = f.text](const S& s) { return t(s.*member); };

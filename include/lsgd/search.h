@@ -19,6 +19,7 @@
 
 #include "lsgd/frame_store.h"
 #include "lsgd/similarity.h"
+#include "lsgd/state.h"
 
 namespace lsgd {
 
@@ -62,8 +63,10 @@ struct Candidate {
 bool better(const Candidate& a, const Candidate& b);
 
 // One search mode. The detector owns one, made by make_search() from its
-// options, and calls search() once per frame, before storing the frame.
-class CandidateSearch {
+// options, and calls search() once per frame, before storing the frame. Its
+// per-frame state (the group a frame joined) is saved and restored through
+// Stateful (state.h) under its name.
+class CandidateSearch : public Stateful {
  public:
   // Frame `id` (== store.size(): it is searched before it is stored), its
   // descriptor as stored, and the similarity metric.
@@ -80,9 +83,7 @@ class CandidateSearch {
     bool created = false;  // true when the query started a new group
   };
 
-  virtual ~CandidateSearch() = default;
-  // The registered name (SearchOptions::mode).
-  virtual const char* name() const = 0;
+  // name(): the registered name (SearchOptions::mode).
   // True when search() scores every frame j < id - min_gap and writes s(id, j)
   // to row[j] (row resized to that count): the appearance statistics then
   // come from every candidate, and the temporal stage ranks every place
@@ -99,11 +100,8 @@ class CandidateSearch {
   virtual bool has_groups() const { return false; }
   virtual std::int64_t groups() const { return 0; }
   virtual const std::vector<std::int64_t>& members(std::int64_t group) const;
-  // Persistence (lsgd::io::Database): replaces the groups by `groups`, as
-  // search() would have built them over `frames` stored frames. Throws
-  // InvalidArgument, leaving the search unchanged, when they could not have
-  // been built so; a mode without groups always throws.
-  virtual void restore_groups(std::vector<std::vector<std::int64_t>> groups, std::int64_t frames);
+  // The group of stored frame `frame` (-1 for a mode without groups).
+  virtual std::int64_t group_of(std::int64_t frame) const { (void)frame; return -1; }
 };
 
 // A registered search mode.

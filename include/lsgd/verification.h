@@ -1,7 +1,8 @@
-// Verification stages that run after the candidate search (beyond the paper),
-// so that a reported loop can be trusted by a SLAM map. Each is switchable;
-// with none enabled the detector is the faithful method (its ranking; the
-// loop decision is decision.h's).
+// Options of the verification stages that run after the candidate search
+// (beyond the paper), so that a reported loop can be trusted by a SLAM map
+// (the stages themselves: lsgd/stage.h). Each is switchable; with none
+// enabled the detector is the faithful method (its ranking; the loop decision
+// is decision.h's).
 //
 // - temporal (sequence consistency): every candidate is scored by its
 //   sequence evidence, the mean standardised similarity along the diagonal
@@ -18,7 +19,6 @@
 #pragma once
 
 #include <cstdint>
-#include <deque>
 #include <string>
 #include <vector>
 
@@ -48,27 +48,36 @@ struct TemporalOptions {
   static const OptionTable<TemporalOptions>& fields();  // lsgd/options.h
 };
 
+// Names of the built-in stages (lsgd/stage.h has the registry).
+inline constexpr const char* kTemporalStage = "temporal";
+inline constexpr const char* kGeometricStage = "geometric";
+
 struct VerificationOptions {
-  // Sequence evidence: on by default (docs/results.md: it raises R@1 and the
-  // loops declared on every sequence measured).
-  bool temporal = true;
-  // ORB + RANSAC: on by default. Appearance alone cannot separate a revisit
-  // from a look-alike place on every camera; geometry can (docs/results.md).
-  // Costs ORB on every frame (~1.5-5 ms at the default working size) and a
-  // check (~0.5 ms) for each candidate that could become a loop.
-  bool geometric = true;
+  // The stages run after the search, by registered name (lsgd/stage.h), kept
+  // in registration order. Default: both built-in stages.
+  // - temporal, sequence evidence: docs/results.md: it raises R@1 and the
+  //   loops declared on every sequence measured.
+  // - geometric, ORB + RANSAC. Appearance alone cannot separate a revisit
+  //   from a look-alike place on every camera; geometry can (docs/results.md).
+  //   Costs ORB on every frame (~1.5-5 ms at the default working size) and a
+  //   check (~0.5 ms) for each candidate that could become a loop.
+  std::vector<std::string> stages = {kTemporalStage, kGeometricStage};
   // Candidates examined best first; the first one that no enabled stage
   // rejects is reported. [1, 100]; at most search.top_n are available.
   int max_candidates = 3;
-  TemporalOptions temporal_options;
-  GeometricOptions geometric_options;
+  TemporalOptions temporal_options;    // used with the temporal stage
+  GeometricOptions geometric_options;  // used with the geometric stage
+  // True when `stage` is one of `stages`.
+  bool has(const std::string& stage) const;
   void check() const;
   static const OptionTable<VerificationOptions>& fields();  // lsgd/options.h
 };
 
-// "none", "temporal", "geometric" or "temporal,geometric" (either order).
-// Throws InvalidArgument naming the unknown stage.
+// Sets options.stages from "none" or a comma-separated list of registered
+// stages ("temporal,geometric", "geometric", ...; each at most once, any
+// order). Throws InvalidArgument naming an unknown or repeated stage.
 void parse_verification_stages(const std::string& text, VerificationOptions& options);
+// The stages as that text: "temporal,geometric", or "none".
 std::string verification_stages(const VerificationOptions& options);
 
 // The verdict of one stage on one candidate.
@@ -78,39 +87,6 @@ struct StageVerdict {
   bool accepted = false;
   std::string reason;  // e.g. "3 of 3 previous queries agree" or "12 inliers < 20"
   double ms = 0;
-};
-
-// The temporal stage's agreement gate (agree > 0). Remembers the best place
-// of the last `agree` queries. The sequence scores are AppearanceEvidence's.
-class TemporalVerifier {
- public:
-  explicit TemporalVerifier(const TemporalOptions& options = {});
-
-  struct Check {
-    bool accepted = false;
-    std::string reason;
-  };
-  // The agreement gate for a candidate of query `query`.
-  Check agree(std::int64_t query, const Candidate& candidate) const;
-
-  // Remembers the query's best place (its first candidate, frame -1 for
-  // none); call once per processed frame, after agree().
-  void push(std::int64_t query, std::int64_t place);
-
-  // Persistence (lsgd::io::Database): the last query pushed (-1: none) and
-  // the best places remembered, oldest first (at most max(agree, 1)).
-  std::int64_t last_query() const { return last_query_; }
-  std::vector<std::int64_t> places() const { return {places_.begin(), places_.end()}; }
-  // Restores that state as if push() had been called for queries
-  // last_query - places.size() + 1 .. last_query. Throws InvalidArgument,
-  // leaving the verifier unchanged, for more than max(agree, 1) places, places
-  // < -1, or places without a query (last_query + 1 < places.size()).
-  void restore(std::int64_t last_query, std::vector<std::int64_t> places);
-
- private:
-  TemporalOptions options_;
-  std::deque<std::int64_t> places_;  // best place of the previous queries, newest last
-  std::int64_t last_query_ = -1;
 };
 
 }  // namespace lsgd

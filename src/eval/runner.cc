@@ -58,10 +58,10 @@ std::vector<std::string> setup_warnings(const Detector& detector, const GroundTr
           "whole-image histogram and cannot tell places apart; use superpixel_size <= ",
           std::max(2, std::min(w, h) / 2)));
     }
-    if (o.verification.geometric && std::min(w, h) < 100) {
+    if (o.verification.has(kGeometricStage) && std::min(w, h) < 100) {
       out.push_back(internal::concat(
           "frames of ", w, "x", h, " are too small for geometric verification (ORB works on them "
-          "upscaled ", std::lround(detector.geometric_verifier().working_scale(w, h)),
+          "upscaled ", std::lround(o.verification.geometric_options.working_scale(w, h)),
           "x): it will confirm few loops"));
     }
   }

@@ -334,8 +334,10 @@ std::string to_yaml(const DetectorOptions& options) {
     out << std::string(2 * depth, ' ') << parts.back() << ": " << f.text(options);
     if (f.kind == OptionKind::kChoice) {
       std::string choices;
-      for (const std::string& c : f.choices()) choices += concat(choices.empty() ? "" : " | ", c);
-      out << "  # " << choices;
+      for (const std::string& c : f.choices()) {
+        choices += concat(choices.empty() ? "" : f.list ? ", " : " | ", c);
+      }
+      out << "  # " << (f.list ? "none or a list of " : "") << choices;
     } else if (!f.unit.empty()) {
       out << "  # " << f.unit;
     }
@@ -360,9 +362,9 @@ std::string options_reference(const DetectorOptions& options, bool markdown) {
     std::string range;
     if (f.kind == OptionKind::kChoice) {
       for (const std::string& c : f.choices()) {
-        range += concat(range.empty() ? "" : markdown ? " \\| " : " | ", c);
+        range += concat(range.empty() ? "" : f.list ? ", " : markdown ? " \\| " : " | ", c);
       }
-      if (!markdown) range = "one of " + range;
+      range = (f.list ? "none or a comma-separated list of " : markdown ? "" : "one of ") + range;
     } else if (f.kind == OptionKind::kInteger) {
       range = concat("[", static_cast<std::int64_t>(f.lo), ", ", static_cast<std::int64_t>(f.hi), "]");
     } else {

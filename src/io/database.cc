@@ -11,7 +11,6 @@
 #include <algorithm>
 #include <cmath>
 #include <cstring>
-#include <deque>
 #include <limits>
 #include <map>
 #include <set>
@@ -32,7 +31,6 @@ namespace {
 
 using internal::concat;
 
-constexpr std::size_t kFeatureBytes = 2 * sizeof(float) + kOrbBytes;      // x, y, descriptor
 constexpr std::int64_t kNull = std::numeric_limits<std::int64_t>::min();  // NULL in checksums
 // Appends between checkpoints (Impl::checkpoint): the most frames that live
 // only in the write-ahead log.
@@ -127,12 +125,17 @@ struct RowBytes {
   std::int64_t pixels_size = 0;
   const void* features = nullptr;
   std::int64_t features_size = -1;  // -1: NULL
+  // The components' per-frame state (format 4, Detector::frame_state());
+  // -1: NULL (rows of older formats, whose checksum does not cover it).
+  const void* state = nullptr;
+  std::int64_t state_size = -1;
 };
 
 // CRC-32 of a frame row: id, session, node, place as int64 little-endian
 // (NULL = INT64_MIN), then (rows with loop_inliers, format 2) loop as int64
 // and loop_inliers' IEEE-754 bits as int64, then (rows with a frame id,
-// format 3) frame as int64, then name, histogram, pixels, features as blobs.
+// format 3) frame as int64, then name, histogram, pixels, features as blobs,
+// then (rows with a state, format 4) state as a blob.
 std::uint32_t row_checksum(const RowBytes& r) {
   std::uint32_t crc = static_cast<std::uint32_t>(crc32(0, Z_NULL, 0));
   crc = crc_int(crc, r.id);
@@ -150,6 +153,7 @@ std::uint32_t row_checksum(const RowBytes& r) {
   crc = crc_blob(crc, r.hist, r.hist_size);
   crc = crc_blob(crc, r.pixels, r.pixels_size);
   crc = crc_blob(crc, r.features, r.features_size);
+  if (r.state_size >= 0) crc = crc_blob(crc, r.state, r.state_size);
   return crc;
 }
 
@@ -230,26 +234,39 @@ const char* kSchema =
     "CREATE TABLE frames("
     "id INTEGER PRIMARY KEY, session INTEGER NOT NULL, name TEXT NOT NULL,"
     "histogram BLOB NOT NULL, pixels BLOB NOT NULL, node INTEGER, place INTEGER,"
-    "features BLOB, crc32 INTEGER NOT NULL, loop INTEGER, loop_inliers REAL, frame INTEGER);";
+    "features BLOB, crc32 INTEGER NOT NULL, loop INTEGER, loop_inliers REAL, frame INTEGER,"
+    "state BLOB);";
 
-// Columns a format lacks read as NULL: loop state before 2, frame ids before 3.
+// Columns a format lacks read as NULL: loop state before 2, frame ids before
+// 3, the components' state before 4.
 std::string select_frames(int format, const char* tail = " ORDER BY id") {
   return concat("SELECT id, session, name, histogram, pixels, node, place, features, crc32, ",
                 format < 2 ? "NULL, NULL" : "loop, loop_inliers", ", ",
-                format < 3 ? "NULL" : "frame", " FROM frames", tail);
+                format < 3 ? "NULL" : "frame", ", ", format < 4 ? "NULL" : "state", " FROM frames",
+                tail);
 }
 
 // The caller's id of a row: its frame column, or its row id in older formats.
 std::string frame_column(int format) { return format < 3 ? "id" : "coalesce(frame, id)"; }
 
 const char* kInsertFrame =
-    "INSERT INTO frames(id, session, name, histogram, pixels, node, place, features, crc32, "
-    "loop, loop_inliers, frame) VALUES(?1, ?2, ?3, ?4, ?5, ?6, ?7, ?8, ?9, ?10, ?11, ?12)";
+    "INSERT INTO frames(id, session, name, histogram, pixels, node, crc32, frame, state) "
+    "VALUES(?1, ?2, ?3, ?4, ?5, ?6, ?7, ?8, ?9)";
 
-// Older formats -> 3, inside the caller's transaction.
+// Older formats -> 4, inside the caller's transaction.
 const char* kUpgradeV1 =
     "ALTER TABLE frames ADD COLUMN loop INTEGER; ALTER TABLE frames ADD COLUMN loop_inliers REAL;";
 const char* kUpgradeV2 = "ALTER TABLE frames ADD COLUMN frame INTEGER;";
+const char* kUpgradeV3 = "ALTER TABLE frames ADD COLUMN state BLOB;";
+
+// Appends the little-endian record of `component` (version 1) to `records`.
+// Rows of formats 1 to 3 keep the built-in components' state in columns of
+// their own; restore() reads them as these records, whose version-1 layouts
+// are those columns' (state.h, and each component's save_frame()).
+void legacy_record(std::vector<StateRecord>& records, const char* component,
+                   std::vector<std::uint8_t> bytes) {
+  records.push_back({component, 1, std::move(bytes)});
+}
 
 const std::vector<std::string> kIntegerMeta = {"format_version", "width",     "height",
                                                "grid_rows",      "grid_cols", "checksum"};
@@ -277,9 +294,7 @@ struct Database::Impl {
   std::string checked_yaml;  // options YAML already found compatible
   Statement insert;
   // Scratch of append(), reused between frames.
-  std::vector<std::uint8_t> hist_bytes, pixel_bytes, feature_bytes;
-  std::vector<float> points;
-  std::vector<std::uint8_t> orb;
+  std::vector<std::uint8_t> hist_bytes, pixel_bytes;
 
   ~Impl() {
     if (db && writable && opened) {
@@ -329,11 +344,9 @@ struct Database::Impl {
   }
 
   void load_header();
-  // `continuity`: the decision's state after the frame, or null when unknown.
   // `frame`: the detector's id of the frame; `caller_id`: the caller's.
   void insert_frame(const Detector& detector, std::int64_t frame, std::int64_t session,
-                    const std::string& name, std::int64_t node, std::int64_t place,
-                    const ContinuityState* continuity, std::int64_t caller_id);
+                    const std::string& name, std::int64_t caller_id);
   // InvalidArgument unless frames may be appended to `session`.
   void check_session(std::int64_t session) const;
 };
@@ -583,7 +596,8 @@ Database Database::open(const std::string& path, Mode mode) {
     exec_write(m.db, path, "BEGIN IMMEDIATE");
     try {
       if (m.format < 2) exec_write(m.db, path, kUpgradeV1);
-      exec_write(m.db, path, kUpgradeV2);
+      if (m.format < 3) exec_write(m.db, path, kUpgradeV2);
+      exec_write(m.db, path, kUpgradeV3);
       m.meta["format_version"] = std::to_string(kDatabaseFormatVersion);
       m.meta["options"] = to_yaml(m.options);
       m.write_meta();
@@ -801,10 +815,6 @@ void Database::restore(Detector& detector) const {
   if (m.frames == 0) return;
   const DetectorOptions& o = detector.options();
   const bool nodes_mode = detector.search().has_groups();  // dynamic nodes
-  const bool temporal = o.verification.temporal;
-  const bool geometric = o.verification.geometric;
-  const std::size_t keep =
-      static_cast<std::size_t>(std::max(o.verification.temporal_options.agree, 1));
   const auto cells = static_cast<std::size_t>(m.grid.cells());
 
   // Compact storage keeps cells * kCompactBins bytes per frame and no pixel
@@ -829,10 +839,8 @@ void Database::restore(Detector& detector) const {
       descriptor.pixels.resize(cells);
     }
   };
-  std::vector<float> points;
-  std::vector<std::uint8_t> orb;
-  std::vector<std::vector<std::int64_t>> nodes;
-  std::deque<std::int64_t> places;  // last `keep` places; kNull when not recorded
+  std::vector<std::uint8_t> state;
+  std::int64_t nodes = 0;  // dynamic nodes so far (the node column)
 
   // One read transaction: the rows and their count are one snapshot, even
   // while another process appends (a reader beside the writer).
@@ -842,7 +850,6 @@ void Database::restore(Detector& detector) const {
     ~EndRead() { sqlite3_exec(db, "COMMIT", nullptr, nullptr, nullptr); }
   } end_read{m.db};
   Statement stmt(m.db, m.path, select_frames(m.format).c_str());
-  ContinuityState continuity;  // after the last row that recorded it
   std::int64_t id = 0;
   std::int64_t last_frame = -1;
   for (; step_read(m.db, stmt.get(), m.path); ++id) {
@@ -875,39 +882,34 @@ void Database::restore(Detector& detector) const {
       bad("pixels blob has ", row.pixels_size, " bytes, expected ", pixel_bytes);
     }
     if (id == 0) allocate();
+    // The node column: the dynamic node of the frame, kept beside its state
+    // for db info and inspection.
     if (nodes_mode) {
       if (type(5) != SQLITE_INTEGER) bad("node is not an integer (search mode nodes)");
       row.node = sqlite3_column_int64(s, 5);
+      if (row.node < 0 || row.node > nodes) {
+        bad("node ", row.node, " does not exist yet (", nodes, " nodes before this frame)");
+      }
+      if (row.node == nodes) ++nodes;
     } else if (type(5) != SQLITE_NULL) {
-      bad("has a node but the search mode is exhaustive");
+      bad("has a node but the search mode is ", o.search.mode);
     }
     if (type(6) == SQLITE_INTEGER) {
       row.place = sqlite3_column_int64(s, 6);
-      if (!temporal) bad("has a temporal place but temporal verification is off");
-      if (row.place < -1 || row.place >= id)
-        bad("temporal place ", row.place, " is not an earlier frame");
     } else if (type(6) != SQLITE_NULL) {
       bad("place is not an integer");
     }
-    if (geometric) {
-      if (type(7) != SQLITE_BLOB) bad("features is not a blob (geometric verification is on)");
+    if (type(7) == SQLITE_BLOB) {
       row.features = sqlite3_column_blob(s, 7);
       row.features_size = sqlite3_column_bytes(s, 7);
-      if (row.features_size % static_cast<std::int64_t>(kFeatureBytes) != 0) {
-        bad("features blob has ", row.features_size, " bytes, not a multiple of ", kFeatureBytes);
-      }
     } else if (type(7) != SQLITE_NULL) {
-      bad("has ORB features but geometric verification is off");
+      bad("features is not a blob");
     }
     if (type(10) == SQLITE_FLOAT || type(10) == SQLITE_INTEGER) {
       if (type(9) != SQLITE_INTEGER) bad("loop is not an integer");
       row.loop = sqlite3_column_int64(s, 9);
       row.has_loop_inliers = true;
       row.loop_inliers = sqlite3_column_double(s, 10);
-      if (row.loop < -1 || row.loop >= id || !std::isfinite(row.loop_inliers) ||
-          row.loop_inliers < 0) {
-        bad("loop ", row.loop, " with ", row.loop_inliers, " inliers is not an earlier frame or -1");
-      }
     } else if (type(10) != SQLITE_NULL || type(9) != SQLITE_NULL) {
       bad("loop_inliers is not a number");
     }
@@ -922,6 +924,15 @@ void Database::restore(Detector& detector) const {
     } else if (id <= last_frame) {
       bad("has no frame id, and its row id ", id, " is not above the previous frame's ",
           last_frame);
+    }
+    if (type(12) == SQLITE_BLOB) {
+      if (row.place != kNull || row.features_size >= 0 || row.has_loop_inliers) {
+        bad("has both a state and the place, features or loop columns of older formats");
+      }
+      row.state = sqlite3_column_blob(s, 12);
+      row.state_size = sqlite3_column_bytes(s, 12);
+    } else if (type(12) != SQLITE_NULL) {
+      bad("state is not a blob");
     }
     last_frame = row.frame == kNull ? id : row.frame;
     const std::string name = column_text(s, 2);  // after the blobs: text conversion is not needed
@@ -939,35 +950,40 @@ void Database::restore(Detector& detector) const {
       decode_le(static_cast<const std::uint8_t*>(row.hist), cells * kBins, descriptor.hist.data());
       decode_le(static_cast<const std::uint8_t*>(row.pixels), cells, descriptor.pixels.data());
     }
-    points.clear();
-    orb.clear();
-    if (geometric) {
-      const auto n = static_cast<std::size_t>(row.features_size) / kFeatureBytes;
-      const auto* bytes = static_cast<const std::uint8_t*>(row.features);
-      points.resize(2 * n);
-      std::vector<std::uint32_t> bits(2 * n);
-      decode_le(bytes, 2 * n, bits.data());
-      std::memcpy(points.data(), bits.data(), bits.size() * sizeof(float));
-      orb.assign(bytes + 2 * n * sizeof(float), bytes + n * kFeatureBytes);
-    }
-    if (nodes_mode && (row.node < 0 || row.node > static_cast<std::int64_t>(nodes.size()))) {
-      bad("node ", row.node, " does not exist yet (", nodes.size(), " nodes before this frame)");
+    if (row.state_size >= 0) {
+      const auto* bytes = static_cast<const std::uint8_t*>(row.state);
+      state.assign(bytes, bytes + row.state_size);
+    } else {
+      // A row of format 1 to 3: its columns as the components' records.
+      std::vector<StateRecord> records;
+      const auto i64 = [](std::int64_t v) {
+        StateWriter w;
+        w.put_i64(v);
+        return w.bytes();
+      };
+      if (nodes_mode) legacy_record(records, detector.search().name(), i64(row.node));
+      if (row.place != kNull) legacy_record(records, kTemporalStage, i64(row.place));
+      if (row.features_size >= 0) {
+        const auto* bytes = static_cast<const std::uint8_t*>(row.features);
+        legacy_record(records, kGeometricStage, {bytes, bytes + row.features_size});
+      }
+      if (row.has_loop_inliers) {
+        StateWriter w;
+        w.put_i64(row.loop);
+        w.put_f64(row.loop_inliers);
+        legacy_record(records, "decision", w.bytes());
+      }
+      state = encode_records(records);
     }
     try {
-      detector.restore_frame(m.width, m.height, descriptor, points, orb, nodes_mode ? row.node : 0);
+      detector.restore_frame(m.width, m.height, descriptor, state);
     } catch (const InvalidArgument& e) {
       bad(e.what());
     }
-    if (nodes_mode) {
-      if (row.node == static_cast<std::int64_t>(nodes.size())) nodes.emplace_back();
-      nodes[static_cast<std::size_t>(row.node)].push_back(id);
+    if (nodes_mode && detector.search().group_of(id) != row.node) {
+      bad("node column ", row.node, " differs from the node in its state, ",
+          detector.search().group_of(id));
     }
-    if (temporal) {
-      places.push_back(row.place);
-      if (places.size() > keep) places.pop_front();
-    }
-    continuity = ContinuityState{};
-    if (row.has_loop_inliers) continuity = {id, row.loop, row.loop_inliers};
   }
   if (id != m.frames) {
     if (m.writable) {  // we hold the writer's lock: nothing else appends
@@ -976,29 +992,10 @@ void Database::restore(Detector& detector) const {
     m.frames = id;  // a writer appended since open: this snapshot holds more
     m.last_frame = last_frame;
   }
-  try {
-    if (nodes_mode) detector.restore_nodes(std::move(nodes));
-    if (temporal) {
-      for (std::size_t i = 0; i < places.size(); ++i) {
-        if (places[i] == kNull) {
-          format_error(m.path, "frame ", id - static_cast<std::int64_t>(places.size() - i),
-                       " has no temporal place, needed to resume temporal verification");
-        }
-      }
-      detector.restore_temporal(id - 1, {places.begin(), places.end()});
-    }
-    // A last row without the decision's state (format 1, or written by
-    // append_all): the next frame starts no loop's continuation.
-    if (continuity.query < 0) continuity = {id - 1, -1, 0};
-    detector.restore_continuity(continuity);
-  } catch (const InvalidArgument& e) {
-    throw FormatError(concat("database ", m.path, ": ", e.what()));
-  }
 }
 
 void Database::Impl::insert_frame(const Detector& detector, std::int64_t frame,
-                                  std::int64_t session, const std::string& name, std::int64_t node,
-                                  std::int64_t place, const ContinuityState* continuity,
+                                  std::int64_t session, const std::string& name,
                                   std::int64_t caller_id) {
   const DescriptorView view = detector.store().view(frame);
   const auto cells = static_cast<std::size_t>(view.cells);
@@ -1010,25 +1007,11 @@ void Database::Impl::insert_frame(const Detector& detector, std::int64_t frame,
     encode_le(view.hist, cells * kBins, hist_bytes);
     encode_le(view.pixels, cells, pixel_bytes);
   }
-  const bool geometric = detector.options().verification.geometric;
-  feature_bytes.clear();
-  if (geometric) {
-    detector.geometric_verifier().features(frame, points, orb);
-    std::vector<std::uint32_t> bits(points.size());
-    if (!points.empty()) std::memcpy(bits.data(), points.data(), points.size() * sizeof(float));
-    encode_le(bits.data(), bits.size(), feature_bytes);
-    feature_bytes.insert(feature_bytes.end(), orb.begin(), orb.end());
-  }
+  const std::vector<std::uint8_t> state = detector.frame_state(frame);
   RowBytes row;
   row.id = frame;
   row.session = session;
-  row.node = node;
-  row.place = place;
-  if (continuity != nullptr) {
-    row.loop = continuity->loop;
-    row.has_loop_inliers = true;
-    row.loop_inliers = continuity->inliers;
-  }
+  if (detector.search().has_groups()) row.node = detector.search().group_of(frame);
   row.frame = caller_id;
   row.name = name.data();
   row.name_size = static_cast<std::int64_t>(name.size());
@@ -1036,10 +1019,8 @@ void Database::Impl::insert_frame(const Detector& detector, std::int64_t frame,
   row.hist_size = static_cast<std::int64_t>(hist_bytes.size());
   row.pixels = pixel_bytes.data();
   row.pixels_size = static_cast<std::int64_t>(pixel_bytes.size());
-  if (geometric) {
-    row.features = feature_bytes.data();
-    row.features_size = static_cast<std::int64_t>(feature_bytes.size());
-  }
+  row.state = state.data();
+  row.state_size = static_cast<std::int64_t>(state.size());
   sqlite3_stmt* s = insert.get();
   sqlite3_reset(s);
   sqlite3_clear_bindings(s);
@@ -1053,22 +1034,10 @@ void Database::Impl::insert_frame(const Detector& detector, std::int64_t frame,
     sqlite3_bind_blob(s, 5, pixel_bytes.data(), static_cast<int>(pixel_bytes.size()),
                       SQLITE_STATIC);
   }
-  if (node != kNull) sqlite3_bind_int64(s, 6, node);
-  if (place != kNull) sqlite3_bind_int64(s, 7, place);
-  if (geometric) {
-    if (feature_bytes.empty()) {
-      sqlite3_bind_zeroblob(s, 8, 0);
-    } else {
-      sqlite3_bind_blob(s, 8, feature_bytes.data(), static_cast<int>(feature_bytes.size()),
-                        SQLITE_STATIC);
-    }
-  }
-  sqlite3_bind_int64(s, 9, row_checksum(row));
-  if (continuity != nullptr) {
-    sqlite3_bind_int64(s, 10, row.loop);
-    sqlite3_bind_double(s, 11, row.loop_inliers);
-  }
-  sqlite3_bind_int64(s, 12, caller_id);
+  if (row.node != kNull) sqlite3_bind_int64(s, 6, row.node);
+  sqlite3_bind_int64(s, 7, row_checksum(row));
+  sqlite3_bind_int64(s, 8, caller_id);
+  sqlite3_bind_blob(s, 9, state.data(), static_cast<int>(state.size()), SQLITE_STATIC);
   const int rc = sqlite3_step(s);
   sqlite3_reset(s);
   if (rc != SQLITE_DONE)
@@ -1125,18 +1094,7 @@ void Database::append(const Detector& detector, const Result& result, std::int64
     check_compatible(detector.options());
     m.checked_yaml = yaml;
   }
-  const DetectorOptions& o = detector.options();
   const std::int64_t dense = m.frames;  // the detector's id of its last frame
-  std::int64_t node = kNull, place = kNull;
-  if (detector.search().has_groups()) node = result.node;
-  if (o.verification.temporal) {
-    const TemporalVerifier& t = detector.temporal_verifier();
-    if (t.last_query() != dense || t.places().empty()) {
-      internal::throw_invalid("database ", m.path, ": the temporal verifier's last query is ",
-                              t.last_query(), ", not frame ", dense);
-    }
-    place = t.places().back();
-  }
   transaction(m.db, m.path, [&] {
     std::map<std::string, std::string> saved = m.meta;
     if (m.frames == 0) {
@@ -1152,7 +1110,7 @@ void Database::append(const Detector& detector, const Result& result, std::int64
       }
     }
     try {
-      m.insert_frame(detector, dense, session, name, node, place, &detector.continuity(), frame);
+      m.insert_frame(detector, dense, session, name, frame);
     } catch (...) {
       m.meta = saved;
       throw;
@@ -1180,22 +1138,6 @@ void Database::append_all(const Detector& detector, std::int64_t session) {
   }
   if (detector.size() == m.frames) return;
   check_compatible(detector.options());
-  const DetectorOptions& o = detector.options();
-  std::vector<std::int64_t> node_of;
-  if (detector.search().has_groups()) {
-    node_of.assign(static_cast<std::size_t>(detector.size()), kNull);
-    const CandidateSearch& nodes = detector.search();
-    for (std::int64_t k = 0; k < nodes.groups(); ++k) {
-      for (const std::int64_t f : nodes.members(k)) node_of[static_cast<std::size_t>(f)] = k;
-    }
-  }
-  std::vector<std::int64_t> places;
-  std::int64_t first_place = detector.size();
-  if (o.verification.temporal) {
-    places = detector.temporal_verifier().places();
-    first_place =
-        detector.temporal_verifier().last_query() + 1 - static_cast<std::int64_t>(places.size());
-  }
   const std::int64_t first = m.frames;
   transaction(m.db, m.path, [&] {
     const std::map<std::string, std::string> saved = m.meta;
@@ -1208,12 +1150,7 @@ void Database::append_all(const Detector& detector, std::int64_t session) {
         m.write_meta();
       }
       for (std::int64_t f = first; f < detector.size(); ++f) {
-        const std::int64_t node = node_of.empty() ? kNull : node_of[static_cast<std::size_t>(f)];
-        const std::int64_t place =
-            f >= first_place ? places[static_cast<std::size_t>(f - first_place)] : kNull;
-        m.insert_frame(detector, f, session, "", node, place,
-                       f + 1 == detector.size() ? &detector.continuity() : nullptr,
-                       m.last_frame + 1 + (f - first));
+        m.insert_frame(detector, f, session, "", m.last_frame + 1 + (f - first));
       }
     } catch (...) {
       m.meta = saved;

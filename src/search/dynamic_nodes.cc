@@ -77,6 +77,20 @@ void DynamicNodes::restore(std::vector<std::vector<std::int64_t>> nodes) {
   nodes_ = std::move(nodes);
 }
 
+void DynamicNodes::add_member(std::int64_t node, std::int64_t frame) {
+  if (node < 0 || node > size()) {
+    internal::throw_invalid("DynamicNodes::add_member: node ", node, " does not exist yet (",
+                            size(), " nodes)");
+  }
+  if (node == size()) {
+    nodes_.emplace_back();
+  } else if (frame <= nodes_[static_cast<std::size_t>(node)].back()) {
+    internal::throw_invalid("DynamicNodes::add_member: frame ", frame, " is not after node ", node,
+                            "'s last frame ", nodes_[static_cast<std::size_t>(node)].back());
+  }
+  nodes_[static_cast<std::size_t>(node)].push_back(frame);
+}
+
 namespace {
 
 class NodesSearch final : public CandidateSearch {
@@ -87,6 +101,8 @@ class NodesSearch final : public CandidateSearch {
   Outcome search(const Query& q, std::vector<Candidate>& out, std::vector<double>&) override {
     const DynamicNodes::Outcome o =
         nodes_.assign(q.store, q.descriptor, q.id, options_, q.metric, scratch_, out);
+    node_of_.resize(static_cast<std::size_t>(q.id));  // a search whose frame was not stored
+    node_of_.push_back(o.node);
     return {o.node, o.created};
   }
   bool has_groups() const override { return true; }
@@ -95,42 +111,43 @@ class NodesSearch final : public CandidateSearch {
     return nodes_.members(group);
   }
 
-  // As assign() builds them: every stored frame in exactly one node, nodes in
-  // the order their first frames were stored.
-  void restore_groups(std::vector<std::vector<std::int64_t>> nodes, std::int64_t frames) override {
-    std::vector<std::int64_t> node_of(static_cast<std::size_t>(std::max<std::int64_t>(frames, 0)), -1);
-    for (std::size_t k = 0; k < nodes.size(); ++k) {
-      for (const std::int64_t id : nodes[k]) {
-        if (id < 0 || id >= frames) {
-          internal::throw_invalid("restore_nodes: frame ", id, " of node ", k,
-                                  " is not stored (", frames, " frames)");
-        }
-        std::int64_t& owner = node_of[static_cast<std::size_t>(id)];
-        if (owner >= 0) {
-          internal::throw_invalid("restore_nodes: frame ", id, " is in node ", owner,
-                                  " and in node ", k);
-        }
-        owner = static_cast<std::int64_t>(k);
-      }
-      if (k > 0 && !nodes[k].empty() && !nodes[k - 1].empty() &&
-          nodes[k].front() <= nodes[k - 1].front()) {
-        internal::throw_invalid("restore_nodes: node ", k, " starts at frame ", nodes[k].front(),
-                                ", not after node ", k - 1, "'s first frame ",
-                                nodes[k - 1].front());
-      }
+  std::int64_t group_of(std::int64_t frame) const override {
+    if (frame < 0 || frame >= static_cast<std::int64_t>(node_of_.size())) {
+      internal::throw_invalid("nodes: frame ", frame, " is not stored (", node_of_.size(),
+                              " frames)");
     }
-    for (std::size_t id = 0; id < node_of.size(); ++id) {
-      if (node_of[id] < 0) {
-        internal::throw_invalid("restore_nodes: frame ", id, " is in no node (every stored frame "
-                                "joined or created one)");
-      }
+    return node_of_[static_cast<std::size_t>(frame)];
+  }
+
+  // State, version 1: the node the frame joined or created (int64).
+  bool has_state() const override { return true; }
+  void save_frame(std::int64_t frame, StateWriter& out) const override {
+    out.put_i64(group_of(frame));
+  }
+  void check_frame(std::int64_t frame, int, int, std::uint32_t version,
+                   StateReader in) const override {
+    check_state_version(in.what(), name(), version, 1);
+    const std::int64_t node = in.get_i64();
+    in.finish();
+    if (frame != static_cast<std::int64_t>(node_of_.size())) {
+      internal::throw_invalid(in.what(), ": frame ", frame, " restored after ", node_of_.size(),
+                              " frames");
     }
-    nodes_.restore(std::move(nodes));
+    if (node < 0 || node > nodes_.size()) {
+      internal::throw_invalid(in.what(), ": node ", node, " does not exist yet (", nodes_.size(),
+                              " nodes before this frame)");
+    }
+  }
+  void restore_frame(std::int64_t frame, int, int, std::uint32_t, StateReader in) override {
+    const std::int64_t node = in.get_i64();
+    nodes_.add_member(node, frame);
+    node_of_.push_back(node);
   }
 
  private:
   SearchOptions options_;
   DynamicNodes nodes_;
+  std::vector<std::int64_t> node_of_;  // node of each stored frame
   std::vector<Candidate> scratch_;
 };
 

@@ -39,8 +39,8 @@ void DetectorFlags::add_to(CLI::App& command) {
                      "loop decision threshold on the loop score, standard deviations (default 7; "
                      "overrides decision.threshold)");
   command.add_option("--verify", verify,
-                     "verification stages: none, temporal, geometric or temporal,geometric "
-                     "(overrides verification.stages)");
+                     "verification stages: none or a comma-separated list of " +
+                         verification_stage_names() + " (overrides verification.stages)");
   command.add_option("--option", options,
                      "KEY=VALUE: sets any detector option (`lsgd options` lists them), after "
                      "--config; repeatable")

@@ -3,10 +3,10 @@
 // frame, one transaction per appended frame: a crash loses at most the frame
 // being written, and the file stays inspectable with the sqlite3 shell.
 //
-// Schema (format version 3; docs/reliability.md, "Persistence"):
+// Schema (format version 4; docs/reliability.md, "Persistence"):
 //
 //   meta(key TEXT PRIMARY KEY, value NOT NULL)
-//     format_version   3 (integer)
+//     format_version   4 (integer)
 //     library_version  e.g. "0.1.0", the lsgd that created the file
 //     options          the DetectorOptions as YAML (io::to_yaml)
 //     width, height    frame size (0 until the first frame)
@@ -21,21 +21,25 @@
 //          name TEXT NOT NULL,       -- image name or path ('' when unknown)
 //          histogram BLOB NOT NULL,  -- cells * 256 uint16, little-endian
 //          pixels BLOB NOT NULL,     -- cells uint32, little-endian
-//          node INTEGER,             -- dynamic node joined/created; NULL in exhaustive mode
-//          place INTEGER,            -- temporal verifier's best place of this query
-//                                    -- (-1: none); NULL when temporal is off or unknown
-//          features BLOB,            -- ORB: n * 2 float32 (x, y), then n * 32 bytes;
-//                                    -- NULL when geometric verification is off
+//          node INTEGER,             -- dynamic node joined/created (also in its
+//                                    -- state; for db info); NULL without groups
 //          crc32 INTEGER NOT NULL,   -- CRC-32 of every other column (see database.cc)
-//          loop INTEGER,             -- the decision's state after the frame: its
-//          loop_inliers REAL,        -- loop (detector id, -1: none) and inliers
-//          frame INTEGER)            -- the caller's frame id, increasing with id
-//                                    -- (NULL in rows of older formats: = id)
+//          frame INTEGER,            -- the caller's frame id, increasing with id
+//                                    -- (NULL in rows of formats 1, 2: = id)
+//          state BLOB,               -- Detector::frame_state(): the versioned
+//                                    -- records of the search mode, the
+//                                    -- verification stages and the decision
+//                                    -- (lsgd/state.h), stored without looking
+//                                    -- inside; NULL in rows of older formats
+//          place INTEGER, features BLOB, loop INTEGER, loop_inliers REAL)
+//                                    -- formats 1 to 3: the temporal place, the
+//                                    -- ORB features and the decision's loop in
+//                                    -- columns of their own (NULL in format 4
+//                                    -- rows); restore() reads them as the
+//                                    -- components' version-1 records
 //
-// Node membership is derived from frames.node (node k = its frames in id
-// order; node k is created by its first frame, so first frames increase with
-// k); the temporal verifier's state is the place of the last max(agree, 1)
-// frames. Neither needs a table of its own, so appending a frame is one row.
+// A component with new state (a new verification stage) needs no schema
+// change: its records travel in `state`. Appending a frame is one row.
 //
 // Durability: the write-ahead log is checked before SQLite replays it (a
 // damaged log that would silently lose a commit is a FormatError), and the
@@ -67,12 +71,13 @@
 namespace lsgd::io {
 
 // The format this lsgd writes and the newest it reads. Version 2 keeps the
-// loop decision's state per frame (Detector::continuity()), version 3 the
-// caller's frame id. Older files are read as they are and, opened for
-// writing, upgraded in place (columns added; from version 1 its decision
+// loop decision's state per frame, version 3 the caller's frame id, version 4
+// every component's state as versioned records (the state column). Older
+// files are read as they are and, opened for writing, upgraded in place
+// (columns added, old rows kept as written; from version 1 its decision
 // options reset to this version's defaults: version 1 thresholds were raw
 // similarities, version 2's are in sigma).
-constexpr int kDatabaseFormatVersion = 3;
+constexpr int kDatabaseFormatVersion = 4;
 
 // The frames of one session, as the caller numbered and named them.
 struct StoredFrame {

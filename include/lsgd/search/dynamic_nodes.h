@@ -38,6 +38,10 @@ class DynamicNodes {
   // Throws InvalidArgument, leaving the nodes unchanged, for an empty node, a
   // negative id or ids not increasing within a node.
   void restore(std::vector<std::vector<std::int64_t>> nodes);
+  // Adds frame `frame` to `node` (an existing node, or size(): a new one), as
+  // assign() would have. InvalidArgument, nodes unchanged, for another node or
+  // a frame not after the node's last one.
+  void add_member(std::int64_t node, std::int64_t frame);
 
  private:
   std::vector<std::vector<std::int64_t>> nodes_;  // frame ids, first frame first

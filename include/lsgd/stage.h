@@ -1,0 +1,97 @@
+// Verification stages: the detector's extension point for checking loop
+// candidates after the search (beyond the paper). A stage is a class
+// implementing VerificationStage, registered by name in src/stage.cc (the one
+// table of built-in stages) or by register_verification_stage();
+// VerificationOptions::stages lists the stages a detector runs, chosen once
+// when it is made. The built-in stages:
+// - "temporal" (lsgd/stages/temporal.h): the agreement gate of sequence
+//   consistency (the sequence scores themselves are appearance evidence,
+//   evidence.h, which the temporal stage switches on);
+// - "geometric" (lsgd/stages/geometric.h): ORB + RANSAC confirmation.
+// How verdicts become the loop decision is decision.h's (LoopDecision).
+// docs/design.md, "Add a verification stage", is the recipe.
+#pragma once
+
+#include <cstdint>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "lsgd/frame_store.h"
+#include "lsgd/image.h"
+#include "lsgd/search.h"
+#include "lsgd/state.h"
+#include "lsgd/verification.h"
+
+namespace lsgd {
+
+// kTemporalStage, kGeometricStage: the built-in stages' names (verification.h).
+
+// The query as a stage sees it, once per frame before any check.
+struct StageQuery {
+  std::int64_t frame;  // its id (== store.size(): stored after the stages ran)
+  const GrayImage& gray;
+  const FrameStore& store;
+  DescriptorView descriptor;  // as stored
+};
+
+// One stage's verdict on one candidate.
+struct StageCheck {
+  bool accepted = false;
+  // How strongly a confirmation holds (geometric: inliers); -1 when the
+  // stage has no such measure. The decision's continuity rule reads it.
+  double support = -1;
+  std::string reason;  // e.g. "3 of 3 previous queries agree" or "12 inliers < 20"
+  double ms = 0;
+};
+
+class VerificationStage : public Stateful {
+ public:
+  enum class Role {
+    // Examined on the best verification.max_candidates candidates in rank
+    // order; a rejected candidate is never reported.
+    kGate,
+    // Examined on the candidates the gates let through, in the order of the
+    // score each could reach, only while that score could reach the
+    // threshold; the first candidate every confirming stage accepts is
+    // reported and earns decision.geometric_bonus (decision.h).
+    kConfirm,
+  };
+  virtual Role role() const = 0;
+  // False when the stage's options leave it nothing to check (temporal with
+  // agree = 0): it gives no verdicts, but begin() and end() still run.
+  virtual bool examines() const { return true; }
+  // Called once per frame before any check (geometric: computes the frame's
+  // features). Throws only for a frame it cannot take, before changing.
+  virtual void begin(const StageQuery& query) { (void)query; }
+  // The verdict on candidate `candidate` of query `query` (after begin()).
+  virtual StageCheck check(std::int64_t query, const Candidate& candidate) = 0;
+  // Called once per frame after the decision, with the query's candidates
+  // best first (temporal: remembers its best place).
+  virtual void end(std::int64_t query, const std::vector<Candidate>& candidates) {
+    (void)query, (void)candidates;
+  }
+};
+
+// A registered stage.
+struct StageType {
+  const char* name;
+  const char* summary;  // one line, for help texts
+  std::unique_ptr<VerificationStage> (*make)(const VerificationOptions& options);
+};
+
+// Every registered stage, in registration order: the built-in ones first.
+std::vector<StageType> verification_stage_types();
+// Registers another stage (an application's own check), usable by name in
+// VerificationOptions::stages from then on; call it before the detectors
+// that use it are made. InvalidArgument for a missing name, summary or make
+// function, a name already registered, or "none"; thread-safe.
+void register_verification_stage(const StageType& type);
+// "temporal, geometric": the names, for messages and help texts.
+std::string verification_stage_names();
+// Throws InvalidArgument naming `name` and the registered stages unless it is one.
+void check_verification_stage(const std::string& name);
+// The stages options.stages names, in that order, made with `options`.
+std::vector<std::unique_ptr<VerificationStage>> make_stages(const VerificationOptions& options);
+
+}  // namespace lsgd

@@ -1,0 +1,66 @@
+// A table of named factories (search modes, verification stages): the
+// built-in entries first, then those an application registers. Entry has
+// const char* name, summary and a make function pointer.
+#pragma once
+
+#include <mutex>
+#include <string>
+#include <vector>
+
+#include "internal/check.h"
+
+namespace lsgd::internal {
+
+template <class Entry>
+class Registry {
+ public:
+  // `what` names an entry in messages: "search mode", "verification stage".
+  Registry(const char* what, std::vector<Entry> builtin) : what_(what), entries_(std::move(builtin)) {}
+
+  std::vector<Entry> entries() const {
+    const std::lock_guard<std::mutex> lock(mutex_);
+    return entries_;
+  }
+
+  // InvalidArgument ("<caller>: ...") for an entry without name, summary or
+  // make function, a name in `reserved`, or one already registered.
+  void add(const Entry& entry, const char* caller, const char* reserved = nullptr) {
+    if (entry.name == nullptr || *entry.name == '\0' || entry.summary == nullptr ||
+        entry.make == nullptr) {
+      throw_invalid(caller, ": a ", what_, " needs a name, a summary and a make function");
+    }
+    if (reserved != nullptr && std::string(entry.name) == reserved) {
+      throw_invalid(caller, ": '", reserved, "' is not a ", what_, " name");
+    }
+    const std::lock_guard<std::mutex> lock(mutex_);
+    for (const Entry& e : entries_) {
+      if (std::string(e.name) == entry.name) {
+        throw_invalid(caller, ": ", what_, " '", entry.name, "' is already registered");
+      }
+    }
+    entries_.push_back(entry);
+  }
+
+  // "a, b, c"
+  std::string names() const {
+    std::string out;
+    for (const Entry& e : entries()) out += (out.empty() ? "" : ", ") + std::string(e.name);
+    return out;
+  }
+
+  // The entry named `name`; InvalidArgument naming it and the registered
+  // ones when there is none.
+  Entry find(const std::string& name) const {
+    for (const Entry& e : entries()) {
+      if (name == e.name) return e;
+    }
+    throw_invalid(what_, " '", name, "' is unknown: expected one of ", names());
+  }
+
+ private:
+  const char* what_;
+  mutable std::mutex mutex_;
+  std::vector<Entry> entries_;
+};
+
+}  // namespace lsgd::internal

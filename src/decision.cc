@@ -105,6 +105,24 @@ Decision LoopDecision::decide(const DecisionQuery& q, const std::vector<Verifica
         if (continuation.frame < 0 || better(c, continuation)) continuation = c;
       }
     }
+    // The gates judge the continuation too: a rejected candidate is never
+    // reported, whichever way it came.
+    if (continuation.frame >= 0) {
+      bool seen = false;
+      for (std::size_t i = 0; i < n && !seen; ++i) {
+        if (candidates[i].frame != continuation.frame) continue;
+        seen = true;
+        if (gated_[i]) continuation = {};
+      }
+      for (VerificationStage* gate : stages) {
+        if (seen || continuation.frame < 0) break;
+        if (gate->role() != VerificationStage::Role::kGate || !gate->examines()) continue;
+        const StageCheck check = gate->check(q.frame, continuation);
+        out.verdicts.push_back(
+            {continuation.frame, gate->name(), check.accepted, check.reason, check.ms});
+        if (!check.accepted) continuation = {};
+      }
+    }
     examined_.clear();
     bool has_continuation = false;
     for (std::size_t i = 0; i < n; ++i) {

@@ -4,14 +4,15 @@
 //
 //   score = appearance                           (evidence.h: R with the temporal stage,
 //                                                 the standardised similarity without it)
-//         + geometric_bonus   when the geometric stage confirmed the candidate
+//         + geometric_bonus   when the confirming stages (the geometric stage;
+//                             lsgd/stage.h) confirmed the candidate
 //         + continuity_bonus  when, confirmed, it continues the loop declared for
 //                             the previous frame: it is that loop's frame j or
 //                             one of the next 1 + verification.temporal.tolerance
 //                             (a revisit may be slower or faster, never backwards)
 //
-// A stage can also sink a candidate: one the geometric stage or the agreement
-// gate rejected is never reported. With the defaults (threshold 7, bonuses
+// A stage can also sink a candidate: one a confirming stage or a gate (the
+// temporal stage's agreement gate) rejected is never reported. With the defaults (threshold 7, bonuses
 // 3.5 and 2.5) a first loop needs appearance >= 3.5 sigma and geometry, a loop
 // that continues a declared one >= 1 sigma and geometry, and a loop on
 // appearance alone (no geometric stage) >= 7 sigma. docs/results.md has the

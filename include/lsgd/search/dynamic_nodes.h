@@ -47,9 +47,9 @@ class DynamicNodes {
   std::vector<std::vector<std::int64_t>> nodes_;  // frame ids, first frame first
 };
 
-// The registered mode (SearchMode::make). Its restore_groups() also checks
-// what assign() guarantees over the stored frames: every frame in exactly one
-// node, nodes in the order of their first frames.
+// The registered mode (SearchMode::make). Its state (state.h, version 1):
+// the node each frame joined or created; a restored frame's node must exist
+// or be the next new one, as assign() guarantees.
 std::unique_ptr<CandidateSearch> make_nodes_search(const SearchOptions& options);
 
 }  // namespace lsgd

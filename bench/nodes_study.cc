@@ -11,7 +11,9 @@
 // The sequence is `lsgd bench`'s: 1241x376 frames of the synthetic street,
 // frame i showing route frame i % 1090, default detector options (S_p = 40,
 // 80 cells, reference metric and thresholds, min_gap 50). It runs Algorithm 1
-// exactly as DynamicNodes::assign does and, for every node whose members are
+// as DynamicNodes::assign does (written out, to see inside it; checked: the
+// study fails unless assign() then builds the very same nodes) and, for every
+// node whose members are
 // scored, also computes for every member an upper bound on its similarity from
 // histograms merged into 32, 16 or 8 coarse bins (merging bins never increases
 // L1, so the bound is exact). A node whose bound on the mean stays at or below
@@ -193,8 +195,8 @@ int main(int argc, char** argv) {
   };
 
   const double n = static_cast<double>(frames);
+  std::vector<std::vector<std::int64_t>> nodes;  // the study's Algorithm 1
   if (!timing_only) {
-    std::vector<std::vector<std::int64_t>> nodes;
     std::int64_t first_sims = 0, member_sims = 0, scanned_nodes = 0, accepting_members = 0;
     std::int64_t saved[3] = {0, 0, 0};
     for (std::int64_t q = 0; q < frames; ++q) {
@@ -294,6 +296,18 @@ int main(int argc, char** argv) {
                 .count());
         spent += outcome.similarities;
         store.add(stored[at(q)], outcome.node);  // as the detector does
+      }
+      if (!timing_only && storage == lsgd::HistogramStorage::kExact) {
+        bool same = dn.size() == static_cast<std::int64_t>(nodes.size());
+        for (std::int64_t k = 0; same && k < dn.size(); ++k) {
+          same = dn.members(k) == nodes[static_cast<std::size_t>(k)];
+        }
+        if (!same) {
+          std::fprintf(stderr, "the study's Algorithm 1 (%zu nodes) is not DynamicNodes::assign's "
+                       "(%lld nodes): its counts above are wrong\n", nodes.size(),
+                       static_cast<long long>(dn.size()));
+          return 1;
+        }
       }
       std::sort(ms.begin(), ms.end());
       std::printf(

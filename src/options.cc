@@ -6,6 +6,7 @@
 #include <system_error>
 
 #include "internal/check.h"
+#include "internal/numbers.h"
 
 namespace lsgd {
 
@@ -39,20 +40,12 @@ void throw_bad_option_text(const std::string& key, const std::string& text,
 
 namespace {
 
-// Parses the whole of `text` (an optional '+' is allowed) with from_chars.
-template <typename T>
-bool parse_number(std::string text, T& value) {
-  if (!text.empty() && text[0] == '+') text.erase(0, 1);
-  if (text.empty() || text[0] == '+' || text[0] == ' ') return false;
-  const char* end = text.data() + text.size();
-  const auto [ptr, ec] = std::from_chars(text.data(), end, value);
-  return ec == std::errc() && ptr == end;
-}
+using internal::parses_as;
 
 }  // namespace
 
 bool parse_integer_text(const std::string& text, std::int64_t& value) {
-  return parse_number(text, value);
+  return parses_as(text, value);
 }
 
 bool parse_real_text(const std::string& text, double& value) {
@@ -66,7 +59,7 @@ bool parse_real_text(const std::string& text, double& value) {
   } else if (kNan.count(text)) {
     value = std::numeric_limits<double>::quiet_NaN();
   } else {
-    return parse_number(text, value);
+    return parses_as(text, value);
   }
   return true;
 }

@@ -4,6 +4,7 @@
 #include <limits>
 
 #include "internal/check.h"
+#include "internal/numbers.h"
 #include "lsgd/error.h"
 
 namespace lsgd::eval {
@@ -55,8 +56,7 @@ namespace {
 template <typename T>
 T parse_integer(const std::string& key, const std::string& value) {
   T v{};
-  const auto [end, ec] = std::from_chars(value.data(), value.data() + value.size(), v);
-  if (ec != std::errc() || end != value.data() + value.size()) {
+  if (!internal::parses_as(value, v)) {
     internal::throw_invalid("dataset option ", key, "=", value, ": not an integer");
   }
   return v;

@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "internal/check.h"
+#include "internal/numbers.h"
 #include "lsgd/io/sequence.h"
 #include "lsgd/error.h"
 
@@ -71,15 +72,13 @@ std::vector<std::string> split_fields(const std::string& record) {
 
 std::optional<std::int64_t> parse_int(const std::string& s) {
   std::int64_t v = 0;
-  const auto [end, ec] = std::from_chars(s.data(), s.data() + s.size(), v);
-  if (ec != std::errc() || end != s.data() + s.size() || s.empty()) return std::nullopt;
+  if (!internal::parses_as(s, v)) return std::nullopt;
   return v;
 }
 
 std::optional<double> parse_double(const std::string& s) {
   double v = 0;
-  const auto [end, ec] = std::from_chars(s.data(), s.data() + s.size(), v);
-  if (ec != std::errc() || end != s.data() + s.size() || s.empty()) return std::nullopt;
+  if (!internal::parses_as(s, v)) return std::nullopt;
   return v;
 }
 

@@ -19,6 +19,7 @@
 #include <utility>
 
 #include "internal/check.h"
+#include "internal/numbers.h"
 #include "lsgd/error.h"
 #include "lsgd/io/sequence.h"
 #include "lsgd/limits.h"
@@ -64,19 +65,9 @@ std::vector<std::string> fields_of(const std::string& line) {
   return fields;
 }
 
-bool parse_int(const std::string& text, long long& value) {
-  const char* begin = text.data() + (text.size() > 1 && text[0] == '+' ? 1 : 0);
-  const char* end = text.data() + text.size();
-  const auto [ptr, ec] = std::from_chars(begin, end, value);
-  return ec == std::errc() && ptr == end;
-}
+bool parse_int(const std::string& text, long long& value) { return internal::parses_as(text, value); }
 
-bool parse_double(const std::string& text, double& value) {
-  const char* begin = text.data() + (text.size() > 1 && text[0] == '+' ? 1 : 0);
-  const char* end = text.data() + text.size();
-  const auto [ptr, ec] = std::from_chars(begin, end, value);
-  return ec == std::errc() && ptr == end;
-}
+bool parse_double(const std::string& text, double& value) { return internal::parses_as(text, value); }
 
 // ---- detection --------------------------------------------------------------
 

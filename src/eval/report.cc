@@ -165,6 +165,11 @@ void axes(std::ostream& svg, const Rect& r, const Scale& x, const Scale& y,
 
 // The plot area of the 560 x 480 charts (the legend goes under the axis title).
 constexpr Rect kChart{70, 20, 540, 380};
+// Where the legend of a chart starts (x, y) and how wide it may run.
+constexpr double kLegendX = kChart.x0, kLegendY = kChart.y1 + 66, kLegendWidth = 550;
+// Scales onto the chart's plot area: x left to right, y bottom to top.
+Scale chart_x(double lo, double hi) { return {lo, hi, kChart.x0, kChart.x1}; }
+Scale chart_y(double lo, double hi) { return {lo, hi, kChart.y1, kChart.y0}; }
 
 // One legend entry: a swatch (line, dot or box) and its label; returns its width in pixels.
 double legend_row(std::ostream& svg, double x, double y, const std::string& swatch,
@@ -294,7 +299,7 @@ void header(std::ostream& html, const ReportInput& in, const Operating& op) {
 
 void pr_curve(std::ostream& html, const ReportInput& in, const Operating& op) {
   const Metrics& m = *in.metrics;
-  const Scale x{0, 1, 70, 540}, y{0, 1, 380, 20};
+  const Scale x = chart_x(0, 1), y = chart_y(0, 1);
   std::ostringstream svg;
   svg << "<svg class='pr' width='560' height='480' viewBox='0 0 560 480' role='img'>";
   const std::vector<double> t = ticks(0, 1, 10);
@@ -377,7 +382,7 @@ void score_histogram(std::ostream& html, const ReportInput& in, const Operating&
   for (std::size_t b = 0; b < h.tp.size(); ++b) peak = std::max(peak, h.tp[b] + h.fp[b]);
   const double step = std::max(1.0, std::round(tick_step(0, peak, 5)));
   const double top = std::ceil(peak / step) * step;  // the axis ends on a tick
-  const Scale x{h.lo, h.hi, 70, 540}, y{0, top, 380, 20};
+  const Scale x = chart_x(h.lo, h.hi), y = chart_y(0, top);
   std::ostringstream svg;
   svg << "<svg class='hist' width='560' height='480' viewBox='0 0 560 480' role='img'>";
   std::vector<double> yt;
@@ -399,7 +404,7 @@ void score_histogram(std::ostream& html, const ReportInput& in, const Operating&
          {{"dot", kTpColour, "true positive"},
           {"dot", kFpColour, "false positive"},
           {"line", "#111", "operating threshold"}},
-         70, 446, 550);
+         kLegendX, kLegendY, kLegendWidth);
   html << svg.str() << "</svg><figcaption>The best verified candidate of each query that "
        << "reported one (" << h.reports << " queries), stacked; dashed: the " << op.label
        << ".</figcaption></figure>\n";
@@ -587,11 +592,12 @@ void trajectory_section(std::ostream& html, const ReportInput& in, const Operati
     x_lo = std::min(x_lo, q[0]), x_hi = std::max(x_hi, q[0]);
     z_lo = std::min(z_lo, q[1]), z_hi = std::max(z_hi, q[1]);
   }
-  // Equal scale on both axes inside a 470 x 360 plot, centred.
-  const double span = std::max({(x_hi - x_lo) / 470.0, (z_hi - z_lo) / 360.0, 1e-9});
+  // Equal scale on both axes inside the plot area, centred.
+  const double w = kChart.x1 - kChart.x0, h = kChart.y1 - kChart.y0;
+  const double span = std::max({(x_hi - x_lo) / w, (z_hi - z_lo) / h, 1e-9});
   const double xc = (x_lo + x_hi) / 2, zc = (z_lo + z_hi) / 2;
-  const Scale x{xc - 235 * span, xc + 235 * span, 70, 540},
-      z{zc - 180 * span, zc + 180 * span, 380, 20};
+  const Scale x = chart_x(xc - w / 2 * span, xc + w / 2 * span),
+              z = chart_y(zc - h / 2 * span, zc + h / 2 * span);
   std::ostringstream svg;
   svg << "<svg class='trajectory' width='560' height='480' viewBox='0 0 560 480' role='img'>";
   axes(svg, kChart, x, z, ticks(x.lo, x.hi, 6), ticks(z.lo, z.hi, 5), "x", "z", true);
@@ -617,7 +623,7 @@ void trajectory_section(std::ostream& html, const ReportInput& in, const Operati
           {"line", kTpColour, "true loop"},
           {"line", kFpColour, "false loop"},
           {"dot", "#111", "start"}},
-         70, 446, 550);
+         kLegendX, kLegendY, kLegendWidth);
   svg << "</svg>";
   html << "<figure class='chart'><h2>Trajectory</h2>" << svg.str()
        << "<figcaption>Camera positions (x, z), equal scale; lines join each loop found at the "

@@ -17,6 +17,7 @@
 #include <vector>
 
 #include "internal/check.h"
+#include "internal/numbers.h"
 #include "lsgd/error.h"
 #include "lsgd/io/sequence.h"
 #include "lsgd/limits.h"
@@ -66,16 +67,7 @@ std::string describe(const YAML::Node& node) {
 // A YAML scalar usable as a number: plain (not quoted) and not null.
 bool is_plain_scalar(const YAML::Node& node) { return node.IsScalar() && node.Tag() != "!"; }
 
-// Parses the whole of `text` (an optional '+' is allowed) with from_chars.
-template <typename T>
-std::errc parse_number(std::string text, T& value) {
-  if (!text.empty() && text[0] == '+') text.erase(0, 1);
-  if (text.empty() || text[0] == '+' || text[0] == ' ') return std::errc::invalid_argument;
-  const char* end = text.data() + text.size();
-  const auto [ptr, ec] = std::from_chars(text.data(), end, value);
-  if (ec != std::errc()) return ec;
-  return ptr == end ? std::errc() : std::errc::invalid_argument;
-}
+using internal::parse_number;
 
 std::int64_t read_int64(const YAML::Node& node, const std::string& source, const std::string& key,
                         std::int64_t lo, std::int64_t hi) {

@@ -21,13 +21,15 @@ export UBSAN_OPTIONS=${UBSAN_OPTIONS:-print_stacktrace=1:halt_on_error=1}
 
 echo "ci-hardening: (a) ASan+UBSan test suite in build-asan"
 cmake -S . -B build-asan -DCMAKE_BUILD_TYPE=RelWithDebInfo -DCMAKE_CXX_FLAGS_RELWITHDEBINFO="-O1 -g1" \
-  -DLSGD_SANITIZE=address,undefined -DLSGD_BUILD_TESTS=ON -DLSGD_BUILD_TOOLS=ON -DLSGD_BUILD_BENCH=OFF
+  -DLSGD_SANITIZE=address,undefined -DLSGD_BUILD_TESTS=ON -DLSGD_BUILD_TOOLS=ON -DLSGD_BUILD_BENCH=OFF \
+  -DLSGD_BUILD_PYTHON=OFF -DLSGD_BUILD_EXAMPLES=OFF
 cmake --build build-asan -j"$jobs"
 ctest --test-dir build-asan --output-on-failure -j"$jobs" -E "SyntheticCli|SyntheticDefaults"
 
 echo "ci-hardening: (c) ThreadSanitizer: detector_test in build-tsan"
 cmake -S . -B build-tsan -DCMAKE_BUILD_TYPE=RelWithDebInfo -DCMAKE_CXX_FLAGS_RELWITHDEBINFO="-O1 -g1" \
-  -DLSGD_SANITIZE=thread -DLSGD_BUILD_TESTS=ON -DLSGD_BUILD_TOOLS=OFF -DLSGD_BUILD_BENCH=OFF
+  -DLSGD_SANITIZE=thread -DLSGD_BUILD_TESTS=ON -DLSGD_BUILD_TOOLS=OFF -DLSGD_BUILD_BENCH=OFF \
+  -DLSGD_BUILD_PYTHON=OFF -DLSGD_BUILD_EXAMPLES=OFF
 cmake --build build-tsan -j"$jobs" --target detector_test
 TSAN_OPTIONS=halt_on_error=1 build-tsan/tests/detector_test --gtest_filter='Detector.*'
 
@@ -35,7 +37,7 @@ echo "ci-hardening: (b) libFuzzer targets in build-fuzz"
 cmake -S . -B build-fuzz -DCMAKE_CXX_COMPILER=clang++ -DCMAKE_BUILD_TYPE=RelWithDebInfo \
   -DCMAKE_CXX_FLAGS_RELWITHDEBINFO="-O1 -g1" \
   -DLSGD_SANITIZE=address,undefined -DLSGD_BUILD_FUZZERS=ON \
-  -DLSGD_BUILD_TESTS=OFF -DLSGD_BUILD_TOOLS=OFF -DLSGD_BUILD_BENCH=OFF
+  -DLSGD_BUILD_TESTS=OFF -DLSGD_BUILD_TOOLS=OFF -DLSGD_BUILD_BENCH=OFF -DLSGD_BUILD_PYTHON=OFF -DLSGD_BUILD_EXAMPLES=OFF
 cmake --build build-fuzz -j"$jobs"
 
 status=0

@@ -1,0 +1,318 @@
+// The Python module lsgd._lsgd (pybind11): the detector, the place
+// database, sequences, ground truth and the strict metrics, for
+// /usr/bin/python3 with numpy. lsgd/__init__.py re-exports it; README,
+// "Python", shows how to use it.
+#include <pybind11/numpy.h>
+#include <pybind11/pybind11.h>
+#include <pybind11/stl.h>
+
+#include <cstring>
+#include <opencv2/core.hpp>
+#include <string>
+#include <vector>
+
+#include "lsgd/detector.h"
+#include "lsgd/error.h"
+#include "lsgd/eval/dataset.h"
+#include "lsgd/eval/gt_formats.h"
+#include "lsgd/eval/groundtruth.h"
+#include "lsgd/eval/metrics.h"
+#include "lsgd/io/config.h"
+#include "lsgd/io/database.h"
+#include "lsgd/io/sequence.h"
+#include "lsgd/options.h"
+
+namespace py = pybind11;
+
+namespace {
+
+// ---- options: a dict with the YAML's names, nested ({"search": {"min_gap":
+// 50}}) or dotted ({"search.min_gap": 50}), values as Python numbers or text.
+
+std::string option_value_text(const py::handle& value) {
+  if (py::isinstance<py::bool_>(value)) {
+    throw lsgd::InvalidArgument("an option value is a bool; options take numbers or names");
+  }
+  if (py::isinstance<py::float_>(value)) {
+    return lsgd::format_real(value.cast<double>());
+  }
+  if (py::isinstance<py::list>(value) || py::isinstance<py::tuple>(value)) {
+    std::string text;  // verification.stages as a list of names
+    for (const py::handle& item : value) text += (text.empty() ? "" : ",") + py::str(item).cast<std::string>();
+    return text.empty() ? "none" : text;
+  }
+  return py::str(value).cast<std::string>();
+}
+
+void set_options(lsgd::DetectorOptions& options, const py::dict& values, const std::string& prefix) {
+  for (const auto& [k, v] : values) {
+    const std::string key = prefix + py::str(k).cast<std::string>();
+    if (py::isinstance<py::dict>(v)) {
+      set_options(options, v.cast<py::dict>(), key + ".");
+    } else {
+      lsgd::set_option(options, key, option_value_text(v));
+    }
+  }
+}
+
+lsgd::DetectorOptions make_options(const py::object& options, const py::kwargs& kwargs) {
+  lsgd::DetectorOptions o;
+  if (!options.is_none()) {
+    if (py::isinstance<py::str>(options)) {
+      o = lsgd::io::load_config(options.cast<std::string>());  // a YAML file
+    } else {
+      set_options(o, options.cast<py::dict>(), "");
+    }
+  }
+  set_options(o, kwargs, "");
+  o.check();
+  return o;
+}
+
+// Every option as {"search.min_gap": "50", ...}, in the YAML's order, as text
+// that reads back equal.
+py::dict options_dict(const lsgd::DetectorOptions& o) {
+  py::dict out;
+  for (const auto& f : lsgd::DetectorOptions::fields()) out[py::str(f.name)] = f.text(o);
+  return out;
+}
+
+// ---- images: numpy uint8 arrays, H x W (gray), H x W x 3 (BGR), H x W x 4 (BGRA)
+
+bool rows_dense(const py::array& a) {
+  const py::ssize_t channels = a.ndim() == 3 ? a.shape(2) : 1;
+  return a.ndim() >= 2 && a.strides(1) == channels && (a.ndim() == 2 || a.strides(2) == 1) &&
+         a.strides(0) >= a.shape(1) * channels;
+}
+
+lsgd::ImageView image_view(const py::array& a) {
+  if (a.dtype().kind() != 'u' || a.itemsize() != 1) {
+    throw lsgd::InvalidArgument("the image is a numpy array of " + py::str(a.dtype()).cast<std::string>() +
+                                ": expected uint8 (convert 16-bit or float images first)");
+  }
+  const int channels = a.ndim() == 2 ? 1 : a.ndim() == 3 ? static_cast<int>(a.shape(2)) : 0;
+  if (channels != 1 && channels != 3 && channels != 4) {
+    std::string shape;
+    for (py::ssize_t i = 0; i < a.ndim(); ++i) shape += (i ? ", " : "") + std::to_string(a.shape(i));
+    throw lsgd::InvalidArgument("the image has shape (" + shape +
+                                "): expected (H, W) gray, (H, W, 3) BGR or (H, W, 4) BGRA");
+  }
+  if (!rows_dense(a)) throw lsgd::InvalidArgument("the image's rows are not contiguous");
+  lsgd::ImageView v;
+  v.data = static_cast<const std::uint8_t*>(a.data());
+  v.width = static_cast<int>(a.shape(1));
+  v.height = static_cast<int>(a.shape(0));
+  v.stride_bytes = static_cast<std::size_t>(a.strides(0));
+  v.format = channels == 1 ? lsgd::PixelFormat::kGray8
+             : channels == 3 ? lsgd::PixelFormat::kBgr8 : lsgd::PixelFormat::kBgra8;
+  return v;
+}
+
+
+py::array mat_to_array(const cv::Mat& m) {
+  std::vector<py::ssize_t> shape = {m.rows, m.cols};
+  if (m.channels() > 1) shape.push_back(m.channels());
+  py::array_t<std::uint8_t> out(shape);
+  for (int y = 0; y < m.rows; ++y) {
+    std::memcpy(out.mutable_data(y), m.ptr(y), static_cast<std::size_t>(m.cols) * m.channels());
+  }
+  return out;
+}
+
+lsgd::eval::FrameRecord record_of(const lsgd::Result& r) {
+  lsgd::eval::FrameRecord rec;
+  rec.frame = r.frame;
+  rec.reported = r.best;
+  rec.loop = r.loop;
+  rec.candidates = r.candidates;
+  rec.timings = r.timings;
+  return rec;
+}
+
+}  // namespace
+
+PYBIND11_MODULE(_lsgd, m) {
+  m.doc() = "lsgd: training-free visual loop closure detection (LSGDDN-LCD)";
+  m.attr("__version__") = LSGD_VERSION_STRING;
+
+  // Errors: lsgd.Error and its kinds, each also a standard Python exception.
+  static py::exception<lsgd::Error> error(m, "Error", PyExc_RuntimeError);
+  static py::handle invalid = PyErr_NewException("lsgd.InvalidArgument",
+      py::make_tuple(error, py::handle(PyExc_ValueError)).release().ptr(), nullptr);
+  static py::handle io_error = PyErr_NewException("lsgd.IoError",
+      py::make_tuple(error, py::handle(PyExc_OSError)).release().ptr(), nullptr);
+  static py::handle format_error = PyErr_NewException("lsgd.FormatError",
+      py::make_tuple(error, py::handle(PyExc_ValueError)).release().ptr(), nullptr);
+  m.attr("InvalidArgument") = invalid;
+  m.attr("IoError") = io_error;
+  m.attr("FormatError") = format_error;
+  py::register_exception_translator([](std::exception_ptr p) {
+    try {
+      if (p) std::rethrow_exception(p);
+    } catch (const lsgd::InvalidArgument& e) {
+      PyErr_SetString(invalid.ptr(), e.what());
+    } catch (const lsgd::IoError& e) {
+      PyErr_SetString(io_error.ptr(), e.what());
+    } catch (const lsgd::FormatError& e) {
+      PyErr_SetString(format_error.ptr(), e.what());
+    } catch (const lsgd::Error& e) {
+      PyErr_SetString(error.ptr(), e.what());
+    }
+  });
+
+  py::class_<lsgd::Candidate>(m, "Candidate")
+      .def_readonly("frame", &lsgd::Candidate::frame)
+      .def_readonly("score", &lsgd::Candidate::score)
+      .def("__repr__", [](const lsgd::Candidate& c) {
+        return "Candidate(frame=" + std::to_string(c.frame) + ", score=" + lsgd::format_real(c.score) + ")";
+      });
+  py::class_<lsgd::LoopEvidence>(m, "LoopEvidence")
+      .def_readonly("appearance", &lsgd::LoopEvidence::appearance)
+      .def_readonly("inliers", &lsgd::LoopEvidence::inliers)
+      .def_readonly("confirmed", &lsgd::LoopEvidence::confirmed)
+      .def_readonly("continues", &lsgd::LoopEvidence::continues);
+  py::class_<lsgd::StageVerdict>(m, "StageVerdict")
+      .def_readonly("candidate", &lsgd::StageVerdict::candidate)
+      .def_readonly("stage", &lsgd::StageVerdict::stage)
+      .def_readonly("accepted", &lsgd::StageVerdict::accepted)
+      .def_readonly("reason", &lsgd::StageVerdict::reason)
+      .def_readonly("ms", &lsgd::StageVerdict::ms);
+  py::class_<lsgd::Timings>(m, "Timings")
+      .def_readonly("convert_ms", &lsgd::Timings::convert_ms)
+      .def_readonly("segment_ms", &lsgd::Timings::segment_ms)
+      .def_readonly("describe_ms", &lsgd::Timings::describe_ms)
+      .def_readonly("search_ms", &lsgd::Timings::search_ms)
+      .def_readonly("verify_ms", &lsgd::Timings::verify_ms)
+      .def_readonly("total_ms", &lsgd::Timings::total_ms);
+  py::class_<lsgd::Result>(m, "Result")
+      .def_readonly("frame", &lsgd::Result::frame)
+      .def_readonly("loop", &lsgd::Result::loop)
+      .def_readonly("best", &lsgd::Result::best)
+      .def_readonly("evidence", &lsgd::Result::evidence)
+      .def_readonly("candidates", &lsgd::Result::candidates)
+      .def_readonly("verification", &lsgd::Result::verification)
+      .def_readonly("node", &lsgd::Result::node)
+      .def_readonly("node_created", &lsgd::Result::node_created)
+      .def_readonly("timings", &lsgd::Result::timings)
+      .def("__repr__", [](const lsgd::Result& r) {
+        return "Result(frame=" + std::to_string(r.frame) + ", loop=" + (r.loop ? "True" : "False") +
+               ", best=" + std::to_string(r.best.frame) + ", score=" + lsgd::format_real(r.best.score) + ")";
+      });
+
+  m.def("default_options", [] { return options_dict(lsgd::DetectorOptions{}); },
+        "Every detector option and its default, as {'search.min_gap': '50', ...}.");
+  m.def("options", [](const py::object& options, const py::kwargs& kwargs) {
+          return options_dict(make_options(options, kwargs));
+        }, py::arg("options") = py::none(),
+        "The options a Detector(options, **kwargs) would use, validated.");
+
+  py::class_<lsgd::Detector>(m, "Detector")
+      .def(py::init([](const py::object& options, const py::kwargs& kwargs) {
+             return std::make_unique<lsgd::Detector>(make_options(options, kwargs));
+           }),
+           py::arg("options") = py::none(),
+           "Detector(options=None, **kwargs): options as a dict with the YAML's names "
+           "(nested or dotted), a YAML file name, or keyword arguments per section: "
+           "Detector(search={'min_gap': 50, 'mode': 'nodes'}, verification={'stages': 'temporal'}).")
+      .def("process",
+           [](lsgd::Detector& d, py::array image) {
+             // A strided view (a crop with a step, a transposed array) is copied once.
+             if (!rows_dense(image)) image = py::array::ensure(image, py::array::c_style);
+             if (!image) throw lsgd::InvalidArgument("the image is not a numpy array");
+             const lsgd::ImageView view = image_view(image);
+             py::gil_scoped_release release;  // other Python threads run meanwhile
+             return d.process(view);
+           },
+           py::arg("image"),
+           "Processes the next frame (uint8 numpy array: (H, W) gray, (H, W, 3) BGR or "
+           "(H, W, 4) BGRA) and returns its Result. Zero-copy when each row's pixels are "
+           "contiguous; the GIL is released while it runs.")
+      .def_property_readonly("size", &lsgd::Detector::size)
+      .def("__len__", &lsgd::Detector::size)
+      .def_property_readonly("nodes", &lsgd::Detector::nodes)
+      .def_property_readonly("options", [](const lsgd::Detector& d) { return options_dict(d.options()); })
+      .def("similarity", &lsgd::Detector::similarity, py::arg("a"), py::arg("b"),
+           "Similarity of two stored frames with the configured metric.");
+
+  // ---- the place database
+  py::class_<lsgd::io::Database>(m, "Database")
+      .def_static("create", [](const std::string& path, const py::object& options, const py::kwargs& kwargs) {
+             return lsgd::io::Database::create(path, make_options(options, kwargs));
+           }, py::arg("path"), py::arg("options") = py::none(),
+           "Creates a new, empty database for detectors with these options.")
+      .def_static("open", [](const std::string& path, bool writable) {
+             return lsgd::io::Database::open(path, writable ? lsgd::io::Database::Mode::kReadWrite
+                                                            : lsgd::io::Database::Mode::kReadOnly);
+           }, py::arg("path"), py::arg("writable") = true)
+      .def("detector", [](const lsgd::io::Database& db) {
+             auto d = std::make_unique<lsgd::Detector>(db.options());
+             db.restore(*d);
+             return d;
+           }, "A detector with the stored options and every stored frame restored.")
+      .def("restore", &lsgd::io::Database::restore, py::arg("detector"))
+      .def("append", &lsgd::io::Database::append, py::arg("detector"), py::arg("result"),
+           py::arg("session"), py::arg("name") = "", py::arg("frame") = -1,
+           "Stores the detector's last frame (call right after process()).")
+      .def_property_readonly("path", &lsgd::io::Database::path)
+      .def_property_readonly("frames", &lsgd::io::Database::frames)
+      .def_property_readonly("last_session", &lsgd::io::Database::last_session)
+      .def_property_readonly("options", [](const lsgd::io::Database& db) { return options_dict(db.options()); })
+      .def("frame_ids", &lsgd::io::Database::frame_ids);
+
+  // ---- images and sequences
+  m.def("read_image", [](const std::string& path) { return mat_to_array(lsgd::io::read_image(path)); },
+        py::arg("path"), "Reads an image file as a uint8 array (gray or BGR); lsgd.Error on a bad file.");
+  m.def("open_sequence", [](const std::string& path) { return lsgd::io::open_sequence(path).images; },
+        py::arg("path"), "The image paths of a folder (natural order) or an image list file.");
+
+  // ---- ground truth and the strict metrics
+  py::class_<lsgd::eval::GroundTruth>(m, "GroundTruth")
+      .def(py::init<std::int64_t>(), py::arg("frames"))
+      .def("add", &lsgd::eval::GroundTruth::add)
+      .def_property_readonly("frames", &lsgd::eval::GroundTruth::frames)
+      .def_property_readonly("pairs", &lsgd::eval::GroundTruth::pairs)
+      .def("is_loop", &lsgd::eval::GroundTruth::is_loop)
+      .def("matches", &lsgd::eval::GroundTruth::matches)
+      .def("queries", &lsgd::eval::GroundTruth::queries)
+      .def("has_loop", &lsgd::eval::GroundTruth::has_loop, py::arg("query"), py::arg("min_gap"));
+  m.def("load_groundtruth", [](const std::string& path, std::int64_t frames, const std::string& format) {
+          lsgd::eval::GtOptions o;
+          o.frames = frames;
+          o.format = lsgd::eval::parse_gt_format(format);
+          return lsgd::eval::load_groundtruth(path, o);
+        }, py::arg("path"), py::arg("frames") = -1, py::arg("format") = "auto",
+        "Reads loop ground truth: pairs text, MATLAB .mat, KITTI poses or loopinf.");
+
+  py::class_<lsgd::eval::PrPoint>(m, "PrPoint")
+      .def_readonly("threshold", &lsgd::eval::PrPoint::threshold)
+      .def_readonly("precision", &lsgd::eval::PrPoint::precision)
+      .def_readonly("recall", &lsgd::eval::PrPoint::recall);
+  py::class_<lsgd::eval::Metrics>(m, "Metrics")
+      .def_readonly("protocol", &lsgd::eval::Metrics::protocol)
+      .def_readonly("frames", &lsgd::eval::Metrics::frames)
+      .def_readonly("positives", &lsgd::eval::Metrics::positives)
+      .def_readonly("min_gap", &lsgd::eval::Metrics::min_gap)
+      .def_readonly("declared_loops", &lsgd::eval::Metrics::declared_loops)
+      .def_readonly("declared_true", &lsgd::eval::Metrics::declared_true)
+      .def_readonly("declared_false", &lsgd::eval::Metrics::declared_false)
+      .def_readonly("precision_at_decision", &lsgd::eval::Metrics::precision_at_decision)
+      .def_readonly("recall_at_decision", &lsgd::eval::Metrics::recall_at_decision)
+      .def_readonly("recall_at_100_precision", &lsgd::eval::Metrics::recall_at_100_precision)
+      .def_readonly("threshold_at_100_precision", &lsgd::eval::Metrics::threshold_at_100_precision)
+      .def_readonly("precision_at_100_recall", &lsgd::eval::Metrics::precision_at_100_recall)
+      .def_readonly("average_precision", &lsgd::eval::Metrics::average_precision)
+      .def_readonly("recall_at_1", &lsgd::eval::Metrics::recall_at_1)
+      .def_readonly("recall_at_5", &lsgd::eval::Metrics::recall_at_5)
+      .def_readonly("recall_at_10", &lsgd::eval::Metrics::recall_at_10)
+      .def_readonly("ms_per_frame_median", &lsgd::eval::Metrics::ms_per_frame_median)
+      .def_readonly("curve", &lsgd::eval::Metrics::curve);
+  m.def("evaluate", [](const std::vector<lsgd::Result>& results, const lsgd::eval::GroundTruth& gt,
+                       std::int64_t min_gap) {
+          std::vector<lsgd::eval::FrameRecord> records;
+          records.reserve(results.size());
+          for (const lsgd::Result& r : results) records.push_back(record_of(r));
+          return lsgd::eval::evaluate(records, gt, min_gap);
+        }, py::arg("results"), py::arg("groundtruth"), py::arg("min_gap"),
+        "Scores Detector results (one per frame, ids as the ground truth's) under the strict "
+        "protocol (docs/evaluation.md): the declared loops (operating point), R@100P, AP, R@N.");
+}

@@ -1,0 +1,205 @@
+"""Tests of the Python module (pytest; run by ctest as python.pytest).
+
+The module must give what the C++ library gives: the same results frame for
+frame as `lsgd run` on the same images, the same metrics as `lsgd eval`, the
+library's errors as Python exceptions with the same messages.
+"""
+import csv
+import json
+import os
+import subprocess
+import threading
+
+import numpy as np
+import pytest
+
+import lsgd
+
+SOURCE = os.environ.get("LSGD_SOURCE_DIR", os.path.join(os.path.dirname(__file__), "..", ".."))
+CLI = os.environ.get("LSGD_CLI", "")
+SHARED = os.path.join(SOURCE, "..", "shared", "datasets")
+
+
+def place(p, shift=0, width=160, height=120):
+    """Frame of place p: noise over the place's own 8 gray levels, moved by `shift` pixels."""
+    rng = np.random.default_rng(1000 + p)
+    levels = np.random.default_rng(7000 + p).integers(0, 256, 8, dtype=np.uint8)
+    index = rng.integers(0, 8, (height, width + 8))
+    return levels[index[:, shift:shift + width]]
+
+
+def route(places=30, laps=3):
+    return [place(p, lap) for lap in range(laps) for p in range(places)]
+
+
+def write_pgm(path, image):
+    with open(path, "wb") as f:
+        f.write(b"P5\n%d %d\n255\n" % (image.shape[1], image.shape[0]))
+        f.write(np.ascontiguousarray(image).tobytes())
+
+
+def test_version_and_options():
+    assert lsgd.__version__
+    defaults = lsgd.default_options()
+    assert defaults["search.min_gap"] == "50"
+    assert defaults["verification.stages"] == "temporal,geometric"
+    o = lsgd.options({"search": {"min_gap": 10, "mode": "nodes"}}, verification={"stages": ["temporal"]})
+    assert (o["search.min_gap"], o["search.mode"], o["verification.stages"]) == ("10", "nodes", "temporal")
+    assert lsgd.options({"search.nodes.beta": 1.1})["search.nodes.beta"] == "1.1"
+    assert lsgd.Detector(search={"min_gap": 7}).options["search.min_gap"] == "7"
+
+
+def test_option_errors_are_the_librarys():
+    with pytest.raises(lsgd.InvalidArgument, match="unknown option 'search.min_gapp'"):
+        lsgd.Detector({"search.min_gapp": 3})
+    with pytest.raises(ValueError, match="search.min_gap"):  # InvalidArgument is a ValueError
+        lsgd.Detector(search={"min_gap": -1})
+    with pytest.raises(lsgd.Error, match="verification stage 'sift' is unknown"):
+        lsgd.Detector(verification={"stages": "sift"})
+    with pytest.raises(lsgd.InvalidArgument, match="bool"):
+        lsgd.Detector(search={"min_gap": True})
+
+
+def test_images_gray_bgr_and_strided_give_the_same_results():
+    gray = route(20, 2)
+    a = lsgd.Detector(search={"min_gap": 5}, verification={"stages": "temporal"})
+    b = lsgd.Detector(search={"min_gap": 5}, verification={"stages": "temporal"})
+    c = lsgd.Detector(search={"min_gap": 5}, verification={"stages": "temporal"})
+    for g in gray:
+        bgr = np.repeat(g[:, :, None], 3, axis=2)
+        wide = np.zeros((g.shape[0], g.shape[1] * 2), np.uint8)
+        wide[:, ::2] = g  # a strided view: copied once, same pixels
+        ra, rb, rc = a.process(g), b.process(bgr), c.process(wide[:, ::2])
+        assert (ra.frame, ra.best.frame, ra.loop) == (rb.frame, rb.best.frame, rb.loop)
+        assert (ra.best.frame, ra.best.score) == (rc.best.frame, rc.best.score)
+    assert len(a) == a.size == 40
+
+
+def test_bad_images_are_errors_and_change_nothing():
+    d = lsgd.Detector(search={"min_gap": 5})
+    d.process(place(0))
+    with pytest.raises(lsgd.InvalidArgument, match="uint8"):
+        d.process(place(1).astype(np.float32))
+    with pytest.raises(lsgd.InvalidArgument, match="shape"):
+        d.process(np.zeros((4, 4, 2), np.uint8))
+    with pytest.raises(lsgd.InvalidArgument, match="same size"):
+        d.process(np.zeros((60, 80), np.uint8))
+    assert d.size == 1
+    with pytest.raises(lsgd.IoError, match="no-such-image.png"):
+        lsgd.read_image("no-such-image.png")
+    with pytest.raises(OSError):
+        lsgd.open_sequence("no-such-folder")
+
+
+def test_results_match_lsgd_run_frame_for_frame(tmp_path):
+    if not CLI:
+        pytest.skip("LSGD_CLI (the lsgd tool) not given: run through ctest")
+    frames = route(30, 4)
+    folder = tmp_path / "route"
+    folder.mkdir()
+    for i, f in enumerate(frames):
+        write_pgm(folder / ("%03d.pgm" % i), f)
+    out = tmp_path / "run.csv"
+    subprocess.run([CLI, "run", "--sequence", str(folder), "--min-gap", "10", "--output", str(out)],
+                   check=True, capture_output=True)
+    rows = list(csv.DictReader(open(out)))
+    d = lsgd.Detector(search={"min_gap": 10})
+    results = lsgd.run(d, [str(folder / ("%03d.pgm" % i)) for i in range(len(frames))])
+    assert len(rows) == len(results)
+    loops = 0
+    for row, r in zip(rows, results):
+        assert int(row["frame"]) == r.frame
+        assert int(row["loop_frame"]) == (r.best.frame if r.loop else -1)
+        assert int(row["candidate_frame"]) == r.best.frame
+        if r.best.frame >= 0:
+            assert float(row["score"]) == pytest.approx(r.best.score, rel=1e-5)
+        loops += r.loop
+    assert loops > 10
+
+
+def test_evaluation_in_ten_lines_matches_lsgd_eval(tmp_path):
+    corridor = os.path.join(SHARED, "corridor")
+    if not os.path.isdir(corridor) or not CLI:
+        pytest.skip("../shared/datasets/corridor or the lsgd tool is absent")
+    images = lsgd.open_sequence(os.path.join(corridor, "sequence.txt"))
+    gt = lsgd.load_groundtruth(os.path.join(corridor, "groundtruth.txt"), frames=len(images))
+    detector = lsgd.Detector(search={"min_gap": 50})
+    results = lsgd.run(detector, images)
+    m = lsgd.evaluate(results, gt, min_gap=50)
+    out = tmp_path / "eval.json"
+    subprocess.run([CLI, "eval", "--sequence", os.path.join(corridor, "sequence.txt"), "--gt",
+                    os.path.join(corridor, "groundtruth.txt"), "--min-gap", "50", "--json", str(out)],
+                   check=True, capture_output=True)
+    j = json.load(open(out))
+    assert m.declared_loops == j["declared_loops"] and m.declared_false == j["declared_false"]
+    for key in ["recall_at_100_precision", "average_precision", "recall_at_1", "recall_at_5"]:
+        assert getattr(m, key) == pytest.approx(j[key], abs=1e-12), key
+    assert m.declared_false == 0 and m.declared_loops > 0
+
+
+def test_database_resumes_where_it_stopped(tmp_path):
+    path = str(tmp_path / "places.db")
+    frames = route(20, 3)
+    uninterrupted = lsgd.Detector(search={"min_gap": 5})
+    expected = [uninterrupted.process(f) for f in frames]
+    db = lsgd.Database.create(path, search={"min_gap": 5})
+    d = lsgd.Detector(db.options)
+    for f in frames[:30]:
+        db.append(d, d.process(f), session=0)
+    del db, d  # the robot stops
+    db = lsgd.Database.open(path)
+    assert db.frames == 30
+    d = db.detector()
+    assert d.size == 30
+    for f, e in zip(frames[30:], expected[30:]):
+        r = d.process(f)
+        db.append(d, r, session=1)
+        assert (r.frame, r.best.frame, r.loop, r.best.score) == (e.frame, e.best.frame, e.loop, e.best.score)
+    assert lsgd.Database.open(path, writable=False).frames == 60
+    with pytest.raises(lsgd.IoError, match="already exists"):
+        lsgd.Database.create(path)
+
+
+def test_process_releases_the_gil():
+    frames = route(20, 2)
+    alone = [r.best.frame for r in lsgd.run(lsgd.Detector(search={"min_gap": 5}), frames)]
+    out = {}
+
+    def work(k):
+        out[k] = [r.best.frame for r in lsgd.run(lsgd.Detector(search={"min_gap": 5}), frames)]
+
+    threads = [threading.Thread(target=work, args=(k,)) for k in range(2)]
+    for t in threads:
+        t.start()
+    for t in threads:
+        t.join()
+    assert out[0] == alone and out[1] == alone
+
+
+def test_result_fields():
+    d = lsgd.Detector(search={"min_gap": 5})
+    results = [d.process(f) for f in route(20, 2)]
+    r = max(results, key=lambda r: r.best.score)
+    assert r.candidates and r.candidates[0].frame >= 0
+    assert r.timings.total_ms > 0
+    assert all(v.stage in ("temporal", "geometric") for x in results for v in x.verification)
+    assert r.evidence.inliers >= -1
+    assert "Result(frame=" in repr(r)
+
+
+def test_example_script_evaluates_and_plots(tmp_path):
+    places, laps = 30, 4
+    frames = route(places, laps)
+    for i, f in enumerate(frames):
+        write_pgm(tmp_path / ("%03d.pgm" % i), f)
+    with open(tmp_path / "gt.txt", "w") as gt:
+        for q in range(places, len(frames)):
+            for m in range(q % places, q, places):
+                gt.write("%d %d\n" % (q, m))
+    figure = tmp_path / "pr.png"
+    script = os.path.join(SOURCE, "python", "examples", "evaluate.py")
+    out = subprocess.run(["/usr/bin/python3", script, str(tmp_path), str(tmp_path / "gt.txt"), "10",
+                          str(figure)], check=True, capture_output=True, text=True,
+                         env=dict(os.environ, MPLCONFIGDIR=str(tmp_path))).stdout
+    assert "declared" in out and "R@100P" in out
+    assert figure.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"

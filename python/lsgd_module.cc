@@ -21,6 +21,7 @@
 #include "lsgd/io/database.h"
 #include "lsgd/io/sequence.h"
 #include "lsgd/options.h"
+#include "lsgd/version.h"
 
 namespace py = pybind11;
 
@@ -133,7 +134,8 @@ lsgd::eval::FrameRecord record_of(const lsgd::Result& r) {
 
 PYBIND11_MODULE(_lsgd, m) {
   m.doc() = "lsgd: training-free visual loop closure detection (LSGDDN-LCD)";
-  m.attr("__version__") = LSGD_VERSION_STRING;
+  m.attr("__version__") = lsgd::version();
+  m.attr("__commit__") = lsgd::commit();
 
   // Errors: lsgd.Error and its kinds, each also a standard Python exception.
   static py::exception<lsgd::Error> error(m, "Error", PyExc_RuntimeError);

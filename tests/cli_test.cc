@@ -50,6 +50,10 @@ void expect_eval_json(const nlohmann::json& j, std::int64_t frames) {
     ASSERT_TRUE(j.contains(key)) << key;
   }
   EXPECT_EQ(j["frames"].get<std::int64_t>(), frames);
+  // What made it: the version, the commit and the command line.
+  EXPECT_EQ(j["lsgd_version"].get<std::string>().rfind("0.", 0), 0u);
+  EXPECT_FALSE(j["lsgd_commit"].get<std::string>().empty());
+  EXPECT_EQ(j["command"].get<std::string>().rfind("lsgd eval --sequence ", 0), 0u) << j["command"];
   for (const char* rate : {"recall_at_100_precision", "average_precision", "recall_at_1",
                            "recall_at_5", "recall_at_10"}) {
     const double v = j[rate].get<double>();
@@ -138,6 +142,63 @@ TEST(Cli, RunOrdersAFolderNaturallyAndWritesToStdout) {
   EXPECT_LT(p1, p2);
   EXPECT_LT(p2, p10);
   EXPECT_EQ(lines_of(r.out), 4);
+}
+
+// A dataset folder (images beside sequence.txt, as lsgd demo --output and
+// ../shared/datasets lay them out) is read as its list, in the list's order.
+TEST(Cli, RunOnADatasetFolderReadsItsSequenceTxt) {
+  const fs::path dir = kTmp / "dataset";
+  fs::remove_all(dir);
+  fs::create_directories(dir / "images");
+  cv::Mat image(48, 64, CV_8UC1);
+  for (const char* name : {"b.png", "a.png", "c.png"}) {
+    cv::randu(image, 0, 255);
+    ASSERT_TRUE(cv::imwrite((dir / "images" / name).string(), image));
+  }
+  std::ofstream(dir / "sequence.txt") << "images/c.png\nimages/a.png\nimages/b.png\n";
+  const CmdResult r = lsgd("run --sequence '" + dir.string() + "'");
+  ASSERT_EQ(r.code, 0) << r.err;
+  const auto a = r.out.find("a.png"), b = r.out.find("b.png"), c = r.out.find("c.png");
+  ASSERT_NE(b, std::string::npos);
+  EXPECT_LT(c, a);  // the list's order, not the names'
+  EXPECT_LT(a, b);
+  // --layout folder still reads the folder's own images (none here).
+  const CmdResult f = lsgd("run --layout folder --sequence '" + dir.string() + "'");
+  EXPECT_EQ(f.code, 1);
+  EXPECT_NE(f.err.find("no image"), std::string::npos) << f.err;
+}
+
+// The usage the README promises: --version, suggestions for a slip, exit 1
+// for every usage error, help with the defaults.
+TEST(Cli, VersionSuggestionsExitCodesAndDefaults) {
+  const CmdResult v = lsgd("--version");
+  EXPECT_EQ(v.code, 0);
+  EXPECT_EQ(v.out.rfind("lsgd 0.", 0), 0u) << v.out;
+  EXPECT_NE(v.out.find("(commit "), std::string::npos) << v.out;
+  const CmdResult cmd = lsgd("evl --json x.json");
+  EXPECT_EQ(cmd.code, 1);
+  EXPECT_NE(cmd.err.find("unknown command 'evl'; did you mean 'eval'?"), std::string::npos) << cmd.err;
+  const CmdResult flag = lsgd("run --sequence x --min-gapp 3");
+  EXPECT_EQ(flag.code, 1);
+  EXPECT_NE(flag.err.find("unknown option --min-gapp for lsgd run; did you mean --min-gap?"),
+            std::string::npos) << flag.err;
+  const CmdResult sub = lsgd("gt stat x");
+  EXPECT_EQ(sub.code, 1);
+  EXPECT_NE(sub.err.find("unknown command 'stat' for lsgd gt; did you mean 'stats'?"),
+            std::string::npos) << sub.err;
+  const CmdResult far = lsgd("run --sequence x --zzzzzz");
+  EXPECT_EQ(far.code, 1);
+  EXPECT_NE(far.err.find("unknown option --zzzzzz for lsgd run ("), std::string::npos) << far.err;
+  const CmdResult missing = lsgd("eval --sequence x");
+  EXPECT_EQ(missing.code, 1);
+  EXPECT_NE(missing.err.find("required"), std::string::npos) << missing.err;
+  const CmdResult range = lsgd("run --sequence x --camera 9");
+  EXPECT_EQ(range.code, 1);
+  const CmdResult help = lsgd("run --help");
+  EXPECT_EQ(help.code, 0);
+  EXPECT_NE(help.out.find("=auto"), std::string::npos) << help.out;  // --layout's default
+  EXPECT_EQ(help.out.find("=-1"), std::string::npos) << help.out;    // sentinels stay hidden
+  EXPECT_EQ(help.out.find("=[]"), std::string::npos) << help.out;
 }
 
 TEST(Cli, MissingSequenceFailsWithOneLineNamingIt) {

@@ -28,6 +28,7 @@ from ._lsgd import (  # noqa: F401
     Result,
     StageVerdict,
     Timings,
+    __commit__,
     __version__,
     default_options,
     evaluate,

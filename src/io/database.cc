@@ -21,10 +21,8 @@
 #include "io/wal_check.h"
 #include "lsgd/io/config.h"
 #include "lsgd/limits.h"
+#include "lsgd/version.h"
 
-#ifndef LSGD_VERSION
-#define LSGD_VERSION "unknown"
-#endif
 
 namespace lsgd::io {
 namespace {
@@ -403,7 +401,7 @@ void Database::Impl::load_header() {
   }
   const long long stored_format = std::stoll(version->second);
   if (stored_format > kDatabaseFormatVersion) {
-    format_error(path, "format version ", stored_format, " is newer than this lsgd (", LSGD_VERSION,
+    format_error(path, "format version ", stored_format, " is newer than this lsgd (", lsgd::version(),
                  ") reads (", kDatabaseFormatVersion, "): use a newer lsgd");
   }
   if (stored_format < 1) format_error(path, "unknown format version ", stored_format);
@@ -642,7 +640,7 @@ Database Database::create(const std::string& path, const DetectorOptions& option
       exec_write(impl.db, path, "PRAGMA synchronous=FULL; BEGIN;");
       exec_write(impl.db, path, kSchema);
       impl.meta = {{"format_version", std::to_string(kDatabaseFormatVersion)},
-                   {"library_version", LSGD_VERSION},
+                   {"library_version", lsgd::version()},
                    {"options", to_yaml(options)},
                    {"width", "0"},
                    {"height", "0"},
@@ -1074,7 +1072,7 @@ void Database::Impl::check_session(std::int64_t session) const {
   }
 }
 
-void Database::append(const Detector& detector, const Result& result, std::int64_t session,
+void Database::append(const Detector& detector, const Result& /*result*/, std::int64_t session,
                       const std::string& name, std::int64_t frame) {
   Impl& m = *impl_;
   m.check_writable();

@@ -192,9 +192,21 @@ Sequence open_fabmap(const std::string& path, Side side) {
   return sequence;
 }
 
+// The list file of a dataset folder (lsgd's datasets, `lsgd demo --output`):
+// DIR/sequence.txt; empty when `path` is not a folder holding one.
+std::string dataset_list(const std::string& path) {
+  std::error_code ec;
+  if (!fs::is_directory(path, ec)) return "";
+  const fs::path list = fs::path(path) / kDatasetList;
+  return is_file(list) ? list.string() : "";
+}
+
 Sequence open_plain(const std::string& path, Layout layout) {
   std::error_code ec;
   const bool folder = fs::is_directory(path, ec);
+  if (layout == Layout::kList && folder && !dataset_list(path).empty()) {
+    return open_sequence(dataset_list(path));
+  }
   if (layout == Layout::kList && folder) {
     internal::throw_invalid("layout list needs a list file, but '", path,
                             "' is a folder (use --layout folder or auto)");
@@ -311,6 +323,7 @@ Layout detect_layout(const std::string& path, const SequenceOptions& options) {
   if (image_folder_camera(dir) >= 0 && is_file(dir.parent_path() / "times.txt")) {
     return Layout::kKitti;
   }
+  if (!dataset_list(path).empty()) return Layout::kList;  // a dataset folder: its own order
   return Layout::kFolder;
 }
 

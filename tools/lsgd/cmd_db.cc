@@ -37,7 +37,7 @@ void db_info(const DbInfoArgs& args) {
                           {"first_frame", s.first_frame},
                           {"last_frame", s.last_frame}});
     }
-    const nlohmann::json j = {{"path", info.path},
+    nlohmann::json j = {{"path", info.path},
                               {"format_version", info.format_version},
                               {"library_version", info.library_version},
                               {"width", info.width},
@@ -51,6 +51,7 @@ void db_info(const DbInfoArgs& args) {
                               {"rows_verified", damage.empty()},
                               {"damage", damage},
                               {"options", info.options_yaml}};
+    stamp(j);
     std::cout << j.dump(2) << "\n";
   } else {
     std::cout << "database: " << info.path << "\n"

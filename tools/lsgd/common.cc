@@ -2,6 +2,7 @@
 
 #include <unistd.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cstdio>
 #include <filesystem>
@@ -15,6 +16,7 @@
 #include "lsgd/io/files.h"
 #include "lsgd/error.h"
 #include "lsgd/io/config.h"
+#include "lsgd/version.h"
 
 namespace lsgd::cli {
 namespace {
@@ -119,7 +121,32 @@ io::SequenceOptions SequenceFlags::resolve() const {
 }
 
 Progress::Progress(std::int64_t total, std::string label)
-    : total_(total), label_(std::move(label)), enabled_(isatty(STDERR_FILENO) == 1) {}
+    : total_(total), label_(std::move(label)), enabled_(isatty(STDERR_FILENO) == 1),
+      start_ns_(now_ns()) {}
+
+std::string format_duration(double seconds) {
+  if (!(seconds >= 0) || seconds > 1e7) return "--:--";
+  const auto s = static_cast<long long>(seconds + 0.5);
+  char text[32];
+  if (s >= 3600) {
+    std::snprintf(text, sizeof text, "%lld:%02lld:%02lld", s / 3600, s / 60 % 60, s % 60);
+  } else {
+    std::snprintf(text, sizeof text, "%lld:%02lld", s / 60, s % 60);
+  }
+  return text;
+}
+
+std::string Progress::line(std::int64_t done, double ms_per_frame, double elapsed_s) const {
+  constexpr int kWidth = 30;
+  const int filled = total_ > 0 ? static_cast<int>(kWidth * std::min(done, total_) / total_) : kWidth;
+  const double rate = elapsed_s > 0 ? static_cast<double>(done) / elapsed_s : 0;
+  const double eta = rate > 0 ? static_cast<double>(total_ - done) / rate : -1;
+  char text[160];
+  std::snprintf(text, sizeof text, " %lld/%lld frames, %.1f frames/s, %.2f ms/frame, elapsed %s, ETA %s",
+                static_cast<long long>(done), static_cast<long long>(total_), rate, ms_per_frame,
+                format_duration(elapsed_s).c_str(), format_duration(eta).c_str());
+  return label_ + " [" + std::string(filled, '#') + std::string(kWidth - filled, '.') + "]" + text;
+}
 
 Progress::~Progress() {
   if (enabled_ && last_draw_ns_ != 0) std::fputs("\r\033[K", stderr);
@@ -130,11 +157,7 @@ void Progress::update(std::int64_t done, double ms_per_frame) {
   const std::int64_t now = now_ns();
   if (done < total_ && now - last_draw_ns_ < 100'000'000) return;  // redraw at most 10 Hz
   last_draw_ns_ = now;
-  constexpr int kWidth = 30;
-  const int filled = total_ > 0 ? static_cast<int>(kWidth * done / total_) : kWidth;
-  std::fprintf(stderr, "\r%s [%s%s] %lld/%lld frames, %.2f ms/frame\033[K", label_.c_str(),
-               std::string(filled, '#').c_str(), std::string(kWidth - filled, '.').c_str(),
-               static_cast<long long>(done), static_cast<long long>(total_), ms_per_frame);
+  std::fprintf(stderr, "\r%s\033[K", line(done, ms_per_frame, (now - start_ns_) * 1e-9).c_str());
   std::fflush(stderr);
 }
 
@@ -268,6 +291,44 @@ void throw_no_frame(std::int64_t images, const std::string& first_error) {
 }
 
 
+namespace {
+
+std::string& recorded_command_line() {
+  static std::string line;
+  return line;
+}
+
+std::string shell_quoted(const std::string& arg) {
+  const bool plain = !arg.empty() && arg.find_first_not_of(
+      "abcdefghijklmnopqrstuvwxyzABCDEFGHIJKLMNOPQRSTUVWXYZ0123456789-_./=:,+@%") == std::string::npos;
+  if (plain) return arg;
+  std::string out = "'";
+  for (const char c : arg) out += c == '\'' ? std::string("'\\''") : std::string(1, c);
+  return out + "'";
+}
+
+}  // namespace
+
+void set_command_line(int argc, char** argv) {
+  std::string line;
+  for (int i = 0; i < argc; ++i) {
+    line += (i ? " " : "") + shell_quoted(i == 0 ? std::string("lsgd") : std::string(argv[i]));
+  }
+  recorded_command_line() = line;
+}
+
+const std::string& command_line() { return recorded_command_line(); }
+
+std::string version_text() {
+  return std::string("lsgd ") + lsgd::version() + " (commit " + lsgd::commit() + ")";
+}
+
+void stamp(nlohmann::json& j) {
+  j["lsgd_version"] = lsgd::version();
+  j["lsgd_commit"] = lsgd::commit();
+  j["command"] = command_line();
+}
+
 nlohmann::json metrics_json(const eval::Metrics& m) {
   nlohmann::json j;
   j["protocol"] = m.protocol;
@@ -332,7 +393,9 @@ void print_metrics(const eval::Metrics& m, std::int64_t nodes, std::ostream& out
 }
 
 void write_json(const nlohmann::json& json, const std::string& path) {
-  io::write_output_file(path, json.dump(2) + "\n", "JSON file");
+  nlohmann::json out = json;
+  if (out.is_object()) stamp(out);  // every JSON result says what made it
+  io::write_output_file(path, out.dump(2) + "\n", "JSON file");
 }
 
 }  // namespace lsgd::cli

@@ -60,13 +60,21 @@ class Progress {
   Progress(std::int64_t total, std::string label);
   ~Progress();
   void update(std::int64_t done, double ms_per_frame);
+  // The bar's text after `done` frames in `elapsed_s` seconds: the bar,
+  // frames done of total, frames per second, ms per frame (process() alone),
+  // elapsed time and the time left at the rate so far.
+  std::string line(std::int64_t done, double ms_per_frame, double elapsed_s) const;
 
  private:
   std::int64_t total_;
   std::string label_;
   bool enabled_;
+  std::int64_t start_ns_;
   std::int64_t last_draw_ns_ = 0;
 };
+
+// "1:05" (minutes:seconds) or "1:02:03"; "--:--" for a negative or unknown time.
+std::string format_duration(double seconds);
 
 // Writes `lsgd run` rows:
 // frame,image,loop_frame,candidate_frame,score,ms,appearance,inliers.
@@ -130,6 +138,16 @@ FrameRun run_frames(Detector& detector, const eval::FrameSource& source, const s
 [[noreturn]] void throw_no_frame(std::int64_t images, const std::string& first_error);
 
 nlohmann::json metrics_json(const eval::Metrics& m);
+
+// The command line as typed (each argument shell-quoted when it needs it),
+// recorded once by main().
+void set_command_line(int argc, char** argv);
+const std::string& command_line();
+// "lsgd 0.1.0 (commit 05e5e35a1b2c)".
+std::string version_text();
+// Adds what produced a JSON output: "lsgd_version", "lsgd_commit" and the
+// "command" line, so that every result says how to make it again.
+void stamp(nlohmann::json& j);
 // Prints the headline numbers of an evaluation, one per line.
 void print_metrics(const eval::Metrics& m, std::int64_t nodes, std::ostream& out);
 void write_json(const nlohmann::json& json, const std::string& path);

@@ -1,13 +1,106 @@
 // lsgd: the command-line front end of the LSGDDN-LCD loop-closure detector.
+#include <algorithm>
 #include <cstdlib>
 #include <exception>
 #include <iostream>
+#include <string>
+#include <vector>
 
 #include <CLI/CLI.hpp>
 #include <opencv2/core.hpp>
 
 #include "commands.h"
+#include "common.h"
 #include "lsgd/error.h"
+
+namespace {
+
+// Edit distance (insertions, deletions, substitutions, adjacent swaps).
+std::size_t distance(const std::string& a, const std::string& b) {
+  std::vector<std::vector<std::size_t>> d(a.size() + 1, std::vector<std::size_t>(b.size() + 1));
+  for (std::size_t i = 0; i <= a.size(); ++i) d[i][0] = i;
+  for (std::size_t j = 0; j <= b.size(); ++j) d[0][j] = j;
+  for (std::size_t i = 1; i <= a.size(); ++i) {
+    for (std::size_t j = 1; j <= b.size(); ++j) {
+      d[i][j] = std::min({d[i - 1][j] + 1, d[i][j - 1] + 1, d[i - 1][j - 1] + (a[i - 1] != b[j - 1])});
+      if (i > 1 && j > 1 && a[i - 1] == b[j - 2] && a[i - 2] == b[j - 1]) {
+        d[i][j] = std::min(d[i][j], d[i - 2][j - 2] + 1);
+      }
+    }
+  }
+  return d[a.size()][b.size()];
+}
+
+// The name closest to `word` when it is close enough to be a slip ("" otherwise).
+std::string nearest(const std::string& word, const std::vector<std::string>& names) {
+  std::string best;
+  std::size_t best_d = std::max<std::size_t>(2, word.size() / 3) + 1;
+  for (const std::string& n : names) {
+    const std::size_t d = distance(word, n);
+    if (d < best_d || (d == best_d && !best.empty() && n < best)) best = n, best_d = d;
+  }
+  return best;
+}
+
+// The subcommand the arguments selected, deepest first ("gt convert"); the
+// app itself when none was.
+CLI::App* selected(CLI::App& app) {
+  CLI::App* at = &app;
+  while (!at->get_subcommands().empty()) at = at->get_subcommands().front();
+  return at;
+}
+
+std::string path_of(const CLI::App* cmd) {
+  std::string path;
+  for (const CLI::App* at = cmd; at != nullptr; at = at->get_parent()) {
+    path = (at->get_parent() == nullptr ? std::string("lsgd") : at->get_name()) + (path.empty() ? "" : " " + path);
+  }
+  return path;
+}
+
+// Help shows every default, but not the sentinels that mean "not given"
+// (-1, an empty list): those options' descriptions say what not giving them does.
+void hide_sentinel_defaults(CLI::App& app) {
+  for (CLI::Option* o : app.get_options()) {
+    if (o->get_default_str() == "-1" || o->get_default_str() == "[]") o->default_str("");
+  }
+  for (CLI::App* sub : app.get_subcommands({})) hide_sentinel_defaults(*sub);
+}
+
+// A usage error as one message: unknown commands and misspelt options name
+// the nearest right one.
+std::string usage_message(CLI::App& app, const CLI::ParseError& e, int argc, char** argv) {
+  CLI::App* cmd = selected(app);
+  if (cmd == &app && argc > 1 && argv[1][0] != '-') {
+    std::vector<std::string> names;
+    for (const CLI::App* sub : app.get_subcommands({})) names.push_back(sub->get_name());
+    const std::string guess = nearest(argv[1], names);
+    return "unknown command '" + std::string(argv[1]) + "'" +
+           (guess.empty() ? "" : "; did you mean '" + guess + "'?") + " (lsgd --help lists them)";
+  }
+  std::vector<std::string> subnames;
+  for (const CLI::App* sub : cmd->get_subcommands({})) subnames.push_back(sub->get_name());
+  std::vector<std::string> options;
+  for (const CLI::Option* o : cmd->get_options()) {
+    for (const std::string& n : o->get_lnames()) options.push_back("--" + n);
+  }
+  for (const std::string& extra : cmd->remaining()) {
+    if (extra.rfind("--", 0) == 0) {
+      const std::string word = extra.substr(0, extra.find('='));
+      const std::string guess = nearest(word, options);
+      return "unknown option " + word + " for " + path_of(cmd) +
+             (guess.empty() ? "" : "; did you mean " + guess + "?") + " (" + path_of(cmd) + " --help lists them)";
+    }
+    if (!subnames.empty()) {
+      const std::string guess = nearest(extra, subnames);
+      return "unknown command '" + extra + "' for " + path_of(cmd) +
+             (guess.empty() ? "" : "; did you mean '" + guess + "'?");
+    }
+  }
+  return std::string(e.what()) + " (" + path_of(cmd) + " --help for the usage)";
+}
+
+}  // namespace
 
 int main(int argc, char** argv) {
   // The tool computes on the CPU: OpenCV must not load an OpenCL runtime for
@@ -15,7 +108,10 @@ int main(int argc, char** argv) {
   // LeakSanitizer's exit check, and nothing here runs on a GPU). A value the
   // user set is kept.
   ::setenv("OPENCV_OPENCL_RUNTIME", "disabled", 0);
+  lsgd::cli::set_command_line(argc, argv);
   CLI::App app{"lsgd: training-free visual loop closure detection (LSGDDN-LCD)"};
+  app.set_version_flag("--version", lsgd::cli::version_text());
+  app.option_defaults()->always_capture_default();  // help shows every default
   app.require_subcommand(1);
   lsgd::cli::register_run(app);
   lsgd::cli::register_eval(app);
@@ -25,6 +121,7 @@ int main(int argc, char** argv) {
   lsgd::cli::register_gt(app);
   lsgd::cli::register_db(app);
   lsgd::cli::register_options(app);
+  hide_sentinel_defaults(app);
   // The detector runs on the calling thread; OpenCV's own thread pool (ORB,
   // RANSAC and resizing in the geometric stage) is off too, so that every
   // time the tool reports is single-thread and runs are repeatable. `lsgd
@@ -32,8 +129,16 @@ int main(int argc, char** argv) {
   cv::setNumThreads(0);
   try {
     app.parse(argc, argv);
-  } catch (const CLI::ParseError& e) {
+  } catch (const CLI::CallForHelp& e) {
     return app.exit(e);
+  } catch (const CLI::CallForAllHelp& e) {
+    return app.exit(e);
+  } catch (const CLI::CallForVersion& e) {
+    return app.exit(e);
+  } catch (const CLI::ParseError& e) {
+    // Usage errors exit 1 like every other error (README, "Command line").
+    std::cerr << "lsgd: error: " << usage_message(app, e, argc, argv) << std::endl;
+    return 1;
   } catch (const std::exception& e) {
     std::cerr << "lsgd: error: " << e.what() << std::endl;
     return 1;

@@ -173,9 +173,9 @@ class Database {
   void restore(Detector& detector) const;
 
   // Appends the detector's last frame, just processed (the detector must
-  // hold frames() + 1 frames; `result` is what process() returned for it:
-  // its node is stored, its ids are not read, so a caller may have renumbered
-  // them), in one transaction. `session`: 0 .. kMaxSession, either the last
+  // hold frames() + 1 frames; `result` is what process() returned for it,
+  // kept in the signature for callers: everything stored is read from the
+  // detector, Detector::frame_state()), in one transaction. `session`: 0 .. kMaxSession, either the last
   // session or one without frames (a session's frames stay together).
   // `name` is free text (the image path). `frame`: the caller's id of the
   // frame, above every stored one (-1: one past the last). Throws

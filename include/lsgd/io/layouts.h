@@ -75,9 +75,15 @@ struct SequenceOptions {
 // The layout PATH has when `options.layout` is kAuto (otherwise that layout):
 // kKitti when options.kitti_sequence is set, when PATH is a folder holding
 // times.txt and an image_0..image_3 folder, or when PATH is an image_X folder
-// whose parent holds times.txt; kFolder for another folder; kList for a file.
+// whose parent holds times.txt; kList for a file, and for a dataset folder:
+// one holding `sequence.txt` (kDatasetList), read as that list (layout list
+// given a folder does the same); kFolder for another folder (its images).
 // IoError when PATH does not exist.
 Layout detect_layout(const std::string& path, const SequenceOptions& options = {});
+
+// The list file of a dataset folder, as lsgd's datasets and `lsgd demo
+// --output` lay them out (beside groundtruth.txt).
+inline constexpr const char* kDatasetList = "sequence.txt";
 
 // The frames of PATH in its layout, before options.selection. Errors name the
 // files involved: IoError for a missing path or folder; FormatError for a

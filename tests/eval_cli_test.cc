@@ -130,6 +130,39 @@ TEST_F(ShortStreet, RunCsvScoredAsDetectionsMatchesEval) {
   EXPECT_TRUE(x["warnings"].empty()) << x["warnings"];
 }
 
+// --compare scores another system's detections with the same evaluator as
+// the run: its metrics equal `lsgd eval --detections` of the same file, and
+// the report draws both on one PR plot.
+TEST_F(ShortStreet, CompareScoresAnotherSystemWithTheSameEvaluator) {
+  const fs::path json = kTmp / "compare.json", alone = kTmp / "alone.json", html = kTmp / "compare.html";
+  const CmdResult a = lsgd("eval --sequence " + q(dir_) + common(json) + " --report " + q(html) +
+                           " --compare " + q(dir_ / "run.csv") + " --compare 'mine=" +
+                           (dir_ / "run.csv").string() + "'");
+  ASSERT_EQ(a.code, 0) << a.err;
+  const CmdResult b = lsgd("eval --detections " + q(dir_ / "run.csv") + common(alone));
+  ASSERT_EQ(b.code, 0) << b.err;
+  const auto x = read_json(json), y = read_json(alone);
+  ASSERT_EQ(x["compared"].size(), 2u);
+  EXPECT_EQ(x["compared"][0]["name"], "run");
+  EXPECT_EQ(x["compared"][1]["name"], "mine");
+  for (const char* key : {"declared_loops", "declared_false", "recall_at_100_precision",
+                          "average_precision", "recall_at_1"}) {
+    EXPECT_EQ(x["compared"][0][key], y[key]) << key;
+    EXPECT_EQ(x["compared"][0][key], x[key]) << key;  // the CSV is this very run's
+  }
+  EXPECT_NE(a.out.find("compared: mine ("), std::string::npos) << a.out;
+  const std::string report = lsgd::test::slurp(html);
+  EXPECT_NE(report.find("<polyline class='pr-compared'"), std::string::npos);
+  EXPECT_NE(report.find("mine (AP "), std::string::npos);
+  EXPECT_NE(report.find("src='data:image/jpeg;base64,"), std::string::npos);  // thumbnails
+  EXPECT_NE(report.find("<svg class='timeline'"), std::string::npos);         // no poses
+  EXPECT_NE(report.find("lsgd eval --sequence"), std::string::npos);          // the command
+  const CmdResult missing = lsgd("eval --sequence " + q(dir_) + common(json) + " --compare " +
+                                 q(kTmp / "no-such.csv"));
+  EXPECT_EQ(missing.code, 1);
+  EXPECT_NE(missing.err.find("no-such.csv"), std::string::npos) << missing.err;
+}
+
 // A setup the method cannot work in is said on stderr and in the JSON: frames
 // of 64x32 give one grid cell at the default superpixel size, are too small
 // for geometry, and the ground-truth loop comes before scores are calibrated.

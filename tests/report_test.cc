@@ -398,6 +398,88 @@ TEST(Report, TrajectoryOnlyWithPoses) {
   EXPECT_EQ(tag_balance_error(html), "");
 }
 
+// Without poses the scores over the run stand in for the trajectory: one
+// dot per frame that reported a candidate, coloured by what was declared.
+TEST(Report, ScoreTimelineWithoutPoses) {
+  const StreetRun& r = run();
+  ReportInput in = r.input();
+  in.declared = true;
+  std::string html = render_report(in);
+  ASSERT_EQ(count(html, "<svg class='timeline'"), 1u);
+  const std::size_t begin = html.find("<svg class='timeline'");
+  const std::string svg = html.substr(begin, html.find("</svg>", begin) - begin);
+  std::size_t reported = 0, declared = 0;
+  for (const FrameRecord& f : r.records) {
+    reported += f.reported.frame >= 0 ? 1 : 0;
+    declared += f.loop && f.reported.frame >= 0 ? 1 : 0;
+  }
+  EXPECT_EQ(count(svg, "<circle"), reported + 3);  // + the legend's three dots
+  EXPECT_EQ(count(svg, "r='2.6'"), declared);
+  EXPECT_GT(declared, 0u);
+  in.trajectory = r.trajectory;
+  EXPECT_EQ(render_report(in).find("<svg class='timeline'"), std::string::npos);
+  EXPECT_EQ(tag_balance_error(html), "");
+}
+
+// Thumbnails: declared true and false loops and missed revisits, query and
+// match side by side, each a JPEG data URI; a frame that cannot be read is a
+// note, not a failure. The header names the image size, grid, command and version.
+TEST(Report, ExampleThumbnailsAndWhatMadeTheRun) {
+  const StreetRun& r = run();
+  ReportInput in = r.input();
+  in.declared = true;
+  in.width = 160;
+  in.height = 120;
+  in.grid_rows = 2;
+  in.grid_cols = 3;
+  in.command = "lsgd eval --sequence <street>";
+  in.version = "lsgd 9.9.9 (commit abc)";
+  in.max_examples = 3;
+  int loaded = 0;
+  in.image = [&](std::int64_t f) {
+    ++loaded;
+    if (f == 7) throw IoError("frame 7 is gone");
+    return r.world.render(f);
+  };
+  std::string html = render_report(in);
+  EXPECT_NE(html.find("160 x 120 pixels, descriptor grid 2 x 3 = 6 cells"), std::string::npos);
+  EXPECT_NE(html.find("lsgd eval --sequence &lt;street&gt;"), std::string::npos);
+  EXPECT_NE(html.find("lsgd 9.9.9 (commit abc)"), std::string::npos);
+  ASSERT_NE(html.find("<section class='examples'>"), std::string::npos);
+  const std::size_t thumbs = count(html, "src='data:image/jpeg;base64,");
+  EXPECT_EQ(static_cast<int>(thumbs), loaded);
+  EXPECT_GE(thumbs, 6u);                                 // 3 true loops, 2 frames each
+  EXPECT_LE(thumbs, 3u * 2 + 3 * 3 + 3 * 3);            // at most 3 of each kind
+  EXPECT_NE(html.find("Missed revisits ("), std::string::npos);
+  const std::size_t jpeg = html.find("src='data:image/jpeg;base64,") + 28;
+  const std::vector<uchar> bytes = decode_base64(html.substr(jpeg, html.find('\'', jpeg) - jpeg));
+  const cv::Mat thumb = cv::imdecode(bytes, cv::IMREAD_UNCHANGED);
+  EXPECT_EQ(thumb.rows, 110);
+  EXPECT_EQ(thumb.cols, 146);  // 160 x 120 scaled to a height of 110
+  in.image = [](std::int64_t) -> cv::Mat { throw IoError("the disk is gone"); };
+  html = render_report(in);
+  EXPECT_EQ(count(html, "src='data:image/jpeg"), 0u);
+  EXPECT_NE(html.find("the disk is gone"), std::string::npos);
+  EXPECT_EQ(tag_balance_error(html), "");
+}
+
+// Another system's detections, scored by the same evaluator, on the same PR plot.
+TEST(Report, ComparedSystemsShareThePrPlot) {
+  const StreetRun& r = run();
+  ReportInput in = r.input();
+  std::vector<FrameRecord> other = r.records;
+  for (FrameRecord& f : other) f.reported.frame = f.reported.frame >= 0 ? 0 : -1;  // always frame 0
+  in.compared.push_back({"always-zero", evaluate(other, r.world.ground_truth(), kMinGap)});
+  in.compared.push_back({"ours <again>", r.metrics});
+  const std::string html = render_report(in);
+  EXPECT_EQ(count(html, "<polyline class='pr-compared'"), 2u);
+  EXPECT_NE(html.find("always-zero (AP "), std::string::npos);
+  EXPECT_NE(html.find("ours &lt;again&gt; (AP "), std::string::npos);
+  in.compared[0].metrics.min_gap = kMinGap + 1;
+  EXPECT_THROW(render_report(in), InvalidArgument);
+  EXPECT_EQ(tag_balance_error(html), "");
+}
+
 TEST(Report, EscapesHostileText) {
   ReportInput in = run().input();
   in.sequence = "<script>alert(\"x\")</script> & 'q' <img src=x>";

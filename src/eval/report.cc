@@ -13,246 +13,12 @@
 #include <opencv2/imgproc.hpp>
 #include <sstream>
 
+#include "eval/report_svg.h"
 #include "internal/check.h"
 #include "lsgd/error.h"
 
 namespace lsgd::eval {
-namespace {
-
-using internal::concat;
-
-// Colours shared by the charts, the legends and the CSS.
-constexpr const char* kTpColour = "#1a9641";       // true positive loop
-constexpr const char* kFpColour = "#e41a1c";       // false positive loop
-constexpr const char* kGtColour = "#ff00ff";       // ground-truth loops (matrix outline)
-constexpr const char* kGtFrameColour = "#f59e0b";  // frames with a GT loop (trajectory)
-constexpr const char* kCurveColour = "#2563eb";    // PR curve
-const cv::Vec3b kGtBgr(255, 0, 255);               // kGtColour in OpenCV's BGR order
-constexpr int kMatrixPixels = 600;                 // displayed side of the similarity matrix
-
-// ---------------------------------------------------------------- text
-
-std::string escape(const std::string& text) {
-  std::string out;
-  out.reserve(text.size());
-  for (const char c : text) {
-    switch (c) {
-      case '&':
-        out += "&amp;";
-        break;
-      case '<':
-        out += "&lt;";
-        break;
-      case '>':
-        out += "&gt;";
-        break;
-      case '"':
-        out += "&quot;";
-        break;
-      case '\'':
-        out += "&#39;";
-        break;
-      default:
-        out += c;
-    }
-  }
-  return out;
-}
-
-// printf-style formatting of one number (the charts need fixed precision).
-std::string num(double value, int decimals = 1) {
-  char buffer[64];
-  std::snprintf(buffer, sizeof buffer, "%.*f", decimals, value);
-  return buffer;
-}
-
-std::string percent(double fraction) { return num(100.0 * fraction, 1) + "&#8239;%"; }
-
-std::string base64(const std::vector<uchar>& bytes) {
-  static const char* const kAlphabet =
-      "ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
-  std::string out;
-  out.reserve((bytes.size() + 2) / 3 * 4);
-  for (std::size_t i = 0; i < bytes.size(); i += 3) {
-    const std::uint32_t b0 = bytes[i];
-    const std::uint32_t b1 = i + 1 < bytes.size() ? bytes[i + 1] : 0;
-    const std::uint32_t b2 = i + 2 < bytes.size() ? bytes[i + 2] : 0;
-    const std::uint32_t v = (b0 << 16) | (b1 << 8) | b2;
-    out += kAlphabet[(v >> 18) & 63];
-    out += kAlphabet[(v >> 12) & 63];
-    out += i + 1 < bytes.size() ? kAlphabet[(v >> 6) & 63] : '=';
-    out += i + 2 < bytes.size() ? kAlphabet[v & 63] : '=';
-  }
-  return out;
-}
-
-// ---------------------------------------------------------------- charts
-
-// Linear map from data [lo, hi] to pixels [p0, p1] (p1 < p0 for a y axis).
-struct Scale {
-  double lo, hi, p0, p1;
-  double operator()(double v) const { return p0 + (v - lo) / (hi - lo) * (p1 - p0); }
-};
-
-// The round step (1, 2 or 5 x 10^k) that puts about `target` ticks on [lo, hi].
-double tick_step(double lo, double hi, int target) {
-  const double raw = (hi - lo) / std::max(target, 1);
-  if (!(raw > 0) || !std::isfinite(raw)) return 0;
-  const double magnitude = std::pow(10.0, std::floor(std::log10(raw)));
-  double best = magnitude;
-  for (const double m : {1.0, 2.0, 5.0, 10.0}) {  // nearest to raw on a log scale
-    if (std::abs(std::log(m * magnitude / raw)) < std::abs(std::log(best / raw)))
-      best = m * magnitude;
-  }
-  return best;
-}
-
-// Round tick values inside [lo, hi], about `target` of them.
-std::vector<double> ticks(double lo, double hi, int target) {
-  const double step = tick_step(lo, hi, target);
-  if (step == 0) return {lo};
-  std::vector<double> out;
-  for (double v = std::ceil(lo / step - 1e-9) * step; v <= hi + 1e-9 * step; v += step) {
-    out.push_back(std::abs(v) < 1e-9 * step ? 0.0 : v);
-  }
-  return out;
-}
-
-// Decimals that print every tick of `values` distinctly.
-int tick_decimals(const std::vector<double>& values) {
-  if (values.size() < 2) return 2;
-  const double step = values[1] - values[0];
-  return std::clamp(static_cast<int>(std::ceil(-std::log10(step) - 1e-9)), 0, 4);
-}
-
-// A plot area in pixels: left, top, right, bottom.
-struct Rect {
-  double x0, y0, x1, y1;
-};
-
-// Frame, ticks (with grid lines when `grid`), tick labels and axis titles of a plot area.
-void axes(std::ostream& svg, const Rect& r, const Scale& x, const Scale& y,
-          const std::vector<double>& xt, const std::vector<double>& yt, const std::string& x_title,
-          const std::string& y_title, bool grid) {
-  const int xd = tick_decimals(xt), yd = tick_decimals(yt);
-  for (const double v : xt) {
-    const double px = x(v);
-    if (grid)
-      svg << "<line class='grid' x1='" << px << "' y1='" << r.y0 << "' x2='" << px << "' y2='"
-          << r.y1 << "'/>";
-    svg << "<line class='axis' x1='" << px << "' y1='" << r.y1 << "' x2='" << px << "' y2='"
-        << r.y1 + 5 << "'/>"
-        << "<text class='tick' x='" << px << "' y='" << r.y1 + 18 << "' text-anchor='middle'>"
-        << num(v, xd) << "</text>";
-  }
-  for (const double v : yt) {
-    const double py = y(v);
-    if (grid)
-      svg << "<line class='grid' x1='" << r.x0 << "' y1='" << py << "' x2='" << r.x1 << "' y2='"
-          << py << "'/>";
-    svg << "<line class='axis' x1='" << r.x0 - 5 << "' y1='" << py << "' x2='" << r.x0 << "' y2='"
-        << py << "'/>"
-        << "<text class='tick' x='" << r.x0 - 8 << "' y='" << py + 4 << "' text-anchor='end'>"
-        << num(v, yd) << "</text>";
-  }
-  svg << "<rect class='frame' x='" << r.x0 << "' y='" << r.y0 << "' width='" << r.x1 - r.x0
-      << "' height='" << r.y1 - r.y0 << "'/>"
-      << "<text class='title' x='" << (r.x0 + r.x1) / 2 << "' y='" << r.y1 + 38
-      << "' text-anchor='middle'>" << escape(x_title) << "</text>"
-      << "<text class='title' transform='translate(" << r.x0 - 50 << ' ' << (r.y0 + r.y1) / 2
-      << ") rotate(-90)' text-anchor='middle'>" << escape(y_title) << "</text>";
-}
-
-// The plot area of the 560 x 480 charts (the legend goes under the axis title).
-constexpr Rect kChart{70, 20, 540, 380};
-// Where the legend of a chart starts (x, y) and how wide it may run.
-constexpr double kLegendX = kChart.x0, kLegendY = kChart.y1 + 66, kLegendWidth = 550;
-// Scales onto the chart's plot area: x left to right, y bottom to top.
-Scale chart_x(double lo, double hi) { return {lo, hi, kChart.x0, kChart.x1}; }
-Scale chart_y(double lo, double hi) { return {lo, hi, kChart.y1, kChart.y0}; }
-
-// One legend entry: a swatch (line, dot or box) and its label; returns its width in pixels.
-double legend_row(std::ostream& svg, double x, double y, const std::string& swatch,
-                  const std::string& colour, const std::string& label) {
-  if (swatch == "line") {
-    svg << "<line class='swatch' x1='" << x << "' y1='" << y << "' x2='" << x + 22 << "' y2='" << y
-        << "' stroke='" << colour << "' stroke-width='2.5'/>";
-  } else if (swatch == "box") {
-    svg << "<rect x='" << x + 4 << "' y='" << y - 6
-        << "' width='14' height='12' fill='none' stroke='" << colour << "' stroke-width='2'/>";
-  } else {
-    svg << "<circle cx='" << x + 11 << "' cy='" << y << "' r='5' fill='" << colour
-        << "' stroke='#fff' stroke-width='1'/>";
-  }
-  svg << "<text class='legend' x='" << x + 30 << "' y='" << y + 4 << "'>" << label << "</text>";
-  return 30 + 6.8 * static_cast<double>(label.size()) + 18;  // ~6.8 px per character at 12 px
-}
-
-struct LegendItem {
-  const char* swatch;
-  const char* colour;
-  std::string label;
-};
-
-// A horizontal legend under a chart, wrapped at x = right.
-void legend(std::ostream& svg, const std::vector<LegendItem>& items, double x0, double y,
-            double right) {
-  double x = x0;
-  for (const LegendItem& item : items) {
-    const double width = 48 + 6.8 * static_cast<double>(item.label.size());
-    if (x > x0 && x + width > right) x = x0, y += 20;
-    x += legend_row(svg, x, y, item.swatch, item.colour, item.label);
-  }
-}
-
-// ---------------------------------------------------------------- loops
-
-struct Loop {
-  std::int64_t query, match;
-  double score;
-  bool correct;
-};
-
-// The reported loops at the operating threshold, with how the threshold was chosen.
-struct Operating {
-  double threshold = std::numeric_limits<double>::infinity();
-  std::string label;  // HTML: what the threshold is
-  std::vector<Loop> loops;
-  std::int64_t tp = 0, fp = 0;
-};
-
-bool correct_loop(const GroundTruth& gt, std::int64_t query, std::int64_t match,
-                  std::int64_t min_gap) {
-  return match >= 0 && match < query - min_gap && gt.is_loop(query, match);
-}
-
-Operating operating_point(const ReportInput& in) {
-  Operating op;
-  const Metrics& m = *in.metrics;
-  if (in.declared) {
-    op.label = "loops declared by the system with its own settings (no ground truth involved)";
-  } else if (in.threshold) {
-    op.threshold = *in.threshold;
-    op.label = escape(in.threshold_name) + " " + num(op.threshold, 4);
-  } else if (m.recall_at_100_precision > 0) {
-    op.threshold = m.threshold_at_100_precision;
-    op.label = "R@100P threshold " + num(op.threshold, 4);
-  } else {
-    op.label = "none (no threshold reaches precision 1, so no loop is marked)";
-  }
-  for (const FrameRecord& r : *in.records) {
-    if (r.reported.frame < 0) continue;
-    if (in.declared ? !r.loop : !(r.reported.score >= op.threshold)) continue;
-    const bool ok = correct_loop(*in.gt, r.frame, r.reported.frame, m.min_gap);
-    op.loops.push_back({r.frame, r.reported.frame, r.reported.score, ok});
-    (ok ? op.tp : op.fp) += 1;
-  }
-  // Declared loops: the charts mark the lowest score declared.
-  if (in.declared) {
-    for (const Loop& l : op.loops) op.threshold = std::min(op.threshold, l.score);
-  }
-  return op;
-}
+namespace report {
 
 // ---------------------------------------------------------------- sections
 
@@ -267,6 +33,18 @@ void header(std::ostream& html, const ReportInput& in, const Operating& op) {
        << " frames (candidates j &lt; i &minus; w)</td></tr>"
        << "<tr><th>Search</th><td>mode " << escape(in.mode) << ", verification "
        << escape(in.verification) << "</td></tr>"
+       << (in.width > 0 ? concat("<tr><th>Images</th><td>", in.width, " x ", in.height, " pixels",
+                                 in.grid_rows > 0 ? concat(", descriptor grid ", in.grid_rows, " x ",
+                                                           in.grid_cols, " = ", in.grid_rows * in.grid_cols,
+                                                           " cells")
+                                                  : std::string(),
+                                 "</td></tr>")
+                          : std::string())
+       << (in.version.empty() ? std::string()
+                              : "<tr><th>Made by</th><td>" + escape(in.version) + "</td></tr>")
+       << (in.command.empty() ? std::string()
+                              : "<tr><th>Command</th><td class='path'><code>" + escape(in.command) +
+                                    "</code></td></tr>")
        << "<tr><th>Frames</th><td>" << m.frames << " evaluated of " << in.gt->frames() << "; "
        << m.positives << " positives (queries with a GT loop outside the window); "
        << in.gt->pairs() << " GT pairs</td></tr>"
@@ -313,6 +91,14 @@ void pr_curve(std::ostream& html, const ReportInput& in, const Operating& op) {
       svg << num(x(p.recall), 2) << ',' << num(y(p.precision), 2) << ' ';
     svg << "'/>";
   }
+  // Other systems, scored by the same evaluator, under ours.
+  for (std::size_t k = 0; k < in.compared.size(); ++k) {
+    const Metrics& c = in.compared[k].metrics;
+    svg << "<polyline class='pr-compared' fill='none' stroke='" << compared_colour(k)
+        << "' stroke-width='1.6' stroke-dasharray='6 3' points='";
+    for (const PrPoint& p : c.curve) svg << num(x(p.recall), 2) << ',' << num(y(p.precision), 2) << ' ';
+    svg << "'/>";
+  }
   if (m.recall_at_100_precision > 0) {
     svg << "<circle cx='" << x(m.recall_at_100_precision) << "' cy='" << y(1) << "' r='6' fill='"
         << kTpColour << "' stroke='#fff' stroke-width='1.5'/>";
@@ -333,9 +119,18 @@ void pr_curve(std::ostream& html, const ReportInput& in, const Operating& op) {
                  ? "R@100P " + percent(m.recall_at_100_precision) + " at threshold " +
                        num(m.threshold_at_100_precision, 4)
                  : std::string("R@100P 0: the best-scored report is false"));
+  double row = 344;
   if (at) {
-    legend_row(svg, 84, 344, "box", "#111",
+    legend_row(svg, 84, row, "box", "#111",
                "operating point: P " + percent(at->precision) + ", R " + percent(at->recall));
+    row += 22;
+  }
+  for (std::size_t k = 0; k < in.compared.size(); ++k, row += 22) {
+    const Metrics& c = in.compared[k].metrics;
+    legend_row(svg, 84, row, "line", compared_colour(k),
+               escape(in.compared[k].name) + " (AP " + percent(c.average_precision) + ", R@100P " +
+                   percent(c.recall_at_100_precision) + ", " + std::to_string(c.declared_false) +
+                   " false of " + std::to_string(c.declared_loops) + " declared)");
   }
   svg << "</svg>";
   html << "<figure class='chart'><h2>Precision-recall</h2>" << svg.str() << "<figcaption>"
@@ -700,9 +495,13 @@ table.numbers th,table.numbers td{border-bottom:1px solid #e5e7eb}
 table.numbers th:first-child,table.numbers td:first-child{text-align:left}
 .bar{display:inline-block;height:10px;background:#93c5fd;border-radius:2px}
 pre{background:#f3f4f6;border-radius:6px;padding:10px 14px;font-size:12px;overflow:auto}
+.gallery{display:flex;flex-wrap:wrap;gap:10px}.example{margin:0;border:2px solid;border-radius:6px;padding:6px}
+.thumbs{display:flex;gap:6px}.thumb .caption{font-size:11px}.nothumb{font-size:11px;max-width:160px;color:#6b7280}
 )";
 
-}  // namespace
+}  // namespace report
+
+using namespace report;  // the sections and their helpers (report_svg.h)
 
 void ReportInput::check() const {
   if (!metrics || !records || !gt) {
@@ -721,6 +520,18 @@ void ReportInput::check() const {
   for (const auto& p : trajectory) {
     if (!std::isfinite(p[0]) || !std::isfinite(p[1])) {
       internal::throw_invalid("report: trajectory position (", p[0], ", ", p[1], ") is not finite");
+    }
+  }
+  internal::check_range("report: max_examples", max_examples, 0, 50);
+  if (width < 0 || height < 0 || grid_rows < 0 || grid_cols < 0) {
+    internal::throw_invalid("report: image size ", width, "x", height, " or grid ", grid_rows, "x",
+                            grid_cols, " is negative");
+  }
+  for (const ComparedSystem& c : compared) {
+    if (c.metrics.min_gap != metrics->min_gap || c.metrics.protocol != metrics->protocol) {
+      internal::throw_invalid("report: compared system '", c.name, "' was scored with window ",
+                              c.metrics.min_gap, " (", c.metrics.protocol, "), not ",
+                              metrics->min_gap, " (", metrics->protocol, ")");
     }
   }
   if (threshold && !std::isfinite(*threshold)) {
@@ -744,10 +555,15 @@ std::string render_report(const ReportInput& in) {
   header(html, in, op);
   html << "<div class='row'>";
   pr_curve(html, in, op);
-  if (!in.trajectory.empty()) trajectory_section(html, in, op);
+  if (!in.trajectory.empty()) {
+    trajectory_section(html, in, op);
+  } else {
+    timeline_section(html, in, op);
+  }
   score_histogram(html, in, op);
   timing_section(html, in);
   html << "</div>\n";
+  if (in.image) examples_section(html, in, op);
   matrix_section(html, in, op);
   if (!in.config_yaml.empty()) {
     html << "<section><h2>Configuration</h2><pre>" << escape(in.config_yaml)

@@ -3,7 +3,9 @@
 // Runs the detector over a sequence, or reads another system's detections, and
 // scores them against ground truth moved onto the evaluated frames.
 #include <CLI/CLI.hpp>
+#include <opencv2/core.hpp>
 #include <fstream>
+#include <filesystem>
 #include <iostream>
 #include <memory>
 #include <optional>
@@ -41,6 +43,7 @@ struct EvalArgs {
   std::string gt_format = "auto";
   std::string report;  // HTML report path
   std::string poses;   // KITTI poses for the report's trajectory
+  std::vector<std::string> compare;  // other systems' detections: [NAME=]CSV
   DetectorFlags detector;
   SequenceFlags layout;
   CLI::App* command = nullptr;  // to tell which flags were given
@@ -93,6 +96,44 @@ eval::Metrics score(const EvalArgs& args, const std::vector<eval::FrameRecord>& 
   return eval::evaluate_lsgddn_reference(records, gt, reference);
 }
 
+// --compare [NAME=]CSV: another system's detections on the same frames,
+// scored by the same evaluator (protocol, window, ground truth) as ours.
+std::vector<eval::ComparedSystem> compared_systems(const EvalArgs& args, const eval::GroundTruth& gt,
+                                                   std::int64_t min_gap, nlohmann::json& json) {
+  std::vector<eval::ComparedSystem> out;
+  nlohmann::json rows = nlohmann::json::array();
+  for (const std::string& spec : args.compare) {
+    const std::size_t eq = spec.find('=');
+    const bool named = eq != std::string::npos && eq > 0 && !std::filesystem::exists(spec);
+    const std::string file = named ? spec.substr(eq + 1) : spec;
+    const std::string name = named ? spec.substr(0, eq) : std::filesystem::path(file).stem().string();
+    const std::vector<eval::FrameRecord> records = eval::read_detections(file, gt.frames());
+    out.push_back({name, score(args, records, gt, min_gap)});
+    nlohmann::json row = metrics_json(out.back().metrics);
+    row["name"] = name;
+    row["detections"] = file;
+    row.erase("curve");
+    rows.push_back(row);
+    const eval::Metrics& m = out.back().metrics;
+    std::cout << "compared: " << name << " (" << file << "): declared " << m.declared_loops << " ("
+              << m.declared_true << " true, " << m.declared_false << " false), R@100P "
+              << m.recall_at_100_precision << ", AP " << m.average_precision << ", R@1 "
+              << m.recall_at_1 << "\n";
+  }
+  if (!args.compare.empty()) json["compared"] = rows;
+  return out;
+}
+
+// The file of each --compare.
+std::vector<std::string> compared_files(const EvalArgs& args) {
+  std::vector<std::string> files;
+  for (const std::string& spec : args.compare) {
+    const std::size_t eq = spec.find('=');
+    files.push_back(eq != std::string::npos && eq > 0 && !std::filesystem::exists(spec) ? spec.substr(eq + 1) : spec);
+  }
+  return files;
+}
+
 void describe_inputs(const EvalArgs& args, const io::SequenceOptions& options, io::Layout layout,
                      const eval::GroundTruth& gt, nlohmann::json& json) {
   json["ground_truth"] = args.gt;
@@ -120,6 +161,8 @@ eval::ReportInput report_input(const EvalArgs& args, const eval::Metrics& metric
   input.metrics = &metrics;
   input.records = &records;
   input.gt = &gt;
+  input.command = command_line();
+  input.version = version_text();
   if (!args.poses.empty()) {
     const std::vector<eval::Pose> poses = eval::read_kitti_poses(args.poses);
     if (static_cast<std::int64_t>(poses.size()) != gt.frames()) {
@@ -141,6 +184,7 @@ void check_files(const EvalArgs& args, const std::vector<std::string>& images) {
   files.input(args.detections, "--detections");
   files.input(args.gt, "--gt");
   files.input(args.poses, "--poses");
+  files.inputs(compared_files(args), "--compare", "detections");
   files.output(args.json, "--json");
   files.output(args.output, "--output");
   files.output(args.report, "--report");
@@ -165,11 +209,13 @@ void evaluate_detections(const EvalArgs& args, const io::SequenceOptions& option
   nlohmann::json json = metrics_json(metrics);
   json["detections"] = args.detections;
   describe_inputs(args, options, options.layout, gt, json);
-  write_json(json, args.json);
   std::cout << args.detections << " (detections read from the file, no detector run)\n";
   print_metrics(metrics, 0, std::cout);
+  const auto compared = compared_systems(args, gt, min_gap, json);
+  write_json(json, args.json);
   if (!args.report.empty()) {
     eval::ReportInput input = report_input(args, metrics, records, gt);
+    input.compared = compared;
     input.sequence = args.detections + " (detections of another system)";
     input.declared = true;
     eval::write_report(input, args.report);
@@ -210,7 +256,8 @@ void evaluate_sequence(const EvalArgs& args, const io::SequenceOptions& options)
   json["sequence"] = args.sequence;
   describe_inputs(args, options, layout, gt, json);
   json["config_yaml"] = io::to_yaml(detector_options);
-  write_json(json, args.json);
+  json["width"] = detector.width();
+  json["height"] = detector.height();
   std::cout << args.sequence << " (" << detector_options.search.mode << ", verification "
             << verification_stages(detector_options.verification) << ")\n";
   print_metrics(metrics, detector.nodes(), std::cout);
@@ -218,8 +265,18 @@ void evaluate_sequence(const EvalArgs& args, const io::SequenceOptions& options)
     std::cout << "  skipped " << skipped
               << " frames (unreadable or rejected images; scored as frames without a report)\n";
   }
+  const auto compared = compared_systems(args, gt, detector_options.search.min_gap, json);
+  write_json(json, args.json);
   if (!args.report.empty()) {
     eval::ReportInput input = report_input(args, metrics, records, gt);
+    input.compared = compared;
+    input.width = detector.width();
+    input.height = detector.height();
+    input.grid_rows = detector.store().grid().rows;
+    input.grid_cols = detector.store().grid().cols;
+    input.image = [&sequence](std::int64_t f) {
+      return io::read_image(sequence.images.at(static_cast<std::size_t>(f)));
+    };
     input.sequence = args.sequence;
     input.mode = detector_options.search.mode;
     input.verification = verification_stages(detector_options.verification);
@@ -274,13 +331,19 @@ void register_eval(CLI::App& app) {
                   "convert` for other values) or loopinf")
       ->check(CLI::IsMember({"auto", "pairs", "mat", "kitti-poses", "loopinf"}));
   cmd->add_option("--report", args->report,
-                  "write a self-contained HTML report here (PR curve, similarity matrix with "
-                  "ground truth, trajectory with --poses, timings, configuration)")
+                  "write a self-contained HTML report here (PR curve, trajectory with --poses or "
+                  "scores over the run, example loops as thumbnails, similarity matrix with "
+                  "ground truth, timings, configuration, command line and version)")
       ->check(kNonEmptyPath);
   cmd->add_option("--poses", args->poses,
                   "KITTI poses file (12 or 13 columns) of the evaluated frames: draws the "
                   "trajectory and the loops found in the --report")
       ->check(CLI::ExistingFile)
+      ->check(kNonEmptyPath);
+  cmd->add_option("--compare", args->compare,
+                  "[NAME=]CSV: another system's detections on the same frames (the formats "
+                  "--detections reads), scored by the same evaluator; drawn on the --report's "
+                  "PR plot and written to the JSON's 'compared'; repeatable")
       ->check(kNonEmptyPath);
   cmd->add_option("--json", args->json, "write the metrics here as JSON")->required()
       ->check(kNonEmptyPath);

@@ -4,9 +4,12 @@
 // and can be mailed or archived as is.
 //
 // Sections: a header (sequence, ground truth, protocol, window, mode,
-// verification, counts and the headline metrics), the precision-recall curve,
-// the similarity matrix with the ground-truth loops outlined and the reported
-// loops marked, the trajectory with the loops found (when poses are given),
+// verification, image size and grid, the command line and version, counts
+// and the headline metrics), the precision-recall curve (with other systems'
+// when compared), the trajectory with the loops found (when poses are given)
+// or else the score of every frame over time, example loops as thumbnails
+// (declared true, declared false, missed revisits), the similarity matrix
+// with the ground-truth loops outlined and the reported loops marked,
 // per-stage timings and resources, and the exact configuration.
 #pragma once
 
@@ -21,7 +24,18 @@
 #include "lsgd/eval/groundtruth.h"
 #include "lsgd/eval/metrics.h"
 
+namespace cv {
+class Mat;
+}
+
 namespace lsgd::eval {
+
+// Another system's results on the same frames, scored by the same evaluator,
+// drawn beside ours on the precision-recall plot (lsgd eval --compare).
+struct ComparedSystem {
+  std::string name;  // as the legend shows it
+  Metrics metrics;
+};
 
 struct ReportInput {
   std::string title;                // page title; empty: "lsgd evaluation: <sequence>"
@@ -31,6 +45,10 @@ struct ReportInput {
   std::string mode;                 // search mode, e.g. "exhaustive" or "nodes"
   std::string verification;         // verification stages, e.g. "temporal"
   std::string config_yaml;          // the exact configuration (io::to_yaml); empty: omitted
+  std::string command;              // the command line that made the run; empty: omitted
+  std::string version;              // e.g. "lsgd 0.1.0 (commit 05e5e35a1b2c)"; empty: omitted
+  int width = 0, height = 0;        // frame size; 0: unknown (detections), not shown
+  int grid_rows = 0, grid_cols = 0; // the descriptor grid; 0: not shown
 
   // Required (not owned; must outlive the call). The temporal window is metrics->min_gap.
   const Metrics* metrics = nullptr;
@@ -61,6 +79,16 @@ struct ReportInput {
   std::string threshold_name = "decision threshold";  // what `threshold` is, when given
   // Warnings about the setup (eval::setup_warnings), shown at the top.
   std::vector<std::string> warnings;
+
+  // The image of frame f (8-bit gray or BGR; throws lsgd::Error for one that
+  // cannot be read), for thumbnails of example loops: declared true and false
+  // ones and missed revisits, query and match side by side. Empty: no
+  // thumbnails. At most `max_examples` of each kind, [0, 50].
+  std::function<cv::Mat(std::int64_t)> image;
+  int max_examples = 4;
+
+  // Other systems on the same frames, on the same PR plot.
+  std::vector<ComparedSystem> compared;
 
   // Throws InvalidArgument naming the first missing or inconsistent field.
   void check() const;

@@ -15,6 +15,7 @@ packages=(
   libmatio-dev  # MATLAB .mat ground truth (lsgd gt); brings zlib1g-dev
   libsqlite3-dev  # detector databases (lsgd run --database, lsgd_io)
   libjpeg-dev  # libjpeg-turbo's warnings tell a damaged JPEG (lsgd_io)
+  libhnswlib-dev  # the index search mode's graph (header-only)
   pybind11-dev python3-dev python3-numpy  # the Python module (python/), for /usr/bin/python3
   python3-pytest python3-matplotlib  # its tests and python/examples/evaluate.py
   clang libclang-rt-14-dev  # scripts/ci-hardening.sh: libFuzzer targets in fuzz/

@@ -189,6 +189,7 @@ Result Detector::process_gray(double convert_ms, std::int64_t start_ns) {
   // node the store has no group for (frames restored without their nodes)
   // gets a new one rather than an error.
   store_.add(descriptor_, std::clamp<std::int64_t>(result.node, 0, store_.groups()));
+  search_->end(result.frame, result.candidates);
   if (result.frame == 0) width_ = gray_.width, height_ = gray_.height;
 
   result.timings.total_ms = ms_since(start_ns);
@@ -210,7 +211,10 @@ void Detector::score_candidates(Result& result) {
   }
   result.candidates.clear();
   if (!evidence_.similarity_statistics().valid()) return;
-  for (const Candidate& c : raw_) result.candidates.push_back({c.frame, evidence_.single_frame(c.score)});
+  const std::size_t n = std::min(raw_.size(), static_cast<std::size_t>(top_n));
+  for (std::size_t i = 0; i < n; ++i) {
+    result.candidates.push_back({raw_[i].frame, evidence_.single_frame(raw_[i].score)});
+  }
 }
 
 // The verification stages and the loop decision (decision.h).

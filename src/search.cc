@@ -4,6 +4,7 @@
 #include "internal/registry.h"
 #include "lsgd/search/dynamic_nodes.h"
 #include "lsgd/search/exhaustive.h"
+#include "lsgd/search/index.h"
 #include "lsgd/limits.h"
 
 namespace lsgd {
@@ -20,6 +21,8 @@ internal::Registry<SearchMode>& registry() {
           {kExhaustiveSearch, "every frame outside the temporal window is scored",
            make_exhaustive_search},
           {kNodesSearch, "the paper's dynamic nodes (Algorithm 1)", make_nodes_search},
+          {kIndexSearch, "an HNSW graph (hnswlib), its shortlist re-scored exactly",
+           make_index_search},
       });
   return modes;
 }
@@ -60,6 +63,22 @@ const OptionTable<DynamicNodeOptions>& DynamicNodeOptions::fields() {
 
 void DynamicNodeOptions::check() const { check_options(fields(), *this, "search.nodes"); }
 
+const OptionTable<IndexOptions>& IndexOptions::fields() {
+  using S = IndexOptions;
+  static const OptionTable<S> table = {
+      integer_option("m", &S::m, 4, 64, "", "graph links per frame (HNSW's M)"),
+      integer_option("ef_construction", &S::ef_construction, 8, 2000, "frames",
+                     "candidates examined when a frame is inserted"),
+      integer_option("ef_search", &S::ef_search, 1, 10000, "frames",
+                     "candidates examined per query (at least the shortlist)"),
+      integer_option("shortlist", &S::shortlist, 1, 1000, "frames",
+                     "frames the graph returns, re-scored exactly (at least top_n)"),
+  };
+  return table;
+}
+
+void IndexOptions::check() const { check_options(fields(), *this, "search.index"); }
+
 const OptionTable<SearchOptions>& SearchOptions::fields() {
   using S = SearchOptions;
   static const OptionTable<S> table = [] {
@@ -87,6 +106,8 @@ const OptionTable<SearchOptions>& SearchOptions::fields() {
     nest<S, DynamicNodeOptions>(t, "nodes", &S::nodes, DynamicNodeOptions::fields(),
                                 [](const S& s) { return s.mode == kNodesSearch; },
                                 "in nodes mode");
+    nest<S, IndexOptions>(t, "index", &S::index, IndexOptions::fields(),
+                          [](const S& s) { return s.mode == kIndexSearch; }, "in index mode");
     return t;
   }();
   return table;

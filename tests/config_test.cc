@@ -437,6 +437,7 @@ TEST(OptionTables, ResumableAndAppliesSayWhatAResumeCompares) {
     EXPECT_EQ(f.resumable, f.name.rfind("decision.", 0) == 0);
     const bool applies = !f.applies || f.applies(exhaustive);
     const bool expected = f.name.rfind("search.nodes.", 0) != 0 &&
+                          f.name.rfind("search.index.", 0) != 0 &&
                           f.name.rfind("verification.temporal.", 0) != 0;
     EXPECT_EQ(applies, expected);
     EXPECT_EQ(f.applies == nullptr, f.when.empty());

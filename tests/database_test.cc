@@ -213,6 +213,11 @@ INSTANTIATE_TEST_SUITE_P(
                       ResumeCase{kExhaustiveSearch, "temporal", 260, 110, false,
                                  HistogramStorage::kCompact},
                       ResumeCase{kNodesSearch, "temporal", 260, 140, true,
+                                 HistogramStorage::kCompact},
+                      // The index rebuilds its graph from the stored frames;
+                      // the last frame's places travel in its record.
+                      ResumeCase{kIndexSearch, "temporal", 260, 130, false},
+                      ResumeCase{kIndexSearch, "temporal,geometric", 190, 155, true,
                                  HistogramStorage::kCompact}),
     [](const ::testing::TestParamInfo<ResumeCase>& param) {
       std::string name = param.param.mode + "_" + param.param.stages +

@@ -246,7 +246,7 @@ TEST(SearchOptions, BoundaryValuesAccepted) {
 }
 
 TEST(SearchModes, TheBuiltInModesAreRegisteredAndMadeByName) {
-  EXPECT_EQ(search_mode_names(), "exhaustive, nodes");
+  EXPECT_EQ(search_mode_names(), "exhaustive, nodes, index");
   for (const SearchMode& m : search_modes()) {
     SearchOptions o;
     o.mode = m.name;
@@ -264,13 +264,130 @@ TEST(SearchModes, TheBuiltInModesAreRegisteredAndMadeByName) {
   EXPECT_FALSE(make_search(o)->scores_every_frame());
   EXPECT_TRUE(make_search(o)->has_groups());
   EXPECT_TRUE(make_search(o)->has_state());
+  o.mode = kIndexSearch;
+  EXPECT_FALSE(make_search(o)->scores_every_frame());
+  EXPECT_FALSE(make_search(o)->has_groups());
+  EXPECT_TRUE(make_search(o)->has_state());
   for (const char* bad : {"foo", "", "Nodes", "dynamic", "exhaustive "}) {
     const std::string message = message_of<InvalidArgument>([&] { check_search_mode(bad); });
     EXPECT_NE(message.find(std::string("'") + bad + "'"), std::string::npos) << message;
-    EXPECT_NE(message.find("exhaustive, nodes"), std::string::npos) << message;
+    EXPECT_NE(message.find("exhaustive, nodes, index"), std::string::npos) << message;
     o.mode = bad;
     EXPECT_THROW(make_search(o), InvalidArgument);
   }
+}
+
+// ---- index
+
+// Runs the index over frames stored one by one, as the detector does, and
+// returns each query's candidates.
+std::vector<std::vector<Candidate>> run_index(const std::vector<Descriptor>& frames,
+                                              const SearchOptions& o, SimilarityMetric metric) {
+  const std::unique_ptr<CandidateSearch> index = make_search(o);
+  FrameStore store;
+  std::vector<std::vector<Candidate>> all;
+  std::vector<Candidate> out;
+  std::vector<double> row;
+  for (std::size_t i = 0; i < frames.size(); ++i) {
+    index->search({store, frames[i].view(), static_cast<std::int64_t>(i), metric}, out, row);
+    all.push_back(out);
+    index->end(static_cast<std::int64_t>(i), {});
+    store.add(frames[i]);
+  }
+  return all;
+}
+
+// With a shortlist as large as the map the index returns exactly what
+// exhaustive search does (its shortlist is re-scored exactly); every
+// candidate is outside the temporal window, scored by the metric itself.
+TEST(SearchIndex, AShortlistAsLargeAsTheMapIsExhaustive) {
+  std::vector<Descriptor> frames;
+  for (int i = 0; i < 120; ++i) frames.push_back(random_descriptor(6, 700 + i % 37));  // revisits
+  for (SimilarityMetric metric : {SimilarityMetric::kReference, SimilarityMetric::kNormalizedL1}) {
+    SearchOptions o;
+    o.mode = kIndexSearch;
+    o.min_gap = 5;
+    o.top_n = 4;
+    o.index.shortlist = 200;
+    o.index.ef_search = 400;
+    const auto all = run_index(frames, o, metric);
+    const FrameStore store = store_of(frames);
+    for (std::size_t q = 0; q < frames.size(); ++q) {
+      SCOPED_TRACE(testing::Message() << to_string(metric) << " query " << q);
+      const std::int64_t limit = std::max<std::int64_t>(0, static_cast<std::int64_t>(q) - 5);
+      ASSERT_EQ(all[q].size(), static_cast<std::size_t>(limit));  // the whole shortlist
+      for (const Candidate& c : all[q]) {
+        EXPECT_LT(c.frame, limit);
+        EXPECT_EQ(c.score, similarity(frames[q].view(), store.view(c.frame), metric));
+      }
+      std::vector<Candidate> best(all[q].begin(), all[q].begin() + std::min<std::ptrdiff_t>(4, limit));
+      expect_same(best, brute_force(store, frames[q].view(), static_cast<std::int64_t>(q), 5, 4, metric));
+    }
+  }
+}
+
+// With a small shortlist the graph still finds the nearest frame for almost
+// every query of a map with revisits, and reads far fewer than all frames.
+TEST(SearchIndex, ASmallShortlistFindsTheNearestFrame) {
+  std::vector<Descriptor> frames;
+  for (int i = 0; i < 1500; ++i) frames.push_back(random_descriptor(6, 5000 + i % 500));
+  SearchOptions o;
+  o.mode = kIndexSearch;
+  o.min_gap = 10;
+  o.index.shortlist = 8;
+  const auto all = run_index(frames, o, SimilarityMetric::kReference);
+  const FrameStore store = store_of(frames);
+  int queries = 0, same = 0;
+  for (std::size_t q = 600; q < frames.size(); q += 7) {
+    const auto exact = brute_force(store, frames[q].view(), static_cast<std::int64_t>(q), 10, 1,
+                                   SimilarityMetric::kReference);
+    ++queries;
+    same += !all[q].empty() && all[q][0].frame == exact[0].frame ? 1 : 0;
+  }
+  EXPECT_GE(same, queries * 97 / 100) << same << " of " << queries;
+}
+
+// Its state: the places the last frame's candidates pointed to, followed one
+// frame on at the next query; refused when damaged.
+TEST(SearchIndex, FollowsThePreviousFramesPlacesAndKeepsThemAsState) {
+  std::vector<Descriptor> frames;
+  for (int i = 0; i < 40; ++i) frames.push_back(random_descriptor(6, 100 + i));
+  SearchOptions o;
+  o.mode = kIndexSearch;
+  o.min_gap = 2;
+  o.index.shortlist = 1;
+  const std::unique_ptr<CandidateSearch> index = make_search(o);
+  FrameStore store;
+  std::vector<Candidate> out;
+  std::vector<double> row;
+  for (int i = 0; i < 30; ++i) {
+    index->search({store, frames[i].view(), i, SimilarityMetric::kReference}, out, row);
+    index->end(i, {});
+    store.add(frames[i]);
+  }
+  index->end(29, {{11, 0.0}, {20, 0.0}});  // the detector's places for frame 29
+  index->search({store, frames[30].view(), 30, SimilarityMetric::kReference}, out, row);
+  std::vector<std::int64_t> ids;
+  for (const Candidate& c : out) ids.push_back(c.frame);
+  EXPECT_NE(std::find(ids.begin(), ids.end(), 12), ids.end());  // 11 + 1
+  EXPECT_NE(std::find(ids.begin(), ids.end(), 21), ids.end());  // 20 + 1
+  StateWriter w;
+  index->save_frame(29, w);
+  StateWriter none;
+  index->save_frame(28, none);
+  EXPECT_TRUE(none.empty());  // only the last frame's places are read on restore
+  const std::unique_ptr<CandidateSearch> restored = make_search(o);
+  EXPECT_NO_THROW(restored->check_frame(29, 1, 1, 1, StateReader(w.bytes().data(), w.bytes().size(), "x")));
+  StateWriter bad;
+  bad.put_i64(1);
+  bad.put_i64(29);  // not an earlier frame
+  EXPECT_THROW(restored->check_frame(29, 1, 1, 1, StateReader(bad.bytes().data(), bad.bytes().size(), "x")),
+               InvalidArgument);
+  StateWriter overflow;
+  overflow.put_i64(1000000);
+  EXPECT_THROW(restored->check_frame(29, 1, 1, 1,
+                                     StateReader(overflow.bytes().data(), overflow.bytes().size(), "x")),
+               InvalidArgument);
 }
 
 // ---- dynamic nodes

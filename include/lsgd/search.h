@@ -8,7 +8,10 @@
 // - "nodes" (lsgd/search/dynamic_nodes.h): the paper's dynamic nodes
 //   (Sec. III-D/E, Algorithm 1) with the reference implementation's
 //   thresholds relative to the similarity between the query and its
-//   previous frame.
+//   previous frame;
+// - "index" (lsgd/search/index.h): an HNSW graph over the stored frames,
+//   its shortlist re-scored exactly; the query reads a few thousand frames
+//   whatever the map's size.
 // docs/design.md, "Add a search mode", is the recipe.
 #pragma once
 
@@ -26,6 +29,7 @@ namespace lsgd {
 // Names of the built-in modes.
 inline constexpr const char* kExhaustiveSearch = "exhaustive";
 inline constexpr const char* kNodesSearch = "nodes";
+inline constexpr const char* kIndexSearch = "index";
 
 struct DynamicNodeOptions {
   // base = threshold_0 * sim(query, previous frame); in (0, 10]. Reference: 0.9.
@@ -40,6 +44,19 @@ struct DynamicNodeOptions {
   static const OptionTable<DynamicNodeOptions>& fields();  // lsgd/options.h
 };
 
+struct IndexOptions {
+  // Graph links per frame (HNSW's M; 2 M on the bottom layer), [4, 64].
+  int m = 16;
+  // Candidates examined when a frame is inserted, [8, 2000].
+  int ef_construction = 100;
+  // Candidates examined per query (at least the shortlist), [1, 10000].
+  int ef_search = 128;
+  // Frames the graph returns, re-scored exactly (at least top_n), [1, 1000].
+  int shortlist = 128;
+  void check() const;
+  static const OptionTable<IndexOptions>& fields();  // lsgd/options.h
+};
+
 struct SearchOptions {
   // A registered search mode (search_modes()): "exhaustive" or "nodes".
   std::string mode = kExhaustiveSearch;
@@ -49,6 +66,7 @@ struct SearchOptions {
   // How many best candidates to return, [1, 1000].
   int top_n = 10;
   DynamicNodeOptions nodes;  // used in nodes mode
+  IndexOptions index;        // used in index mode
   void check() const;
   static const OptionTable<SearchOptions>& fields();  // lsgd/options.h
 };
@@ -90,10 +108,18 @@ class CandidateSearch : public Stateful {
   // (evidence.h). False for a shortlist: row is left alone, the statistics
   // come from sampled diagonals and the candidates are realigned.
   virtual bool scores_every_frame() const = 0;
-  // Writes at most top_n candidates j < id - min_gap, best first (better())
-  // by raw similarity; `row` as above.
+  // Writes candidates j < id - min_gap, best first (better()) by raw
+  // similarity: top_n, or a longer shortlist that the temporal stage
+  // realigns as a whole (the detector keeps top_n); `row` as above.
   virtual Outcome search(const Query& query, std::vector<Candidate>& out,
                          std::vector<double>& row) = 0;
+
+  // Called once per frame after the detector ranked its candidates (the
+  // places its sequences point to, best first): a shortlist mode may follow
+  // them along their diagonals at the next query.
+  virtual void end(std::int64_t frame, const std::vector<Candidate>& candidates) {
+    (void)frame, (void)candidates;
+  }
 
   // Groups: how many, and the frames of group k (first frame first);
   // InvalidArgument for a group that does not exist. None by default.

@@ -174,6 +174,7 @@ Result Detector::process_gray(double convert_ms, std::int64_t start_ns) {
       search_->search({store_, descriptor_.view(), result.frame, metric}, raw_, row_);
   result.node = outcome.group;
   result.node_created = outcome.created;
+  result.timings.insert_ms = outcome.insert_ms;
   // After a restore the evidence is recomputed from the stored frames first.
   if (evidence_.last_query() != result.frame - 1) evidence_.rebuild(store_, metric);
   evidence_.add_query(store_, descriptor_.view(), result.frame, metric,

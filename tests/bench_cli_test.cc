@@ -142,6 +142,36 @@ TEST(BenchCli, NodesModeWithoutOpenCvWritesNull) {
   for (const auto& row : j["query_growth"]["rows"]) EXPECT_EQ(row["gb_per_s"].get<double>(), 0.0);
 }
 
+// --distractors: the sequence hidden among N perturbed frames, every mode
+// but nodes compared with exhaustive search on the same map.
+TEST(BenchCli, DistractorsCompareTheModesOnOneMap) {
+  const fs::path json = kTmp / "distractors.json";
+  const auto r = lsgd("bench --distractors 300 --frames 120 --width 160 --height 120 --min-gap 10 "
+                      "--verify temporal --mode index --json '" + json.string() + "'");
+  ASSERT_EQ(r.code, 0) << r.err;
+  const auto j = nlohmann::json::parse(slurp(json));
+  EXPECT_EQ(j["mode"], "index");
+  EXPECT_EQ(j["distractors"], 300);
+  EXPECT_EQ(j["frames"], 420);
+  for (const char* key : {"query_ms_median", "query_ms_p95", "insert_ms_median", "bytes_per_frame",
+                          "build_s"}) {
+    EXPECT_GT(j[key].get<double>(), 0.0) << key;
+  }
+  EXPECT_GE(j["recall_vs_exhaustive"].get<double>(), 0.5);
+  EXPECT_LE(j["recall_vs_exhaustive"].get<double>(), 1.0);
+  ASSERT_EQ(j["modes"].size(), 2u);
+  EXPECT_EQ(j["modes"][0]["mode"], "exhaustive");
+  EXPECT_EQ(j["modes"][0]["recall_vs_exhaustive"], 1.0);
+  EXPECT_EQ(j["modes"][0]["insert_ms_median"], 0.0);  // no index
+  EXPECT_GT(j["modes"][0]["compared_queries"].get<int>(), 20);
+  const auto nodes = lsgd("bench --distractors 10 --frames 20 --width 160 --height 120 --mode nodes");
+  EXPECT_EQ(nodes.code, 1);
+  EXPECT_NE(nodes.err.find("nodes cannot take distractors"), std::string::npos) << nodes.err;
+  const auto alone = lsgd("bench --sequence x --frames 30");
+  EXPECT_EQ(alone.code, 1);
+  EXPECT_NE(alone.err.find("--sequence is the sequence of --distractors"), std::string::npos) << alone.err;
+}
+
 TEST(BenchCli, BadArgumentsFailNamingTheFlag) {
   const std::pair<const char*, const char*> cases[] = {
       {"bench --frames 0", "--frames"},           {"bench --width 10", "--width"},

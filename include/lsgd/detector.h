@@ -52,7 +52,8 @@ struct Timings {
   double convert_ms = 0;   // conversion to 8-bit gray
   double segment_ms = 0;   // superpixel-grid segmentation, histograms counted in its last pass
   double describe_ms = 0;  // storage encoding (compact) of the histograms
-  double search_ms = 0;    // candidate search (and node assignment)
+  double search_ms = 0;    // candidate search (and node assignment, index insertion)
+  double insert_ms = 0;    // ... of which adding frames to the search's index (index mode)
   double verify_ms = 0;    // verification stages, including feature extraction
   double total_ms = 0;     // the whole process() call
 };

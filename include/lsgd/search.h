@@ -99,6 +99,10 @@ class CandidateSearch : public Stateful {
     // without groups. The store keeps a group's frames together.
     std::int64_t group = -1;
     bool created = false;  // true when the query started a new group
+    // Frames this search added to the mode's own index (index mode: those
+    // that left the temporal window) and the milliseconds that took.
+    std::int64_t inserted = 0;
+    double insert_ms = 0;
   };
 
   // name(): the registered name (SearchOptions::mode).

@@ -9,6 +9,7 @@
 #include <limits>
 
 #include "internal/check.h"
+#include "internal/clock.h"
 #include "lsgd/state.h"
 #include "search/scoring.h"
 
@@ -61,9 +62,15 @@ class IndexSearch final : public CandidateSearch {
     frames_.metric = q.metric;
     // Frames that left the temporal window join the graph.
     const std::int64_t limit = std::max<std::int64_t>(0, std::min(q.store.size(), q.id - options_.min_gap));
+    Outcome outcome;
     try {
-      while (inserted_ < limit) insert(inserted_++);
-      if (inserted_ == 0) return {};
+      if (inserted_ < limit) {
+        const std::int64_t start = internal::now_ns();
+        outcome.inserted = limit - inserted_;
+        while (inserted_ < limit) insert(inserted_++);
+        outcome.insert_ms = internal::ms_since(start);
+      }
+      if (inserted_ == 0) return outcome;
       const auto k = static_cast<std::size_t>(std::min<std::int64_t>(
           inserted_, std::max<std::int64_t>(options_.index.shortlist, options_.top_n)));
       graph_->setEf(std::max<std::size_t>(k, static_cast<std::size_t>(options_.index.ef_search)));
@@ -98,7 +105,7 @@ class IndexSearch final : public CandidateSearch {
     // (a place whose sequence stands out may rank low on one frame) and keeps
     // top_n (Detector::score_candidates).
     internal::keep_best(scratch_, static_cast<int>(scratch_.size()), out);
-    return {};
+    return outcome;
   }
 
   void end(std::int64_t frame, const std::vector<Candidate>& candidates) override {

@@ -14,6 +14,7 @@
 #include <opencv2/core.hpp>
 #include <opencv2/imgproc.hpp>
 
+#include "bench_distractors.h"
 #include "bench_report.h"
 #include "bench_support.h"
 #include "commands.h"
@@ -34,6 +35,10 @@ struct BenchArgs {
   bench::Setup setup;
   std::string json;
   DetectorFlags detector;
+  std::int64_t distractors = 0;  // > 0: bench::run_distractors
+  std::string sequence;          // --distractors: a real sequence instead of the street
+  SequenceFlags layout;
+  CLI::App* command = nullptr;
 };
 
 void record(const Result& r, double cpu_ms, double render_ms, double cvt_ms, bench::Samples& s) {
@@ -170,7 +175,32 @@ void run(const bench::Setup& a, const DetectorOptions& options, bench::RunData& 
   d.stored = detector.size();
 }
 
+void distractors_command(const BenchArgs& args) {
+  bench::DistractorSetup d;
+  d.distractors = args.distractors;
+  d.sequence = args.sequence;
+  d.layout = args.layout.resolve();
+  d.frames = args.command->count("--frames") > 0 ? args.setup.frames : 1090;
+  d.width = args.setup.width;
+  d.height = args.setup.height;
+  d.seed = args.setup.seed;
+  if (!args.detector.mode.empty()) d.modes = {args.detector.mode};
+  d.json = args.json;
+  const DetectorOptions options = args.detector.resolve();
+  CommandFiles files;
+  files.input(args.detector.config, "--config");
+  files.input(args.sequence, "--sequence");
+  files.output(args.json, "--json");
+  files.check();
+  cv::setNumThreads(0);
+  bench::run_distractors(d, options);
+}
+
 void bench_command(const BenchArgs& args) {
+  if (args.distractors > 0) return distractors_command(args);
+  if (!args.sequence.empty()) {
+    throw InvalidArgument("--sequence is the sequence of --distractors: give --distractors N too");
+  }
   const bench::Setup& a = args.setup;
   if (a.warmup >= a.frames) {
     throw InvalidArgument("--warmup " + std::to_string(a.warmup) +
@@ -224,6 +254,17 @@ void register_bench(CLI::App& app) {
   cmd->add_option("--seed", s.seed, "seed of the synthetic world (default 1)");
   cmd->add_option("--json", args->json, "also write the results as JSON here")
       ->check(kNonEmptyPath);
+  cmd->add_option("--distractors", args->distractors,
+                  "hide the sequence among N distractor frames (perturbed descriptors of its own "
+                  "frames) and compare the search modes at that map size: query and insert ms, "
+                  "recall_vs_exhaustive, bytes per frame (--mode: that mode and exhaustive)")
+      ->check(at_least(0));
+  cmd->add_option("--sequence", args->sequence,
+                  "with --distractors: a real sequence (folder, list or dataset layout); default: "
+                  "the synthetic street (--frames frames, 1090 by default)")
+      ->check(kNonEmptyPath);
+  args->layout.add_to(*cmd);
+  args->command = cmd;
   args->detector.add_to(*cmd);
   cmd->callback([args] { bench_command(*args); });
 }

@@ -1,0 +1,286 @@
+// lsgd bench --distractors N.
+//
+// The map holds N distractor frames before the sequence. Distractor k is
+// made from the descriptor of sequence frame k % M (M frames): its cells are
+// shuffled (a random permutation: another spatial layout of the same kind of
+// content) and each cell's histogram is moved by a random offset of -24 to
+// +24 intensity levels (a lighting change; mass pushed past 0 or 255 stays at
+// the end bin), with a generator seeded by k. So a distractor looks like a
+// place of the same world, never like a copy of a sequence frame. They are
+// stored with Detector::restore_frame (no image: they have no ORB features,
+// so geometry never confirms one), then the sequence is processed frame by
+// frame as a SLAM system would; every frame is a query against N + i frames.
+//
+// Per mode: query ms (the search and its evidence, without index insertion),
+// insert ms (adding one frame to the mode's index), build seconds (the first
+// query, which indexes the N distractors), recall_vs_exhaustive (the share of
+// the queries with a candidate in exhaustive search whose reported candidate
+// is exhaustive's), and memory per frame (resident memory the detector added,
+// over its frames; the descriptor alone beside it).
+#include "bench_distractors.h"
+
+#include <algorithm>
+#include <cstdio>
+#include <fstream>
+#include <iomanip>
+#include <iostream>
+#include <opencv2/core.hpp>
+#include <opencv2/imgproc.hpp>
+
+#include "bench_support.h"
+#include "lsgd/error.h"
+#include "lsgd/eval/runner.h"
+#include "lsgd/io/layouts.h"
+#include "lsgd/io/sequence.h"
+#include "lsgd/segmentation.h"
+#include "lsgd/stage.h"
+#include "lsgd/state.h"
+#include "synthetic/synthetic.h"
+
+namespace lsgd::cli::bench {
+namespace {
+
+// Resident memory now, bytes (/proc/self/statm).
+std::int64_t current_rss_bytes() {
+  std::ifstream statm("/proc/self/statm");
+  std::int64_t pages = 0, resident = 0;
+  statm >> pages >> resident;
+  return resident * 4096;
+}
+
+std::uint64_t next(std::uint64_t& s) {  // splitmix64
+  std::uint64_t z = (s += 0x9E3779B97F4A7C15ull);
+  z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
+  z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
+  return z ^ (z >> 31);
+}
+
+// Distractor k from `base` (an exact descriptor), stored as `storage`.
+void make_distractor(const Descriptor& base, std::int64_t k, HistogramStorage storage,
+                     Descriptor& exact, Descriptor& out) {
+  std::uint64_t s = 0x5eed0000ull + static_cast<std::uint64_t>(k);
+  const int cells = base.grid.cells();
+  std::vector<int> order(static_cast<std::size_t>(cells));
+  for (int c = 0; c < cells; ++c) order[static_cast<std::size_t>(c)] = c;
+  for (int c = cells - 1; c > 0; --c) std::swap(order[static_cast<std::size_t>(c)], order[next(s) % (c + 1)]);
+  exact.grid = base.grid;
+  exact.storage = HistogramStorage::kExact;
+  exact.hist.assign(base.hist.size(), 0);
+  exact.pixels = base.pixels;
+  for (int c = 0; c < cells; ++c) {
+    const int from = order[static_cast<std::size_t>(c)];
+    const int shift = static_cast<int>(next(s) % 49) - 24;
+    exact.pixels[static_cast<std::size_t>(c)] = base.pixels[static_cast<std::size_t>(from)];
+    Bin* to = &exact.hist[static_cast<std::size_t>(c) * kBins];
+    const Bin* src = &base.hist[static_cast<std::size_t>(from) * kBins];
+    for (int b = 0; b < kBins; ++b) {
+      const int t = std::clamp(b + shift, 0, kBins - 1);
+      to[t] = static_cast<Bin>(std::min<int>(65535, to[t] + src[b]));
+    }
+  }
+  if (storage == HistogramStorage::kCompact) {
+    compact(exact, out);
+  } else {
+    out = exact;
+  }
+}
+
+struct Frames {
+  std::vector<cv::Mat> gray;       // the sequence, 8-bit gray
+  std::vector<Descriptor> exact;   // ... and its exact descriptors
+  int width = 0, height = 0;
+  std::string source;
+};
+
+Frames load_frames(const DistractorSetup& a, const DetectorOptions& options) {
+  Frames f;
+  if (a.sequence.empty()) {
+    eval::SyntheticOptions w;
+    w.width = a.width;
+    w.height = a.height;
+    w.seed = a.seed;
+    const eval::SyntheticWorld world(w);
+    for (std::int64_t i = 0; i < a.frames; ++i) {
+      cv::Mat gray;
+      cv::cvtColor(world.render(i % world.frames()), gray, cv::COLOR_BGR2GRAY);
+      f.gray.push_back(gray);
+    }
+    f.source = "synthetic street, " + std::to_string(a.frames) + " frames";
+  } else {
+    const io::Sequence sequence = io::open_sequence(a.sequence, a.layout);
+    for (const std::string& path : sequence.images) {
+      cv::Mat image = io::read_image(path);
+      if (image.channels() > 1) cv::cvtColor(image, image, cv::COLOR_BGR2GRAY);
+      f.gray.push_back(image);
+    }
+    f.source = a.sequence + ", " + std::to_string(f.gray.size()) + " frames";
+  }
+  f.width = f.gray.front().cols;
+  f.height = f.gray.front().rows;
+  Segmenter segmenter(options.segmentation);
+  Segmentation segmentation;
+  DescribeScratch scratch;
+  for (const cv::Mat& g : f.gray) {
+    if (g.cols != f.width || g.rows != f.height) {
+      throw InvalidArgument("--sequence: a frame is " + std::to_string(g.cols) + "x" + std::to_string(g.rows) +
+                            ", the first " + std::to_string(f.width) + "x" + std::to_string(f.height));
+    }
+    const GrayImage image = to_gray(g);
+    Descriptor d;
+    segment_and_describe(segmenter, image, segmentation, d, scratch);
+    f.exact.push_back(std::move(d));
+  }
+  return f;
+}
+
+struct ModeRun {
+  std::string mode;
+  Spread query, insert, total;
+  double build_s = 0;
+  double recall_vs_exhaustive = 0;
+  std::int64_t compared = 0;  // queries with an exhaustive candidate
+  double bytes_per_frame = 0;            // resident memory added / frames
+  std::size_t descriptor_bytes = 0;      // descriptor storage per frame
+  double rss_mb = 0;
+  std::int64_t frames = 0;
+  std::vector<std::int64_t> best;  // reported candidate per query
+};
+
+ModeRun run_mode(const std::string& mode, const DistractorSetup& a, const DetectorOptions& base,
+                 const Frames& f) {
+  DetectorOptions options = base;
+  options.search.mode = mode;
+  ModeRun r;
+  r.mode = mode;
+  const std::int64_t rss0 = current_rss_bytes();
+  {
+    Detector detector(options);
+    // The state of a frame without an image: geometry, when on, keeps no
+    // features for it; every other component starts without a record.
+    std::vector<StateRecord> records;
+    if (options.verification.has(kGeometricStage)) records.push_back({kGeometricStage, 1, {}});
+    const std::vector<std::uint8_t> state = encode_records(records);
+    Descriptor exact, stored;
+    const Stopwatch fill;
+    for (std::int64_t k = 0; k < a.distractors; ++k) {
+      make_distractor(f.exact[static_cast<std::size_t>(k % static_cast<std::int64_t>(f.exact.size()))], k,
+                      options.descriptor.storage, exact, stored);
+      detector.restore_frame(f.width, f.height, stored, state);
+    }
+    std::vector<double> query, insert, total;
+    for (std::size_t i = 0; i < f.gray.size(); ++i) {
+      const Result res = detector.process(f.gray[i]);
+      const double q = res.timings.search_ms - res.timings.insert_ms;
+      if (i == 0) {
+        r.build_s = res.timings.insert_ms * 1e-3;  // the distractors enter the index
+      } else {
+        query.push_back(q);
+        if (res.timings.insert_ms > 0) insert.push_back(res.timings.insert_ms);
+        total.push_back(res.timings.total_ms);
+      }
+      r.best.push_back(res.best.frame);
+    }
+    r.query = spread(query);
+    r.insert = insert.empty() ? Spread{} : spread(insert);
+    r.total = spread(total);
+    r.frames = detector.size();
+    r.descriptor_bytes = detector.bytes_per_frame();
+    const std::int64_t rss1 = current_rss_bytes();
+    r.rss_mb = static_cast<double>(rss1) / (1 << 20);
+    r.bytes_per_frame = static_cast<double>(rss1 - rss0) / static_cast<double>(r.frames);
+  }
+  return r;
+}
+
+nlohmann::json row_json(const ModeRun& r) {
+  return {{"mode", r.mode},
+          {"frames", r.frames},
+          {"query_ms_median", r.query.median},
+          {"query_ms_p95", r.query.p95},
+          {"insert_ms_median", r.insert.median},
+          {"insert_ms_p95", r.insert.p95},
+          {"process_ms_median", r.total.median},
+          {"build_s", r.build_s},
+          {"recall_vs_exhaustive", r.recall_vs_exhaustive},
+          {"compared_queries", r.compared},
+          {"bytes_per_frame", r.bytes_per_frame},
+          {"descriptor_bytes_per_frame", r.descriptor_bytes},
+          {"rss_mb", r.rss_mb}};
+}
+
+}  // namespace
+
+void run_distractors(const DistractorSetup& a, const DetectorOptions& options) {
+  std::vector<std::string> modes = a.modes;
+  if (modes.empty()) {
+    for (const SearchMode& m : search_modes()) {
+      if (std::string(m.name) != kNodesSearch) modes.emplace_back(m.name);
+    }
+  }
+  for (const std::string& m : modes) {
+    if (m == kNodesSearch) {
+      throw InvalidArgument("--distractors: search mode nodes cannot take distractors (its nodes "
+                            "are built by running Algorithm 1 over every frame, O(N^2) for N "
+                            "distractors); use exhaustive or index");
+    }
+  }
+  modes.erase(std::remove(modes.begin(), modes.end(), std::string(kExhaustiveSearch)), modes.end());
+  modes.insert(modes.begin(), kExhaustiveSearch);  // the reference, first
+  const Frames f = load_frames(a, options);
+  std::cout << "bench --distractors " << a.distractors << ": " << f.source << " (" << f.width << "x"
+            << f.height << "), " << to_string(options.descriptor.storage) << " storage, verification "
+            << verification_stages(options.verification) << "\n";
+  std::vector<ModeRun> runs;
+  for (const std::string& m : modes) {
+    std::cout << "  " << m << " ..." << std::flush;
+    runs.push_back(run_mode(m, a, options, f));
+    std::cout << " done\n";
+  }
+  const std::vector<std::int64_t>& reference = runs.front().best;
+  for (ModeRun& r : runs) {
+    std::int64_t compared = 0, same = 0;
+    for (std::size_t i = 1; i < reference.size(); ++i) {
+      if (reference[i] < 0) continue;
+      ++compared;
+      same += r.best[i] == reference[i] ? 1 : 0;
+    }
+    r.compared = compared;
+    r.recall_vs_exhaustive = compared > 0 ? static_cast<double>(same) / compared : 0;
+  }
+  std::cout << std::fixed << std::setprecision(3)
+            << "mode        frames   query ms (median, p95)   insert ms (median, p95)   build s   "
+               "recall_vs_exhaustive   bytes/frame (descriptor)\n";
+  for (const ModeRun& r : runs) {
+    std::cout << std::left << std::setw(10) << r.mode << std::right << std::setw(9) << r.frames << "   "
+              << std::setw(8) << r.query.median << " " << std::setw(8) << r.query.p95 << "          "
+              << std::setw(8) << r.insert.median << " " << std::setw(8) << r.insert.p95 << "      "
+              << std::setw(8) << std::setprecision(2) << r.build_s << std::setprecision(3) << "   "
+              << std::setw(8) << r.recall_vs_exhaustive << " (" << r.compared << " queries)   "
+              << std::setprecision(0) << r.bytes_per_frame << " (" << r.descriptor_bytes << ")"
+              << std::setprecision(3) << "\n";
+  }
+  std::cout.unsetf(std::ios::floatfield);
+  if (!a.json.empty()) {
+    // The top level is the mode asked for (the first that is not exhaustive);
+    // every mode is under "modes".
+    const ModeRun& main = runs.size() > 1 ? runs[1] : runs[0];
+    nlohmann::json j = row_json(main);
+    j["distractors"] = a.distractors;
+    j["sequence"] = f.source;
+    j["width"] = f.width;
+    j["height"] = f.height;
+    j["storage"] = to_string(options.descriptor.storage);
+    j["verification"] = verification_stages(options.verification);
+    j["distractor_recipe"] =
+        "descriptor of sequence frame k % M, cells shuffled, each cell's histogram moved by a "
+        "random -24..+24 levels (seed k)";
+    j["machine"] = to_json(describe_machine());
+    nlohmann::json rows = nlohmann::json::array();
+    for (const ModeRun& r : runs) rows.push_back(row_json(r));
+    j["modes"] = rows;
+    write_json(j, a.json);
+    std::cout << "wrote " << a.json << "\n";
+  }
+}
+
+}  // namespace lsgd::cli::bench

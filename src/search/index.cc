@@ -1,5 +1,9 @@
 #include "lsgd/search/index.h"
 
+// hnswlib 0.6.2's SSE path prefetches one link past the end of a node's link
+// list (an out-of-bounds read AddressSanitizer reports in searchBaseLayer);
+// its vector kernels are for its own L2/IP spaces, which we do not use.
+#define NO_MANUAL_VECTORIZATION
 #include <hnswlib/hnswlib.h>
 
 #include <algorithm>

@@ -50,9 +50,9 @@ struct IndexOptions {
   // Candidates examined when a frame is inserted, [8, 2000].
   int ef_construction = 100;
   // Candidates examined per query (at least the shortlist), [1, 10000].
-  int ef_search = 128;
+  int ef_search = 64;
   // Frames the graph returns, re-scored exactly (at least top_n), [1, 1000].
-  int shortlist = 128;
+  int shortlist = 10;
   void check() const;
   static const OptionTable<IndexOptions>& fields();  // lsgd/options.h
 };

@@ -62,7 +62,8 @@ Decision LoopDecision::decide(const DecisionQuery& q, const std::vector<Verifica
   Decision out;
   out.evidence.appearance = std::numeric_limits<double>::quiet_NaN();
   const std::size_t n = std::min(candidates.size(), static_cast<std::size_t>(q.max_candidates));
-  std::vector<VerificationStage*> confirms;
+  std::vector<VerificationStage*>& confirms = confirms_;
+  confirms.clear();
   for (VerificationStage* s : stages) {
     if (s->role() == VerificationStage::Role::kConfirm && s->examines()) confirms.push_back(s);
   }

@@ -13,6 +13,7 @@
 #include <fstream>
 #include <nlohmann/json.hpp>
 #include <opencv2/core.hpp>
+#include <opencv2/imgcodecs.hpp>
 #include <sstream>
 #include <string>
 #include <tuple>
@@ -167,6 +168,20 @@ TEST(BenchCli, DistractorsCompareTheModesOnOneMap) {
   const auto nodes = lsgd("bench --distractors 10 --frames 20 --width 160 --height 120 --mode nodes");
   EXPECT_EQ(nodes.code, 1);
   EXPECT_NE(nodes.err.find("nodes cannot take distractors"), std::string::npos) << nodes.err;
+  // --json never lands on an image of --sequence.
+  const fs::path dir = kTmp / "distractor-sequence";
+  fs::create_directories(dir);
+  cv::Mat image(48, 64, CV_8UC1);
+  for (int i = 0; i < 3; ++i) {
+    cv::randu(image, 0, 255);
+    ASSERT_TRUE(cv::imwrite((dir / (std::to_string(i) + ".png")).string(), image));
+  }
+  const std::string before = slurp(dir / "1.png");
+  const auto onto = lsgd("bench --distractors 5 --sequence '" + dir.string() + "' --json '" +
+                         (dir / "1.png").string() + "'");
+  EXPECT_EQ(onto.code, 1);
+  EXPECT_NE(onto.err.find("1.png"), std::string::npos) << onto.err;
+  EXPECT_EQ(slurp(dir / "1.png"), before);
   const auto alone = lsgd("bench --sequence x --frames 30");
   EXPECT_EQ(alone.code, 1);
   EXPECT_NE(alone.err.find("--sequence is the sequence of --distractors"), std::string::npos) << alone.err;

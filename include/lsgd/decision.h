@@ -146,6 +146,7 @@ class LoopDecision final : public Stateful {
   // Scratch reused across frames.
   std::vector<char> gated_;          // 1 for a candidate a gate rejected
   std::vector<Candidate> examined_;  // candidates the confirming stages check, in order
+  std::vector<VerificationStage*> confirms_;  // the confirming stages of this frame
 };
 
 }  // namespace lsgd

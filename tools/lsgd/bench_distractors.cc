@@ -19,6 +19,8 @@
 // over its frames; the descriptor alone beside it).
 #include "bench_distractors.h"
 
+#include <unistd.h>
+
 #include <algorithm>
 #include <cstdio>
 #include <fstream>
@@ -40,12 +42,12 @@
 namespace lsgd::cli::bench {
 namespace {
 
-// Resident memory now, bytes (/proc/self/statm).
+// Resident memory now, bytes (/proc/self/statm counts pages).
 std::int64_t current_rss_bytes() {
   std::ifstream statm("/proc/self/statm");
   std::int64_t pages = 0, resident = 0;
   statm >> pages >> resident;
-  return resident * 4096;
+  return resident * static_cast<std::int64_t>(sysconf(_SC_PAGESIZE));
 }
 
 std::uint64_t next(std::uint64_t& s) {  // splitmix64

@@ -22,6 +22,7 @@
 #include "files.h"
 #include "lsgd/descriptor.h"
 #include "lsgd/error.h"
+#include "lsgd/io/layouts.h"
 #include "synthetic/synthetic.h"
 #include "lsgd/segmentation.h"
 
@@ -190,6 +191,9 @@ void distractors_command(const BenchArgs& args) {
   CommandFiles files;
   files.input(args.detector.config, "--config");
   files.input(args.sequence, "--sequence");
+  if (!args.sequence.empty()) {  // the JSON may not land on one of the images read
+    files.inputs(io::open_sequence(args.sequence, d.layout).images, "--sequence", "input image");
+  }
   files.output(args.json, "--json");
   files.check();
   cv::setNumThreads(0);

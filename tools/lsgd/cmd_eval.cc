@@ -96,26 +96,36 @@ eval::Metrics score(const EvalArgs& args, const std::vector<eval::FrameRecord>& 
   return eval::evaluate_lsgddn_reference(records, gt, reference);
 }
 
-// --compare [NAME=]CSV: another system's detections on the same frames,
-// scored by the same evaluator (protocol, window, ground truth) as ours.
+// --compare [NAME=]CSV: the legend's name (the file's stem unless NAME= is
+// given; a file whose own name holds '=' is taken whole) and the file.
+struct CompareSpec {
+  std::string name, file;
+};
+CompareSpec parse_compare(const std::string& spec) {
+  const std::size_t eq = spec.find('=');
+  if (eq != std::string::npos && eq > 0 && !std::filesystem::exists(spec)) {
+    return {spec.substr(0, eq), spec.substr(eq + 1)};
+  }
+  return {std::filesystem::path(spec).stem().string(), spec};
+}
+
+// Other systems' detections on the same frames, scored by the same evaluator
+// (protocol, window, ground truth) as ours.
 std::vector<eval::ComparedSystem> compared_systems(const EvalArgs& args, const eval::GroundTruth& gt,
                                                    std::int64_t min_gap, nlohmann::json& json) {
   std::vector<eval::ComparedSystem> out;
   nlohmann::json rows = nlohmann::json::array();
   for (const std::string& spec : args.compare) {
-    const std::size_t eq = spec.find('=');
-    const bool named = eq != std::string::npos && eq > 0 && !std::filesystem::exists(spec);
-    const std::string file = named ? spec.substr(eq + 1) : spec;
-    const std::string name = named ? spec.substr(0, eq) : std::filesystem::path(file).stem().string();
-    const std::vector<eval::FrameRecord> records = eval::read_detections(file, gt.frames());
-    out.push_back({name, score(args, records, gt, min_gap)});
+    const CompareSpec c = parse_compare(spec);
+    const std::vector<eval::FrameRecord> records = eval::read_detections(c.file, gt.frames());
+    out.push_back({c.name, score(args, records, gt, min_gap)});
     nlohmann::json row = metrics_json(out.back().metrics);
-    row["name"] = name;
-    row["detections"] = file;
+    row["name"] = c.name;
+    row["detections"] = c.file;
     row.erase("curve");
     rows.push_back(row);
     const eval::Metrics& m = out.back().metrics;
-    std::cout << "compared: " << name << " (" << file << "): declared " << m.declared_loops << " ("
+    std::cout << "compared: " << c.name << " (" << c.file << "): declared " << m.declared_loops << " ("
               << m.declared_true << " true, " << m.declared_false << " false), R@100P "
               << m.recall_at_100_precision << ", AP " << m.average_precision << ", R@1 "
               << m.recall_at_1 << "\n";
@@ -127,10 +137,7 @@ std::vector<eval::ComparedSystem> compared_systems(const EvalArgs& args, const e
 // The file of each --compare.
 std::vector<std::string> compared_files(const EvalArgs& args) {
   std::vector<std::string> files;
-  for (const std::string& spec : args.compare) {
-    const std::size_t eq = spec.find('=');
-    files.push_back(eq != std::string::npos && eq > 0 && !std::filesystem::exists(spec) ? spec.substr(eq + 1) : spec);
-  }
+  for (const std::string& spec : args.compare) files.push_back(parse_compare(spec).file);
   return files;
 }
 

@@ -6,6 +6,10 @@
 #define NO_MANUAL_VECTORIZATION
 #include <hnswlib/hnswlib.h>
 
+#if defined(__SSE2__)
+#include <emmintrin.h>
+#endif
+
 #include <algorithm>
 #include <cmath>
 #include <cstring>
@@ -20,50 +24,95 @@
 namespace lsgd {
 namespace {
 
-// What the graph's distance function reads: the stored frames, and the
-// query (id -1), which is searched before it is stored.
-struct Frames {
-  const FrameStore* store = nullptr;
-  DescriptorView query;
-  SimilarityMetric metric = SimilarityMetric::kReference;
-};
+// The graph's key of a frame: per cell, its histogram pooled into kKeyBins
+// bins of kBins / kKeyBins intensities, normalised to kKeyMass (rounded), so
+// a cell's key is 16 bytes and a frame's key cells * 16 bytes (1,280 bytes for
+// a 1241x376 frame at 80 cells, an eighth of its compact descriptor). Pooling
+// adjacent bins never increases an L1 distance, so the key distance
+// sum_k sqrt(SAD_k) (reference metric; sum_k SAD_k for the L1 metrics) is a
+// coarse lower-bound-like proxy of the metric that reads 1/8 (compact) or 1/32
+// (exact) of the bytes, from the graph's own memory next to the links.
+constexpr int kKeyBins = 16;
+constexpr int kKeyMass = 255;
+// A cell's key sums to at most kKeyMass plus half a unit of rounding per bin.
+constexpr int kMaxKeySad = 2 * (kKeyMass + kKeyBins / 2);
 
-constexpr std::int64_t kQuery = -1;
-
-float frame_distance(const void* a, const void* b, const void* param) {
-  const auto& f = *static_cast<const Frames*>(param);
-  std::int64_t ia = 0, ib = 0;
-  std::memcpy(&ia, a, sizeof ia);
-  std::memcpy(&ib, b, sizeof ib);
-  const DescriptorView va = ia == kQuery ? f.query : f.store->view(ia);
-  const DescriptorView vb = ib == kQuery ? f.query : f.store->view(ib);
-  const double s = similarity(va, vb, f.metric);
-  return s > 0 ? static_cast<float>(1.0 / s - 1.0) : std::numeric_limits<float>::max();
+void make_key(const DescriptorView& d, std::uint8_t* key) {
+  for (int c = 0; c < d.cells; ++c) {
+    std::uint32_t pooled[kKeyBins] = {};
+    double mass = 0;
+    if (d.compact != nullptr) {
+      const CompactBin* h = d.compact + static_cast<std::size_t>(c) * kCompactBins;
+      constexpr int per = kCompactBins / kKeyBins;
+      for (int b = 0; b < kCompactBins; ++b) pooled[b / per] += h[b];
+      for (const std::uint32_t v : pooled) mass += v;
+    } else {
+      const Bin* h = d.hist + static_cast<std::size_t>(c) * kBins;
+      constexpr int per = kBins / kKeyBins;
+      for (int b = 0; b < kBins; ++b) pooled[b / per] += h[b];
+      mass = d.pixels[c];
+    }
+    for (int b = 0; b < kKeyBins; ++b) {
+      const double v = mass > 0 ? std::round(pooled[b] * kKeyMass / mass) : 0.0;
+      key[static_cast<std::size_t>(c) * kKeyBins + b] = static_cast<std::uint8_t>(std::min(v, 255.0));
+    }
+  }
 }
 
-// hnswlib's space: 8-byte frame ids as the data, frame_distance as the distance.
-class FrameSpace final : public hnswlib::SpaceInterface<float> {
+// What the graph's distance function reads: the key length and the per-cell
+// cost of a SAD (its square root for the reference metric).
+struct KeySpaceParam {
+  int cells = 0;
+  float cost[kMaxKeySad + 1] = {};
+};
+
+float key_distance(const void* a, const void* b, const void* param) {
+  const auto& p = *static_cast<const KeySpaceParam*>(param);
+  const auto* x = static_cast<const std::uint8_t*>(a);
+  const auto* y = static_cast<const std::uint8_t*>(b);
+  float sum = 0;
+  for (int c = 0; c < p.cells; ++c, x += kKeyBins, y += kKeyBins) {
+#if defined(__SSE2__)
+    // One psadbw per cell (SSE2 is the x86-64 baseline: no dispatch needed).
+    const __m128i d = _mm_sad_epu8(_mm_loadu_si128(reinterpret_cast<const __m128i*>(x)),
+                                   _mm_loadu_si128(reinterpret_cast<const __m128i*>(y)));
+    const int sad = _mm_cvtsi128_si32(d) + _mm_extract_epi16(d, 4);
+#else
+    int sad = 0;
+    for (int i = 0; i < kKeyBins; ++i) sad += std::abs(int{x[i]} - int{y[i]});
+#endif
+    sum += p.cost[sad];
+  }
+  return sum;
+}
+
+// hnswlib's space: the frame's key as the data, key_distance as the distance.
+class KeySpace final : public hnswlib::SpaceInterface<float> {
  public:
-  explicit FrameSpace(const Frames* frames) : frames_(frames) {}
-  size_t get_data_size() override { return sizeof(std::int64_t); }
-  hnswlib::DISTFUNC<float> get_dist_func() override { return frame_distance; }
-  void* get_dist_func_param() override { return const_cast<Frames*>(frames_); }
+  KeySpace(int cells, SimilarityMetric metric) {
+    param_.cells = cells;
+    for (int s = 0; s <= kMaxKeySad; ++s) {
+      param_.cost[s] = metric == SimilarityMetric::kReference ? std::sqrt(static_cast<float>(s))
+                                                              : static_cast<float>(s);
+    }
+  }
+  size_t get_data_size() override { return static_cast<std::size_t>(param_.cells) * kKeyBins; }
+  hnswlib::DISTFUNC<float> get_dist_func() override { return key_distance; }
+  void* get_dist_func_param() override { return &param_; }
+  int cells() const { return param_.cells; }
 
  private:
-  const Frames* frames_;
+  KeySpaceParam param_;
 };
 
 class IndexSearch final : public CandidateSearch {
  public:
-  explicit IndexSearch(const SearchOptions& options) : options_(options), space_(&frames_) {}
+  explicit IndexSearch(const SearchOptions& options) : options_(options) {}
   const char* name() const override { return kIndexSearch; }
   bool scores_every_frame() const override { return false; }
 
   Outcome search(const Query& q, std::vector<Candidate>& out, std::vector<double>&) override {
     out.clear();
-    frames_.store = &q.store;
-    frames_.query = q.descriptor;
-    frames_.metric = q.metric;
     // Frames that left the temporal window join the graph.
     const std::int64_t limit = std::max<std::int64_t>(0, std::min(q.store.size(), q.id - options_.min_gap));
     Outcome outcome;
@@ -71,15 +120,16 @@ class IndexSearch final : public CandidateSearch {
       if (inserted_ < limit) {
         const std::int64_t start = internal::now_ns();
         outcome.inserted = limit - inserted_;
-        while (inserted_ < limit) insert(inserted_++);
+        while (inserted_ < limit) insert(q.store, q.metric, inserted_++);
         outcome.insert_ms = internal::ms_since(start);
       }
       if (inserted_ == 0) return outcome;
       const auto k = static_cast<std::size_t>(std::min<std::int64_t>(
           inserted_, std::max<std::int64_t>(options_.index.shortlist, options_.top_n)));
       graph_->setEf(std::max<std::size_t>(k, static_cast<std::size_t>(options_.index.ef_search)));
-      std::int64_t query = kQuery;
-      auto found = graph_->searchKnn(&query, k);
+      key_.resize(space_->get_data_size());
+      make_key(q.descriptor, key_.data());
+      auto found = graph_->searchKnn(key_.data(), k);
       ids_.clear();
       while (!found.empty()) {
         ids_.push_back(static_cast<std::int64_t>(found.top().second));
@@ -151,28 +201,36 @@ class IndexSearch final : public CandidateSearch {
   }
 
  private:
-  void insert(std::int64_t frame) {
+  void insert(const FrameStore& store, SimilarityMetric metric, std::int64_t frame) {
+    const DescriptorView d = store.view(frame);
+    if (!space_) space_ = std::make_unique<KeySpace>(d.cells, metric);
+    if (d.cells != space_->cells()) {
+      internal::throw_invalid("search mode index: frame ", frame, " has ", d.cells,
+                              " cells, the graph's frames ", space_->cells());
+    }
+    key_.resize(space_->get_data_size());
+    make_key(d, key_.data());
     if (!graph_ || graph_->cur_element_count >= graph_->max_elements_) {
       const std::size_t capacity = graph_ ? 2 * graph_->max_elements_ : 1024;
       if (!graph_) {
         graph_ = std::make_unique<hnswlib::HierarchicalNSW<float>>(
-            &space_, capacity, static_cast<std::size_t>(options_.index.m),
+            space_.get(), capacity, static_cast<std::size_t>(options_.index.m),
             static_cast<std::size_t>(options_.index.ef_construction), /*random_seed=*/100);
       } else {
         graph_->resizeIndex(capacity);
       }
     }
-    graph_->addPoint(&frame, static_cast<hnswlib::labeltype>(frame));
+    graph_->addPoint(key_.data(), static_cast<hnswlib::labeltype>(frame));
   }
 
   SearchOptions options_;
-  Frames frames_;
-  FrameSpace space_;
+  std::unique_ptr<KeySpace> space_;  // made at the first insertion (it needs the cell count)
   std::unique_ptr<hnswlib::HierarchicalNSW<float>> graph_;
   std::int64_t inserted_ = 0;  // frames 0 .. inserted_-1 are in the graph
   std::int64_t previous_frame_ = -1;    // the last frame ended
   std::vector<std::int64_t> previous_;  // ... and its candidates' frames, best first
   std::vector<std::int64_t> ids_;
+  std::vector<std::uint8_t> key_;
   std::vector<Candidate> scratch_;
 };
 

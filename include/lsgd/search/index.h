@@ -1,18 +1,21 @@
 // Search mode "index": a navigable small-world graph (HNSW, hnswlib) over the
 // stored frames outside the temporal window, so that a query reads a few
-// thousand frames however large the map is; its shortlist is re-scored
+// thousand small keys however large the map is; its shortlist is re-scored
 // exactly, so only which frames are looked at is approximate, never a score.
 //
-// The graph's distance between two frames is 1/s - 1 for their similarity s
-// (for the reference metric: the mean over cells of sqrt(L1)/256, a metric).
-// The graph keeps only frame ids; distances read the descriptors from the
-// detector's FrameStore, so a frame costs its descriptor plus the graph's
-// links (about 4 * (2 M + 1) bytes on the bottom layer).
+// The graph holds a key per frame: each cell's histogram pooled into 16 bins
+// of 16 intensities, normalised to 255 (16 bytes a cell: 1,280 bytes for a
+// 1241x376 frame at 80 cells, an eighth of its compact descriptor), with the
+// distance sum_k sqrt(SAD_k) (a metric; the reference metric's form; sum_k
+// SAD_k for the L1 metrics). A frame costs its descriptor in the FrameStore
+// plus its key and links in the graph (about 16 cells + 4 (2 M + 1) + 8
+// bytes on the bottom layer, and hnswlib's per-frame lock and label entry).
 //
 // A frame enters the graph when it leaves the temporal window (at query
-// frame + min_gap + 1), so the window never crowds the shortlist. The graph
-// is not saved: a detector restored from a database rebuilds it at its first
-// query, from the stored descriptors (docs/performance.md states the cost).
+// frame + min_gap + 1), so the window never crowds the shortlist. The
+// shortlist, and the previous frame's places one frame on, are re-scored
+// exactly and realigned by the temporal stage. A detector restored from a
+// database rebuilds the graph from the stored descriptors at its first query.
 #pragma once
 
 #include <memory>

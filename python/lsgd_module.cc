@@ -246,12 +246,19 @@ PYBIND11_MODULE(_lsgd, m) {
              return lsgd::io::Database::open(path, writable ? lsgd::io::Database::Mode::kReadWrite
                                                             : lsgd::io::Database::Mode::kReadOnly);
            }, py::arg("path"), py::arg("writable") = true)
-      .def("detector", [](const lsgd::io::Database& db) {
+      .def("detector", [](const lsgd::io::Database& db, bool rebuild_index) {
              auto d = std::make_unique<lsgd::Detector>(db.options());
-             db.restore(*d);
+             db.restore(*d, rebuild_index ? lsgd::io::IndexUse::kRebuild : lsgd::io::IndexUse::kSaved);
              return d;
-           }, "A detector with the stored options and every stored frame restored.")
-      .def("restore", &lsgd::io::Database::restore, py::arg("detector"))
+           }, py::arg("rebuild_index") = false,
+           "A detector with the stored options and every stored frame restored (and the saved "
+           "search index, unless rebuild_index).")
+      .def("restore", [](const lsgd::io::Database& db, lsgd::Detector& d, bool rebuild_index) {
+             db.restore(d, rebuild_index ? lsgd::io::IndexUse::kRebuild : lsgd::io::IndexUse::kSaved);
+           }, py::arg("detector"), py::arg("rebuild_index") = false)
+      .def("save_index", &lsgd::io::Database::save_index, py::arg("detector"),
+           "Saves the detector's search index (index mode's graph) so a resume need not rebuild "
+           "it; returns the frames it covers.")
       .def("append", &lsgd::io::Database::append, py::arg("detector"), py::arg("result"),
            py::arg("session"), py::arg("name") = "", py::arg("frame") = -1,
            "Stores the detector's last frame (call right after process()).")

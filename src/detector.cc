@@ -270,6 +270,11 @@ std::vector<std::uint8_t> Detector::frame_state(std::int64_t frame) const {
   return encode_records(records);
 }
 
+void Detector::restore_index(const std::uint8_t* data, std::size_t size) {
+  const Exclusive exclusive(busy_, "restore_index");
+  search_->restore_index(store_, data, size);
+}
+
 void Detector::restore_frame(int width, int height, const Descriptor& descriptor,
                              const std::vector<std::uint8_t>& state) {
   const Exclusive exclusive(busy_, "restore_frame");

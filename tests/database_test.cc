@@ -150,11 +150,15 @@ struct ResumeCase {
   std::int64_t split;   // N
   bool append_all;      // save with append_all() instead of per-frame append()
   HistogramStorage storage = HistogramStorage::kExact;
+  // Index mode: Database::save_index() after this many frames (the frames
+  // after it up to the split are stored without saving it again); -1: never.
+  std::int64_t saved_at = -1;
 };
 
 void PrintTo(const ResumeCase& c, std::ostream* out) {
   *out << c.mode << " " << c.stages << ", frames " << c.frames << ", split at "
-       << c.split << (c.append_all ? ", append_all" : "") << ", " << to_string(c.storage);
+       << c.split << (c.append_all ? ", append_all" : "") << ", " << to_string(c.storage)
+       << (c.saved_at >= 0 ? ", index saved at " + std::to_string(c.saved_at) : "");
 }
 
 class Resume : public ::testing::TestWithParam<ResumeCase> {};
@@ -168,18 +172,36 @@ TEST_P(Resume, EqualsUninterruptedRun) {
   std::string stages = c.stages;
   std::replace(stages.begin(), stages.end(), ',', '_');
   const std::string path = temp_path("resume_" + c.mode + "_" + stages +
-                                     (c.append_all ? "_all" : "") + "_" + to_string(c.storage));
+                                     (c.append_all ? "_all" : "") + "_" + to_string(c.storage) +
+                                     (c.saved_at >= 0 ? "_saved" : ""));
+  std::int64_t saved_frames = 0;
   {
     Database db = Database::create(path, o);
     Detector first(o);
-    const auto head = run(first, 0, c.split, c.append_all ? nullptr : &db);
-    if (c.append_all) db.append_all(first, 0);
+    if (c.saved_at >= 0) {
+      run(first, 0, c.saved_at, &db);
+      saved_frames = db.save_index(first);
+      ASSERT_GT(saved_frames, 0);
+      ASSERT_LT(saved_frames, c.saved_at);  // the frames that left the temporal window
+      EXPECT_EQ(db.info().index_frames, saved_frames);
+      EXPECT_GT(db.info().index_bytes, 0);
+      run(first, c.saved_at, c.split, &db);
+    } else {
+      run(first, 0, c.split, c.append_all ? nullptr : &db);
+      if (c.append_all) db.append_all(first, 0);
+    }
     EXPECT_EQ(db.frames(), c.split);
   }
   Database db = Database::open(path);
   Detector resumed(o);
   db.restore(resumed);
   ASSERT_EQ(resumed.size(), c.split);
+  {
+    // The saved graph is back before any query (no rebuild); without one,
+    // the graph is built at the first query.
+    std::vector<std::uint8_t> graph;
+    EXPECT_EQ(resumed.save_index(graph), saved_frames);
+  }
   const auto tail = run(resumed, c.split, c.frames, &db);
   std::int64_t found_before_split = 0;
   for (std::size_t i = 0; i < tail.size(); ++i) {
@@ -218,14 +240,114 @@ INSTANTIATE_TEST_SUITE_P(
                       // the last frame's places travel in its record.
                       ResumeCase{kIndexSearch, "temporal", 260, 130, false},
                       ResumeCase{kIndexSearch, "temporal,geometric", 190, 155, true,
-                                 HistogramStorage::kCompact}),
+                                 HistogramStorage::kCompact},
+                      // The graph saved in the file: restored as it was, the
+                      // frames stored after it indexed at the next query.
+                      ResumeCase{kIndexSearch, "temporal", 260, 130, false,
+                                 HistogramStorage::kExact, 130},
+                      ResumeCase{kIndexSearch, "temporal,geometric", 190, 155, false,
+                                 HistogramStorage::kCompact, 120}),
     [](const ::testing::TestParamInfo<ResumeCase>& param) {
       std::string name = param.param.mode + "_" + param.param.stages +
                          (param.param.append_all ? "_append_all" : "") +
-                         (param.param.storage == HistogramStorage::kCompact ? "_compact" : "");
+                         (param.param.storage == HistogramStorage::kCompact ? "_compact" : "") +
+                         (param.param.saved_at >= 0 ? "_saved_index" : "");
       std::replace(name.begin(), name.end(), ',', '_');
       return name;
     });
+
+// The saved graph of index mode: damage is a FormatError naming the saved
+// index (kRebuild ignores it and resumes exactly); bytes that pass the
+// checksum but not the graph's own checks (links out of range, another map's
+// graph, cut short) are refused by Detector::restore_index, which leaves a
+// detector that rebuilds the graph and continues exactly.
+TEST(DatabaseIndex, DamagedSavedIndexIsRefusedAndRebuildIgnoresIt) {
+  const DetectorOptions o = options(kIndexSearch, "temporal");
+  constexpr std::int64_t kSplit = 140, kFrames = 220;
+  Detector reference(o);
+  const std::vector<Result> expected = run(reference, 0, kFrames);
+  const std::string path = temp_path("index_damage");
+  std::vector<std::uint8_t> graph;
+  {
+    Database db = Database::create(path, o);
+    Detector first(o);
+    run(first, 0, kSplit, &db);
+    ASSERT_GT(db.save_index(first), 0);
+    ASSERT_GT(first.save_index(graph), 0);
+  }
+  const auto edit = [&](const char* sql) {
+    sqlite3* db = nullptr;
+    ASSERT_EQ(sqlite3_open(path.c_str(), &db), SQLITE_OK);
+    ASSERT_EQ(sqlite3_exec(db, sql, nullptr, nullptr, nullptr), SQLITE_OK) << sqlite3_errmsg(db);
+    sqlite3_close(db);
+  };
+  const auto restore_error = [&](IndexUse use) {
+    Detector d(o);
+    try {
+      Database::open(path, Database::Mode::kReadOnly).restore(d, use);
+    } catch (const FormatError& e) {
+      return std::string(e.what());
+    }
+    return std::string();
+  };
+  const auto resumes_exactly = [&](Detector& d) {
+    const std::vector<Result> tail = run(d, kSplit, kFrames);
+    for (std::size_t i = 0; i < tail.size(); ++i) expect_same(tail[i], expected[kSplit + i]);
+  };
+
+  // A flipped byte: the part's checksum.
+  edit("UPDATE indexes SET data = CAST(substr(data, 1, 99) || x'5a' || substr(data, 101) AS BLOB) "
+       "WHERE part = 0");
+  std::string m = restore_error(IndexUse::kSaved);
+  EXPECT_NE(m.find(path), std::string::npos) << m;
+  EXPECT_NE(m.find("saved index of search mode index, part 0: checksum"), std::string::npos) << m;
+  EXPECT_NE(m.find("--rebuild-index"), std::string::npos) << m;
+  EXPECT_EQ(restore_error(IndexUse::kRebuild), "");
+  {
+    Detector d(o);
+    Database::open(path, Database::Mode::kReadOnly).restore(d, IndexUse::kRebuild);
+    resumes_exactly(d);
+  }
+  edit("UPDATE indexes SET part = 3");
+  m = restore_error(IndexUse::kSaved);
+  EXPECT_NE(m.find("parts are not numbered 0, 1, 2"), std::string::npos) << m;
+  edit("UPDATE indexes SET part = 0, frames = 100000");
+  m = restore_error(IndexUse::kSaved);
+  EXPECT_NE(m.find("covers 100000 frames (140 stored"), std::string::npos) << m;
+
+  // Bytes with a valid checksum that are not this map's graph.
+  const auto refused = [&](std::vector<std::uint8_t> bytes, const std::string& expected_message) {
+    SCOPED_TRACE(expected_message);
+    Detector d(o);
+    Database::open(path, Database::Mode::kReadOnly).restore(d, IndexUse::kRebuild);
+    const std::string e = message_of<InvalidArgument>([&] { d.restore_index(bytes.data(), bytes.size()); });
+    EXPECT_NE(e.find(expected_message), std::string::npos) << e;
+    std::vector<std::uint8_t> none;
+    EXPECT_EQ(d.save_index(none), 0);  // no half-restored graph
+    resumes_exactly(d);
+  };
+  // The first bottom-layer link (after the header: mark 8, version 8,
+  // marker 4, seven integers, the generator text's size and text).
+  std::int64_t text = 0;
+  std::memcpy(&text, graph.data() + 76, 8);
+  const std::size_t links = 84 + static_cast<std::size_t>(text);
+  std::vector<std::uint8_t> bad = graph;
+  ASSERT_GT(bad[links], 0);  // the first frame has links
+  std::memset(bad.data() + links + 4, 0xff, 4);
+  refused(bad, "frame 0: bottom-layer links out of range");
+  refused({graph.begin(), graph.end() - 3}, "index snapshot");
+  bad = graph;
+  bad[0] = 'x';
+  refused(bad, "not an index snapshot");
+  // Another map's graph (the same options, other frames): its keys.
+  {
+    Detector other(o);
+    for (std::int64_t i = 0; i < kSplit; ++i) other.process(frame(kFrames - 1 - i));
+    std::vector<std::uint8_t> foreign;
+    ASSERT_GT(other.save_index(foreign), 0);
+    refused(foreign, "is not the stored frame's");
+  }
+}
 
 TEST(Database, SessionsFindLoopsAcrossSessions) {
   // Session 0 drives A and B, session 1 drives C, B' (the revisit of B, with
@@ -832,8 +954,8 @@ TEST(DatabaseDamage, EditedRowsAndMeta) {
   expect_edit_detected("DELETE FROM frames WHERE id = 6", "frame ids are not 0 .. 10");
   expect_edit_detected("UPDATE meta SET value = 'x1' WHERE key = 'format_version'",
                        "format_version 'x1' is not an integer");
-  expect_edit_detected("UPDATE meta SET value = 5 WHERE key = 'format_version'",
-                       "format version 5 is newer");
+  expect_edit_detected("UPDATE meta SET value = 6 WHERE key = 'format_version'",
+                       "format version 6 is newer");
   expect_edit_detected("UPDATE frames SET loop_inliers = 'x' WHERE id = 5", "loop_inliers");
   expect_edit_detected("UPDATE meta SET value = 0 WHERE key = 'format_version'",
                        "unknown format version 0");
@@ -1034,20 +1156,25 @@ std::vector<std::string> csv_columns(const std::string& path, std::vector<int> k
   return rows;
 }
 
-TEST(DatabaseCli, RunResumesAndDbInfo) {
-  const std::string dir = temp_path("cli_frames");
+// Frames 0-99 in DIR/a, 100-149 in DIR/b, all of them listed in DIR/all.txt.
+std::string write_split_sequence(const std::string& name) {
+  const std::string dir = temp_path(name);
   fs::remove_all(dir);
   fs::create_directories(dir + "/a");
   fs::create_directories(dir + "/b");
   std::ofstream all(dir + "/all.txt");
   for (std::int64_t i = 0; i < 150; ++i) {
-    char name[32];
-    std::snprintf(name, sizeof(name), "/%04d.png", static_cast<int>(i));
-    const std::string file = dir + (i < 100 ? "/a" : "/b") + name;
+    char file_name[32];
+    std::snprintf(file_name, sizeof(file_name), "/%04d.png", static_cast<int>(i));
+    const std::string file = dir + (i < 100 ? "/a" : "/b") + file_name;
     cv::imwrite(file, frame(i));
     all << file << "\n";
   }
-  all.close();
+  return dir;
+}
+
+TEST(DatabaseCli, RunResumesAndDbInfo) {
+  const std::string dir = write_split_sequence("cli_frames");
   const std::string db = temp_path("cli.db");
   const std::string flags = " --min-gap 20 --mode nodes";
   ASSERT_EQ(run_cli("run --sequence " + dir + "/all.txt --layout list" + flags + " --output " +
@@ -1087,6 +1214,40 @@ TEST(DatabaseCli, RunResumesAndDbInfo) {
 
   write_bytes(dir + "/bad.db", "not a database at all, just text that is long enough");
   EXPECT_NE(run_cli("db info " + dir + "/bad.db"), 0);
+}
+
+// lsgd run --database in index mode saves the graph when it ends and the
+// next run resumes from it (or rebuilds it with --rebuild-index): both equal
+// to the uninterrupted run.
+TEST(DatabaseCli, IndexModeSavesItsGraph) {
+  const std::string dir = write_split_sequence("cli_index_frames");
+  const std::string flags = " --min-gap 20 --mode index";
+  ASSERT_EQ(run_cli("run --sequence " + dir + "/all.txt --layout list" + flags + " --output " +
+                    dir + "/all.csv"),
+            0);
+  const auto expected = csv_columns(dir + "/all.csv", {0, 2, 3, 4});
+  for (const std::string resume : {"", " --rebuild-index"}) {
+    SCOPED_TRACE(resume);
+    const std::string db = temp_path("cli_index.db");
+    ASSERT_EQ(run_cli("run --sequence " + dir + "/a --database " + db + flags + " --output " + dir +
+                      "/a.csv"),
+              0);
+    ASSERT_EQ(run_cli("db info " + db + " --json", dir + "/info.json"), 0);
+    std::ifstream in(dir + "/info.json");
+    const nlohmann::json info = nlohmann::json::parse(in);
+    EXPECT_EQ(info["index_frames"], 100 - 20 - 1);  // the frames that left the temporal window
+    EXPECT_GT(info["index_bytes"].get<int>(), 0);
+    ASSERT_EQ(run_cli("run --sequence " + dir + "/b --database " + db + " --session 7 --output " +
+                      dir + "/b.csv" + resume),
+              0);
+    auto split = csv_columns(dir + "/a.csv", {0, 2, 3, 4});
+    const auto tail = csv_columns(dir + "/b.csv", {0, 2, 3, 4});
+    split.insert(split.end(), tail.begin() + 1, tail.end());
+    EXPECT_EQ(split, expected);
+    ASSERT_EQ(run_cli("db info " + db, dir + "/info.txt"), 0);
+    const std::string text = read_bytes(dir + "/info.txt");
+    EXPECT_NE(text.find("saved search index: 129 frames"), std::string::npos) << text;
+  }
 }
 #endif
 

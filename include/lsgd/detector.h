@@ -135,6 +135,14 @@ class Detector {
   // do not have, or a record its component refuses.
   void restore_frame(int width, int height, const Descriptor& descriptor,
                      const std::vector<std::uint8_t>& state);
+  // The search mode's index as one blob (CandidateSearch::save_index: index
+  // mode's graph), so that a restored detector need not rebuild it; returns
+  // the frames it covers (0 and an empty blob for a mode without one).
+  std::int64_t save_index(std::vector<std::uint8_t>& out) const { return search_->save_index(out); }
+  // Hands save_index()'s blob back after the frames were restored, before
+  // the next process(). InvalidArgument for a damaged blob or one that does
+  // not fit the stored frames; the next query then rebuilds the index.
+  void restore_index(const std::uint8_t* data, std::size_t size);
 
  private:
   Result process_gray(double convert_ms, std::int64_t start_ns);

@@ -132,6 +132,21 @@ class CandidateSearch : public Stateful {
   virtual const std::vector<std::int64_t>& members(std::int64_t group) const;
   // The group of stored frame `frame` (-1 for a mode without groups).
   virtual std::int64_t group_of(std::int64_t frame) const { (void)frame; return -1; }
+
+  // An index the mode can save whole (index mode's graph), so that a detector
+  // restored from storage need not rebuild it. save_index() writes it as it
+  // is now and returns the frames it covers (0 .. covered - 1; 0 and nothing
+  // written for a mode without one). restore_index() takes what save_index()
+  // wrote, for a mode with the same options, before the mode's first query
+  // after its frames were restored to `store`; frames after the covered ones
+  // are indexed at the next query as usual. Throws InvalidArgument naming
+  // what is wrong when the bytes are damaged or do not fit `store`, and then
+  // holds no index (the next query rebuilds it).
+  virtual std::int64_t save_index(std::vector<std::uint8_t>& out) const {
+    out.clear();
+    return 0;
+  }
+  virtual void restore_index(const FrameStore& store, const std::uint8_t* data, std::size_t size);
 };
 
 // A registered search mode.

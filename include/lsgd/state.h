@@ -29,6 +29,9 @@ class StateWriter {
   void put_f32s(const float* v, std::size_t n);
   void put_bytes(const std::uint8_t* data, std::size_t n);
   const std::vector<std::uint8_t>& bytes() const { return bytes_; }
+  void reserve(std::size_t n) { bytes_.reserve(n); }
+  // Moves the bytes out (the writer is empty afterwards).
+  std::vector<std::uint8_t> take() { return std::move(bytes_); }
   bool empty() const { return bytes_.empty(); }
   void clear() { bytes_.clear(); }
 

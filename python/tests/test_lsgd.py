@@ -160,6 +160,25 @@ def test_database_resumes_where_it_stopped(tmp_path):
         lsgd.Database.create(path)
 
 
+def test_index_mode_graph_saved_and_restored(tmp_path):
+    path = str(tmp_path / "index.db")
+    frames = route(20, 3)
+    options = {"search": {"min_gap": 5, "mode": "index"}}
+    uninterrupted = lsgd.Detector(**options)
+    expected = [uninterrupted.process(f) for f in frames]
+    db = lsgd.Database.create(path, **options)
+    d = lsgd.Detector(db.options)
+    for f in frames[:30]:
+        db.append(d, d.process(f), session=0)
+    assert db.save_index(d) == 30 - 5 - 1  # the frames that left the temporal window
+    del db, d
+    for rebuild in (False, True):
+        d = lsgd.Database.open(path, writable=False).detector(rebuild_index=rebuild)
+        for f, e in zip(frames[30:], expected[30:]):
+            r = d.process(f)
+            assert (r.frame, r.best.frame, r.loop, r.best.score) == (e.frame, e.best.frame, e.loop, e.best.score)
+
+
 def test_process_releases_the_gil():
     frames = route(20, 2)
     alone = [r.best.frame for r in lsgd.run(lsgd.Detector(search={"min_gap": 5}), frames)]

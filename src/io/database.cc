@@ -233,7 +233,9 @@ const char* kSchema =
     "id INTEGER PRIMARY KEY, session INTEGER NOT NULL, name TEXT NOT NULL,"
     "histogram BLOB NOT NULL, pixels BLOB NOT NULL, node INTEGER, place INTEGER,"
     "features BLOB, crc32 INTEGER NOT NULL, loop INTEGER, loop_inliers REAL, frame INTEGER,"
-    "state BLOB);";
+    "state BLOB);"
+    "CREATE TABLE indexes(mode TEXT NOT NULL, part INTEGER NOT NULL, frames INTEGER NOT NULL,"
+    "data BLOB NOT NULL, crc32 INTEGER NOT NULL, PRIMARY KEY(mode, part));";
 
 // Columns a format lacks read as NULL: loop state before 2, frame ids before
 // 3, the components' state before 4.
@@ -256,6 +258,13 @@ const char* kUpgradeV1 =
     "ALTER TABLE frames ADD COLUMN loop INTEGER; ALTER TABLE frames ADD COLUMN loop_inliers REAL;";
 const char* kUpgradeV2 = "ALTER TABLE frames ADD COLUMN frame INTEGER;";
 const char* kUpgradeV3 = "ALTER TABLE frames ADD COLUMN state BLOB;";
+const char* kUpgradeV4 =
+    "CREATE TABLE IF NOT EXISTS indexes(mode TEXT NOT NULL, part INTEGER NOT NULL, frames INTEGER NOT NULL,"
+    "data BLOB NOT NULL, crc32 INTEGER NOT NULL, PRIMARY KEY(mode, part));";
+
+// A saved index is stored in parts of at most this many bytes (SQLite's
+// largest blob is 1e9 bytes; a graph of 10^6 frames is about 1.4 GB).
+constexpr std::size_t kIndexPartBytes = std::size_t{64} << 20;
 
 // Appends the little-endian record of `component` (version 1) to `records`.
 // Rows of formats 1 to 3 keep the built-in components' state in columns of
@@ -312,6 +321,8 @@ struct Database::Impl {
   // log into the file and empties the log: afterwards the file alone holds
   // them, and damage to the log cannot lose them (docs/reliability.md).
   void checkpoint(const char* state);
+  std::int64_t read_index(const std::string& mode, std::int64_t stored,
+                          std::vector<std::uint8_t>& out) const;
 
   void check_writable() const {
     if (!writable) internal::throw_invalid("database ", path, " was opened read-only");
@@ -595,7 +606,8 @@ Database Database::open(const std::string& path, Mode mode) {
     try {
       if (m.format < 2) exec_write(m.db, path, kUpgradeV1);
       if (m.format < 3) exec_write(m.db, path, kUpgradeV2);
-      exec_write(m.db, path, kUpgradeV3);
+      if (m.format < 4) exec_write(m.db, path, kUpgradeV3);
+      exec_write(m.db, path, kUpgradeV4);
       m.meta["format_version"] = std::to_string(kDatabaseFormatVersion);
       m.meta["options"] = to_yaml(m.options);
       m.write_meta();
@@ -782,6 +794,16 @@ DatabaseInfo Database::info() const {
       info.nodes = sqlite3_column_int64(stmt.get(), 0) + 1;
     }
   }
+  if (m.format >= 5) {
+    Statement stmt(m.db, m.path,
+                   "SELECT max(frames), sum(length(data)) FROM indexes WHERE mode = ?1");
+    const std::string& mode = m.options.search.mode;
+    sqlite3_bind_text(stmt.get(), 1, mode.c_str(), static_cast<int>(mode.size()), SQLITE_TRANSIENT);
+    if (step_read(m.db, stmt.get(), m.path) && sqlite3_column_type(stmt.get(), 0) == SQLITE_INTEGER) {
+      info.index_frames = sqlite3_column_int64(stmt.get(), 0);
+      info.index_bytes = sqlite3_column_int64(stmt.get(), 1);
+    }
+  }
   info.bytes = file_size(m.path) + file_size(m.path + "-wal");
   return info;
 }
@@ -803,7 +825,7 @@ void Database::check_compatible(const DetectorOptions& options) const {
   }
 }
 
-void Database::restore(Detector& detector) const {
+void Database::restore(Detector& detector, IndexUse index) const {
   Impl& m = *impl_;
   if (detector.size() != 0) {
     internal::throw_invalid("database ", m.path, ": restore needs a new detector, this one holds ",
@@ -990,7 +1012,61 @@ void Database::restore(Detector& detector) const {
     m.frames = id;  // a writer appended since open: this snapshot holds more
     m.last_frame = last_frame;
   }
+  if (index == IndexUse::kSaved) {
+    std::vector<std::uint8_t> bytes;
+    if (m.read_index(detector.search().name(), id, bytes) > 0) {
+      try {
+        detector.restore_index(bytes.data(), bytes.size());
+      } catch (const InvalidArgument& e) {
+        format_error(m.path, "the saved index of search mode ", detector.search().name(), ": ",
+                     e.what(), " (restore with IndexUse::kRebuild, lsgd run --rebuild-index, to "
+                     "ignore it)");
+      }
+    }
+  }
 }
+
+// The saved index of `mode` as one blob (its parts in order, each checked
+// against its checksum); returns the frames it covers, 0 when there is none.
+std::int64_t Database::Impl::read_index(const std::string& mode, std::int64_t stored,
+                                        std::vector<std::uint8_t>& out) const {
+  out.clear();
+  if (format < 5) return 0;
+  Statement stmt(db, path, "SELECT part, frames, data, crc32 FROM indexes WHERE mode = ?1 ORDER BY part");
+  sqlite3_bind_text(stmt.get(), 1, mode.c_str(), static_cast<int>(mode.size()), SQLITE_TRANSIENT);
+  std::int64_t frames = -1, part = 0;
+  while (step_read(db, stmt.get(), path)) {
+    sqlite3_stmt* s = stmt.get();
+    const auto bad = [&](const auto&... parts) {
+      format_error(path, "the saved index of search mode ", mode, ", part ", part, ": ", parts...,
+                   " (restore with IndexUse::kRebuild, lsgd run --rebuild-index, to ignore it)");
+    };
+    if (sqlite3_column_type(s, 0) != SQLITE_INTEGER || sqlite3_column_int64(s, 0) != part) {
+      bad("parts are not numbered 0, 1, 2, ...");
+    }
+    if (sqlite3_column_type(s, 1) != SQLITE_INTEGER) bad("frames is not an integer");
+    const std::int64_t f = sqlite3_column_int64(s, 1);
+    if (f < 1 || f > stored || (frames >= 0 && f != frames)) {
+      bad("covers ", f, " frames (", stored, " stored", frames >= 0 ? concat(", part 0 says ", frames) : "",
+          ")");
+    }
+    frames = f;
+    if (sqlite3_column_type(s, 2) != SQLITE_BLOB || sqlite3_column_type(s, 3) != SQLITE_INTEGER) {
+      bad("data is not a blob or crc32 not an integer");
+    }
+    const auto* data = static_cast<const std::uint8_t*>(sqlite3_column_blob(s, 2));
+    const auto size = static_cast<std::size_t>(sqlite3_column_bytes(s, 2));
+    const std::uint32_t crc = crc_bytes(static_cast<std::uint32_t>(crc32(0, Z_NULL, 0)), data, size);
+    if (static_cast<std::int64_t>(crc) != sqlite3_column_int64(s, 3)) {
+      bad("checksum ", sqlite3_column_int64(s, 3), " does not match its data (", crc,
+          "): the file was modified or damaged");
+    }
+    out.insert(out.end(), data, data + size);
+    ++part;
+  }
+  return frames < 0 ? 0 : frames;
+}
+
 
 void Database::Impl::insert_frame(const Detector& detector, std::int64_t frame,
                                   std::int64_t session, const std::string& name,
@@ -1165,6 +1241,41 @@ void Database::append_all(const Detector& detector, std::int64_t session) {
   m.last_session = session;
   m.sessions.insert(session);
   m.checkpoint("open");
+}
+
+std::int64_t Database::save_index(const Detector& detector) {
+  Impl& m = *impl_;
+  m.check_writable();
+  if (detector.size() != m.frames) {
+    internal::throw_invalid("database ", m.path, ": save_index needs the detector of the stored ",
+                            m.frames, " frames; this one holds ", detector.size());
+  }
+  check_compatible(detector.options());
+  std::vector<std::uint8_t> bytes;
+  const std::int64_t covered = detector.save_index(bytes);
+  const std::string mode = detector.search().name();
+  transaction(m.db, m.path, [&] {
+    Statement drop(m.db, m.path, "DELETE FROM indexes WHERE mode = ?1");
+    sqlite3_bind_text(drop.get(), 1, mode.c_str(), static_cast<int>(mode.size()), SQLITE_TRANSIENT);
+    if (sqlite3_step(drop.get()) != SQLITE_DONE) io_error(m.path, "cannot write (", sqlite3_errmsg(m.db), ")");
+    Statement insert(m.db, m.path,
+                     "INSERT INTO indexes(mode, part, frames, data, crc32) VALUES(?1, ?2, ?3, ?4, ?5)");
+    std::int64_t part = 0;
+    for (std::size_t at = 0; at < bytes.size(); at += kIndexPartBytes, ++part) {
+      const std::size_t n = std::min(kIndexPartBytes, bytes.size() - at);
+      sqlite3_stmt* s = insert.get();
+      sqlite3_reset(s);
+      sqlite3_bind_text(s, 1, mode.c_str(), static_cast<int>(mode.size()), SQLITE_TRANSIENT);
+      sqlite3_bind_int64(s, 2, part);
+      sqlite3_bind_int64(s, 3, covered);
+      sqlite3_bind_blob(s, 4, bytes.data() + at, static_cast<int>(n), SQLITE_STATIC);
+      sqlite3_bind_int64(s, 5, crc_bytes(static_cast<std::uint32_t>(crc32(0, Z_NULL, 0)),
+                                         bytes.data() + at, n));
+      if (sqlite3_step(s) != SQLITE_DONE) io_error(m.path, "cannot write (", sqlite3_errmsg(m.db), ")");
+    }
+  });
+  m.checkpoint("open");
+  return covered;
 }
 
 }  // namespace lsgd::io

@@ -15,6 +15,7 @@
 #include <cstring>
 #include <exception>
 #include <limits>
+#include <sstream>
 
 #include "internal/check.h"
 #include "internal/clock.h"
@@ -89,7 +90,7 @@ float key_distance(const void* a, const void* b, const void* param) {
 // hnswlib's space: the frame's key as the data, key_distance as the distance.
 class KeySpace final : public hnswlib::SpaceInterface<float> {
  public:
-  KeySpace(int cells, SimilarityMetric metric) {
+  KeySpace(int cells, SimilarityMetric metric) : metric_(metric) {
     param_.cells = cells;
     for (int s = 0; s <= kMaxKeySad; ++s) {
       param_.cost[s] = metric == SimilarityMetric::kReference ? std::sqrt(static_cast<float>(s))
@@ -100,9 +101,11 @@ class KeySpace final : public hnswlib::SpaceInterface<float> {
   hnswlib::DISTFUNC<float> get_dist_func() override { return key_distance; }
   void* get_dist_func_param() override { return &param_; }
   int cells() const { return param_.cells; }
+  SimilarityMetric metric() const { return metric_; }
 
  private:
   KeySpaceParam param_;
+  SimilarityMetric metric_;
 };
 
 class IndexSearch final : public CandidateSearch {
@@ -204,9 +207,10 @@ class IndexSearch final : public CandidateSearch {
   void insert(const FrameStore& store, SimilarityMetric metric, std::int64_t frame) {
     const DescriptorView d = store.view(frame);
     if (!space_) space_ = std::make_unique<KeySpace>(d.cells, metric);
-    if (d.cells != space_->cells()) {
-      internal::throw_invalid("search mode index: frame ", frame, " has ", d.cells,
-                              " cells, the graph's frames ", space_->cells());
+    if (d.cells != space_->cells() || metric != space_->metric()) {
+      internal::throw_invalid("search mode index: frame ", frame, " has ", d.cells, " cells and metric ",
+                              to_string(metric), ", the graph's frames ", space_->cells(), " and ",
+                              to_string(space_->metric()));
     }
     key_.resize(space_->get_data_size());
     make_key(d, key_.data());
@@ -221,6 +225,170 @@ class IndexSearch final : public CandidateSearch {
       }
     }
     graph_->addPoint(key_.data(), static_cast<hnswlib::labeltype>(frame));
+  }
+
+ public:
+  // The graph, version 1 (StateWriter's little-endian integers, then
+  // hnswlib's own layout of this machine, marked by a native 32-bit 1):
+  //   "lsgdhnsw", version, native marker, cells, metric, M, ef_construction,
+  //   frames, top level, entry point, the level generator's state (text),
+  //   frames x (bottom-layer links, key, label), then per frame its level and
+  //   links above the bottom layer.
+  std::int64_t save_index(std::vector<std::uint8_t>& out) const override {
+    out.clear();
+    if (!graph_ || graph_->cur_element_count == 0) return 0;
+    const auto& g = *graph_;
+    std::size_t upper = 0;
+    for (std::size_t i = 0; i < g.cur_element_count; ++i) {
+      upper += static_cast<std::size_t>(g.element_levels_[i]) * g.size_links_per_element_;
+    }
+    StateWriter w;
+    w.reserve(4096 + g.cur_element_count * (g.size_data_per_element_ + 8) + upper);
+    w.put_bytes(reinterpret_cast<const std::uint8_t*>(kMagic), 8);
+    w.put_i64(kSnapshotVersion);
+    const std::uint32_t marker = 1;
+    w.put_bytes(reinterpret_cast<const std::uint8_t*>(&marker), sizeof marker);
+    w.put_i64(space_->cells());
+    w.put_i64(static_cast<std::int64_t>(space_->metric()));
+    w.put_i64(static_cast<std::int64_t>(g.M_));
+    w.put_i64(static_cast<std::int64_t>(g.ef_construction_));
+    w.put_i64(static_cast<std::int64_t>(g.cur_element_count));
+    w.put_i64(g.maxlevel_);
+    w.put_i64(static_cast<std::int64_t>(g.enterpoint_node_));
+    std::ostringstream generator;
+    generator << g.level_generator_;
+    const std::string text = generator.str();
+    w.put_i64(static_cast<std::int64_t>(text.size()));
+    w.put_bytes(reinterpret_cast<const std::uint8_t*>(text.data()), text.size());
+    w.put_bytes(reinterpret_cast<const std::uint8_t*>(g.data_level0_memory_),
+                g.cur_element_count * g.size_data_per_element_);
+    for (std::size_t i = 0; i < g.cur_element_count; ++i) {
+      const int level = g.element_levels_[i];
+      w.put_i64(level);
+      if (level > 0) {
+        w.put_bytes(reinterpret_cast<const std::uint8_t*>(g.linkLists_[i]),
+                    static_cast<std::size_t>(level) * g.size_links_per_element_);
+      }
+    }
+    out = w.take();
+    return static_cast<std::int64_t>(g.cur_element_count);
+  }
+
+  void restore_index(const FrameStore& store, const std::uint8_t* data, std::size_t size) override {
+    if (inserted_ > 0) internal::throw_invalid("search mode index: restore_index after the graph was built");
+    try {
+      load(store, data, size);
+    } catch (...) {
+      graph_.reset();
+      space_.reset();
+      inserted_ = 0;
+      throw;
+    }
+  }
+
+ private:
+  static constexpr char kMagic[9] = "lsgdhnsw";
+  static constexpr std::int64_t kSnapshotVersion = 1;
+
+  void load(const FrameStore& store, const std::uint8_t* data, std::size_t size) {
+    StateReader in(data, size, "index snapshot");
+    const auto bad = [](const auto&... parts) { internal::throw_invalid("index snapshot: ", parts...); };
+    if (std::memcmp(in.get_bytes(8), kMagic, 8) != 0) bad("not an index snapshot (no lsgdhnsw mark)");
+    const std::int64_t version = in.get_i64();
+    if (version != kSnapshotVersion) bad("version ", version, " is not ", kSnapshotVersion);
+    std::uint32_t marker = 0;
+    std::memcpy(&marker, in.get_bytes(sizeof marker), sizeof marker);
+    if (marker != 1) bad("written on a machine of the other byte order");
+    const std::int64_t cells = in.get_i64(), metric = in.get_i64(), m = in.get_i64(),
+                       ef = in.get_i64(), count = in.get_i64(), top = in.get_i64(),
+                       entry = in.get_i64();
+    if (store.empty() || cells != store.view(0).cells) {
+      bad(cells, " cells per frame, the stored frames have ", store.empty() ? 0 : store.view(0).cells);
+    }
+    if (metric < 0 || metric > static_cast<std::int64_t>(SimilarityMetric::kNormalizedL1)) bad("metric ", metric);
+    if (m != options_.index.m || ef != options_.index.ef_construction) {
+      bad("made with m ", m, ", ef_construction ", ef, "; the options say ", options_.index.m, ", ",
+          options_.index.ef_construction);
+    }
+    if (count < 1 || count > store.size()) bad(count, " frames, the store holds ", store.size());
+    if (top < 0 || top > 64 || entry < 0 || entry >= count) bad("top level ", top, ", entry point ", entry);
+    const std::int64_t text_size = in.get_i64();
+    if (text_size < 0 || text_size > 4096) bad("level generator state of ", text_size, " bytes");
+    const auto* text = reinterpret_cast<const char*>(in.get_bytes(static_cast<std::size_t>(text_size)));
+
+    space_ = std::make_unique<KeySpace>(static_cast<int>(cells), static_cast<SimilarityMetric>(metric));
+    const auto n = static_cast<std::size_t>(count);
+    std::size_t capacity = 1024;
+    while (capacity < n) capacity *= 2;
+    graph_ = std::make_unique<hnswlib::HierarchicalNSW<float>>(
+        space_.get(), capacity, static_cast<std::size_t>(m), static_cast<std::size_t>(ef), 100);
+    auto& g = *graph_;
+    std::istringstream generator(std::string(text, static_cast<std::size_t>(text_size)));
+    generator >> g.level_generator_;
+    if (!generator) bad("level generator state unreadable");
+    const std::size_t block = g.size_data_per_element_;
+    std::memcpy(g.data_level0_memory_, in.get_bytes(n * block), n * block);
+    // Every link points to another frame of the graph, no list is longer
+    // than the layer allows, labels are the frames in order, keys are the
+    // stored frames' keys.
+    key_.resize(space_->get_data_size());
+    const auto links_ok = [&](const hnswlib::linklistsizeint* list, std::size_t max_links, std::size_t self) {
+      const std::size_t k = *list;
+      if (k > max_links) return false;
+      const auto* ids = reinterpret_cast<const hnswlib::tableint*>(list + 1);
+      for (std::size_t e = 0; e < k; ++e) {
+        if (ids[e] >= n || ids[e] == self) return false;
+      }
+      return true;
+    };
+    for (std::size_t i = 0; i < n; ++i) {
+      char* element = g.data_level0_memory_ + i * block;
+      hnswlib::labeltype label = 0;
+      std::memcpy(&label, element + g.label_offset_, sizeof label);
+      if (label != i) bad("frame ", i, " is labelled ", label);
+      if (!links_ok(reinterpret_cast<const hnswlib::linklistsizeint*>(element), g.maxM0_, i)) {
+        bad("frame ", i, ": bottom-layer links out of range");
+      }
+      make_key(store.view(static_cast<std::int64_t>(i)), key_.data());
+      if (std::memcmp(element + g.offsetData_, key_.data(), key_.size()) != 0) {
+        bad("frame ", i, ": its key is not the stored frame's (a snapshot of other frames)");
+      }
+    }
+    g.cur_element_count = n;  // from here the destructor frees the upper layers made below
+    for (std::size_t i = 0; i < n; ++i) g.element_levels_[i] = 0;
+    for (std::size_t i = 0; i < n; ++i) {
+      const std::int64_t level = in.get_i64();
+      if (level < 0 || level > top) bad("frame ", i, ": level ", level, " above the top level ", top);
+      if (static_cast<std::int64_t>(i) == entry && level != top) bad("the entry point is not on the top level");
+      if (level == 0) continue;
+      const std::size_t bytes = static_cast<std::size_t>(level) * g.size_links_per_element_;
+      g.linkLists_[i] = static_cast<char*>(std::malloc(bytes));
+      if (g.linkLists_[i] == nullptr) bad("out of memory at frame ", i);
+      g.element_levels_[i] = static_cast<int>(level);
+      std::memcpy(g.linkLists_[i], in.get_bytes(bytes), bytes);
+      for (std::int64_t l = 0; l < level; ++l) {
+        const char* list = g.linkLists_[i] + static_cast<std::size_t>(l) * g.size_links_per_element_;
+        if (!links_ok(reinterpret_cast<const hnswlib::linklistsizeint*>(list), g.maxM_, i)) {
+          bad("frame ", i, ": links on level ", l + 1, " out of range");
+        }
+      }
+    }
+    in.finish();
+    // Upper-layer links only to frames on that layer.
+    for (std::size_t i = 0; i < n; ++i) {
+      for (int l = 1; l <= g.element_levels_[i]; ++l) {
+        const auto* list = reinterpret_cast<const hnswlib::linklistsizeint*>(
+            g.linkLists_[i] + static_cast<std::size_t>(l - 1) * g.size_links_per_element_);
+        const auto* ids = reinterpret_cast<const hnswlib::tableint*>(list + 1);
+        for (std::size_t e = 0; e < *list; ++e) {
+          if (g.element_levels_[ids[e]] < l) bad("frame ", i, " links on level ", l, " to a lower frame");
+        }
+      }
+      g.label_lookup_[i] = static_cast<hnswlib::tableint>(i);
+    }
+    g.maxlevel_ = static_cast<int>(top);
+    g.enterpoint_node_ = static_cast<hnswlib::tableint>(entry);
+    inserted_ = count;
   }
 
   SearchOptions options_;

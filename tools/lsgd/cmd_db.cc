@@ -46,6 +46,8 @@ void db_info(const DbInfoArgs& args) {
                               {"frames", info.frames},
                               {"sessions", sessions},
                               {"nodes", info.nodes},
+                              {"index_frames", info.index_frames},
+                              {"index_bytes", info.index_bytes},
                               {"bytes", info.bytes},
                               {"note", info.note},
                               {"rows_verified", damage.empty()},
@@ -66,6 +68,11 @@ void db_info(const DbInfoArgs& args) {
                 << s.first_frame << " .. " << s.last_frame << "\n";
     }
     std::cout << "nodes: " << info.nodes << "\n"
+              << "saved search index: "
+              << (info.index_frames > 0 ? std::to_string(info.index_frames) + " frames, " +
+                                              std::to_string(info.index_bytes) + " bytes"
+                                        : std::string("none"))
+              << "\n"
               << "bytes: " << info.bytes << "\n";
     if (!info.note.empty()) std::cout << "note: " << info.note << "\n";
     std::cout << "rows: " << (damage.empty() ? "all " + std::to_string(info.frames) + " verified (types, sizes, checksums, nodes, ids)" : "DAMAGED") << "\n"

@@ -9,6 +9,7 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
@@ -41,6 +42,7 @@ struct RunArgs {
   DetectorFlags detector;
   SequenceFlags layout;
   std::string database;                 // SQLite file to create or resume; empty: none
+  bool rebuild_index = false;           // ignore the database's saved search index
   std::optional<std::int64_t> session;  // session id of this run's frames
 };
 
@@ -254,7 +256,21 @@ void run_database(const RunArgs& args, const io::Sequence& sequence) {
   };
   try {
     Detector detector(options);
-    db->restore(detector);  // checks the options against the stored ones
+    // Checks the options against the stored ones; the saved search index
+    // (index mode's graph) comes back with the frames.
+    db->restore(detector, args.rebuild_index ? io::IndexUse::kRebuild : io::IndexUse::kSaved);
+    // The search index is saved when the run ends, also when an error ends it
+    // (what the frames stored so far built is kept).
+    const auto save_index = [&] {
+      if (detector.size() != db->frames()) return;
+      const auto start = std::chrono::steady_clock::now();
+      const std::int64_t covered = db->save_index(detector);
+      if (covered > 0) {
+        std::cerr << "saved the search index of " << covered << " frames in "
+                  << std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count()
+                  << " s\n";
+      }
+    };
     const eval::FrameSource source = eval::sequence_source(sequence);
     const SessionPlan plan = plan_session(*db, detector, sequence, source, args.session);
     const auto images = static_cast<std::int64_t>(sequence.images.size());
@@ -281,12 +297,23 @@ void run_database(const RunArgs& args, const io::Sequence& sequence) {
     // The row is written (and flushed) before the frame is committed: after a
     // crash the CSV holds at most one row the database lacks, which the
     // re-run cuts (continue_csv).
-    const FrameRun run = run_frames(
-        detector, source, "run", run_options, [&](const Result& r, const eval::FrameTimes&) {
-          const std::string& image = sequence.images[static_cast<std::size_t>(r.frame - plan.first_id)];
-          csv->write(r, image);
-          db->append(detector, r, plan.session, stored_name(image), r.frame);
-        });
+    FrameRun run;
+    try {
+      run = run_frames(
+          detector, source, "run", run_options, [&](const Result& r, const eval::FrameTimes&) {
+            const std::string& image = sequence.images[static_cast<std::size_t>(r.frame - plan.first_id)];
+            csv->write(r, image);
+            db->append(detector, r, plan.session, stored_name(image), r.frame);
+          });
+    } catch (...) {
+      try {
+        save_index();
+      } catch (const std::exception& e) {
+        std::cerr << "lsgd: note: the search index was not saved (" << e.what() << ")\n";
+      }
+      throw;
+    }
+    save_index();
     // A new session that stored nothing is an error as a new database is
     // (frames of another size than the stored ones, a list of garbage).
     if (run.processed == 0 && !plan.resume) throw_no_frame(run.skipped, run.first_error);
@@ -352,6 +379,9 @@ void register_run(CLI::App& app) {
                   "session when --sequence is its sequence, else last session + 1; 0 for a new "
                   "database)")
       ->check(CLI::Range(std::int64_t{0}, kMaxSession));
+  cmd->add_flag("--rebuild-index", args->rebuild_index,
+                "with --database: ignore the search index saved in it (index mode's graph) and "
+                "rebuild it from the stored frames");
   cmd->callback([args] { run(*args); });
 }
 

@@ -3,10 +3,10 @@
 // frame, one transaction per appended frame: a crash loses at most the frame
 // being written, and the file stays inspectable with the sqlite3 shell.
 //
-// Schema (format version 4; docs/reliability.md, "Persistence"):
+// Schema (format version 5; docs/reliability.md, "Persistence"):
 //
 //   meta(key TEXT PRIMARY KEY, value NOT NULL)
-//     format_version   4 (integer)
+//     format_version   5 (integer)
 //     library_version  e.g. "0.1.0", the lsgd that created the file
 //     options          the DetectorOptions as YAML (io::to_yaml)
 //     width, height    frame size (0 until the first frame)
@@ -37,6 +37,11 @@
 //                                    -- columns of their own (NULL in format 4
 //                                    -- rows); restore() reads them as the
 //                                    -- components' version-1 records
+//   indexes(mode TEXT, part INTEGER,  -- the search mode's saved index
+//           frames INTEGER NOT NULL,   -- (Database::save_index), its bytes
+//           data BLOB NOT NULL,        -- in parts 0, 1, ... of <= 64 MiB,
+//           crc32 INTEGER NOT NULL,    -- each with its CRC-32; the frames
+//           PRIMARY KEY(mode, part))   -- 0 .. frames - 1 it covers
 //
 // A component with new state (a new verification stage) needs no schema
 // change: its records travel in `state`. Appending a frame is one row.
@@ -72,12 +77,17 @@ namespace lsgd::io {
 
 // The format this lsgd writes and the newest it reads. Version 2 keeps the
 // loop decision's state per frame, version 3 the caller's frame id, version 4
-// every component's state as versioned records (the state column). Older
+// every component's state as versioned records (the state column), version 5
+// the search mode's saved index (the indexes table). Older
 // files are read as they are and, opened for writing, upgraded in place
 // (columns added, old rows kept as written; from version 1 its decision
 // options reset to this version's defaults: version 1 thresholds were raw
 // similarities, version 2's are in sigma).
-constexpr int kDatabaseFormatVersion = 4;
+constexpr int kDatabaseFormatVersion = 5;
+
+// Whether restore() reads the saved index of the search mode (index mode's
+// graph) or lets the detector rebuild it from the stored frames.
+enum class IndexUse { kSaved, kRebuild };
 
 // The frames of one session, as the caller numbered and named them.
 struct StoredFrame {
@@ -110,6 +120,8 @@ struct DatabaseInfo {
   std::int64_t frames = 0;
   std::vector<SessionInfo> sessions;  // in the order they were stored
   std::int64_t nodes = 0;  // dynamic nodes (0 in exhaustive mode)
+  std::int64_t index_frames = 0;  // frames the saved index covers (0: none saved)
+  std::int64_t index_bytes = 0;   // ... and its size
   std::int64_t bytes = 0;  // size of the file plus its write-ahead log
   std::string note;        // Database::note()
 };
@@ -170,7 +182,20 @@ class Database {
   // detector processes the next frame exactly as one that had processed every
   // stored frame itself. Throws FormatError naming the file and frame for
   // damaged rows (detector then holds part of the frames: discard it).
-  void restore(Detector& detector) const;
+  // The search mode's index (index mode's graph) is taken from the file when
+  // save_index() stored one and `index` is kSaved, so it is not rebuilt: the
+  // frames stored after it are indexed at the next query. A damaged saved
+  // index is a FormatError (kRebuild ignores it).
+  void restore(Detector& detector, IndexUse index = IndexUse::kSaved) const;
+
+  // Saves the detector's search index (Detector::save_index) in place of the
+  // one saved before, in one transaction, in parts of at most 64 MiB; the
+  // detector must hold exactly the stored frames. Returns the frames it
+  // covers (0: the mode keeps no index, nothing saved). Costs a write of the
+  // whole graph (about 1.4 KB per 1241x376 frame), so a writer calls it when
+  // it stops or now and then, not per frame; frames appended after it are
+  // indexed again at the next resume.
+  std::int64_t save_index(const Detector& detector);
 
   // Appends the detector's last frame, just processed (the detector must
   // hold frames() + 1 frames; `result` is what process() returned for it,

@@ -206,7 +206,8 @@ void Detector::score_candidates(Result& result) {
     if (search_->scores_every_frame()) {
       evidence_.best_places(top_n, result.candidates);
     } else {
-      evidence_.realign(store_, descriptor_.view(), raw_, metric, top_n, result.candidates);
+      evidence_.realign(store_, descriptor_.view(), raw_, metric, top_n, search_->realign_reach(),
+                        result.candidates);
     }
     return;
   }

@@ -241,7 +241,7 @@ void AppearanceEvidence::best_places(int top_n, std::vector<Candidate>& out) con
 
 void AppearanceEvidence::realign(const FrameStore& store, const DescriptorView& descriptor,
                                  const std::vector<Candidate>& raw, SimilarityMetric metric,
-                                 int top_n, std::vector<Candidate>& out) {
+                                 int top_n, std::int64_t reach, std::vector<Candidate>& out) {
   out.clear();
   if (!level2_.valid()) return;
   const std::int64_t limit = last_query_ - min_gap_;  // candidates j < limit
@@ -252,6 +252,19 @@ void AppearanceEvidence::realign(const FrameStore& store, const DescriptorView& 
     for (std::int64_t j = lo; j <= hi; ++j) {
       const Candidate s{j, sequence(store, descriptor, j, metric)};
       if (aligned.frame < 0 || better(s, aligned)) aligned = s;
+    }
+    // Beyond the window: uphill along the sequence score, at most `reach`
+    // frames, while each step is better (a shortlist finds a revisit by its
+    // single frames, whose best frame may sit a few frames off the best
+    // aligned sequence).
+    for (const std::int64_t dir : {std::int64_t{-1}, std::int64_t{1}}) {
+      if (reach <= 0 || aligned.frame != (dir < 0 ? lo : hi)) continue;
+      for (std::int64_t j = aligned.frame + dir, steps = 0; j >= 0 && j < limit && steps < reach;
+           j += dir, ++steps) {
+        const Candidate s{j, sequence(store, descriptor, j, metric)};
+        if (!better(s, aligned)) break;
+        aligned = s;
+      }
     }
     const bool seen = std::any_of(out.begin(), out.end(),
                                   [&](const Candidate& o) { return o.frame == aligned.frame; });

@@ -105,10 +105,12 @@ class AppearanceEvidence {
   void best_places(int top_n, std::vector<Candidate>& out) const;
 
   // Re-aligns each raw candidate within +-tolerance frames to its best
-  // sequence, drops duplicates, and writes the best top_n by R (nodes mode).
+  // sequence, and from the window's edge on uphill (each step better) for at
+  // most `reach` more frames; drops duplicates, and writes the best top_n by
+  // R (modes that do not score every frame; reach: CandidateSearch::realign_reach()).
   void realign(const FrameStore& store, const DescriptorView& descriptor,
                const std::vector<Candidate>& raw, SimilarityMetric metric, int top_n,
-               std::vector<Candidate>& out);
+               std::int64_t reach, std::vector<Candidate>& out);
 
   // Recomputes the state of the last max(frames, long_frames) queries from
   // the stored frames, as if they had been added one by one (after a detector

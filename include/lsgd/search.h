@@ -118,6 +118,11 @@ class CandidateSearch : public Stateful {
   virtual Outcome search(const Query& query, std::vector<Candidate>& out,
                          std::vector<double>& row) = 0;
 
+  // How far past +-tolerance the temporal stage may follow a candidate's
+  // sequence score uphill when it realigns a shortlist (evidence.h). 0: not
+  // at all (nodes mode, as the paper's groups were measured).
+  virtual std::int64_t realign_reach() const { return 0; }
+
   // Called once per frame after the detector ranked its candidates (the
   // places its sequences point to, best first): a shortlist mode may follow
   // them along their diagonals at the next query.

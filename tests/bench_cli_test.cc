@@ -165,6 +165,15 @@ TEST(BenchCli, DistractorsCompareTheModesOnOneMap) {
   EXPECT_EQ(j["modes"][0]["recall_vs_exhaustive"], 1.0);
   EXPECT_EQ(j["modes"][0]["insert_ms_median"], 0.0);  // no index
   EXPECT_GT(j["modes"][0]["compared_queries"].get<int>(), 20);
+  // Memory, the saved graph's size, and the loops declared, judged by the
+  // street's ground truth (a loop to a distractor is false).
+  for (const auto& m : j["modes"]) {
+    EXPECT_GT(m["peak_rss_mb"].get<double>(), 0.0);
+    EXPECT_GE(m["declared_false"].get<int>(), 0);
+    EXPECT_LE(m["declared_false"].get<int>(), m["declared"].get<int>());
+  }
+  EXPECT_EQ(j["modes"][0]["index_bytes_per_frame"], 0.0);
+  EXPECT_GT(j["index_bytes_per_frame"].get<double>(), 0.0);
   const auto nodes = lsgd("bench --distractors 10 --frames 20 --width 160 --height 120 --mode nodes");
   EXPECT_EQ(nodes.code, 1);
   EXPECT_NE(nodes.err.find("nodes cannot take distractors"), std::string::npos) << nodes.err;
@@ -184,7 +193,11 @@ TEST(BenchCli, DistractorsCompareTheModesOnOneMap) {
   EXPECT_EQ(slurp(dir / "1.png"), before);
   const auto alone = lsgd("bench --sequence x --frames 30");
   EXPECT_EQ(alone.code, 1);
-  EXPECT_NE(alone.err.find("--sequence is the sequence of --distractors"), std::string::npos) << alone.err;
+  EXPECT_NE(alone.err.find("--sequence and --gt are the sequence of --distractors"), std::string::npos)
+      << alone.err;
+  const auto street_gt = lsgd("bench --distractors 5 --frames 30 --gt x");
+  EXPECT_EQ(street_gt.code, 1);
+  EXPECT_NE(street_gt.err.find("the synthetic street has its own"), std::string::npos) << street_gt.err;
 }
 
 TEST(BenchCli, BadArgumentsFailNamingTheFlag) {

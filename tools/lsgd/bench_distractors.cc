@@ -28,11 +28,13 @@
 #include <fstream>
 #include <iomanip>
 #include <iostream>
+#include <optional>
 #include <opencv2/core.hpp>
 #include <opencv2/imgproc.hpp>
 
 #include "bench_support.h"
 #include "lsgd/error.h"
+#include "lsgd/eval/gt_formats.h"
 #include "lsgd/eval/runner.h"
 #include "lsgd/io/layouts.h"
 #include "lsgd/io/sequence.h"
@@ -51,6 +53,20 @@ std::int64_t current_rss_bytes() {
   statm >> pages >> resident;
   return resident * static_cast<std::int64_t>(sysconf(_SC_PAGESIZE));
 }
+
+// The process's peak resident memory since reset_peak_rss(), bytes (VmHWM of
+// /proc/self/status, which getrusage's peak cannot reset; 0 when unreadable).
+std::int64_t peak_rss_since_reset() {
+  std::ifstream status("/proc/self/status");
+  std::string line;
+  while (std::getline(status, line)) {
+    if (line.rfind("VmHWM:", 0) == 0) return std::atoll(line.c_str() + 6) * 1024;  // kB
+  }
+  return 0;
+}
+
+// Resets the peak to the current resident memory (Linux 4.0+: "5" to clear_refs).
+void reset_peak_rss() { std::ofstream("/proc/self/clear_refs") << "5"; }
 
 std::uint64_t next(std::uint64_t& s) {  // splitmix64
   std::uint64_t z = (s += 0x9E3779B97F4A7C15ull);
@@ -94,6 +110,7 @@ struct Frames {
   std::vector<Descriptor> exact;   // ... and its exact descriptors
   int width = 0, height = 0;
   std::string source;
+  std::optional<eval::GroundTruth> gt;  // over the sequence's frames, when known
 };
 
 Frames load_frames(const DistractorSetup& a, const DetectorOptions& options) {
@@ -110,6 +127,8 @@ Frames load_frames(const DistractorSetup& a, const DetectorOptions& options) {
       f.gray.push_back(gray);
     }
     f.source = "synthetic street, " + std::to_string(a.frames) + " frames";
+    // Its ground truth covers one lap of the route.
+    if (a.frames <= world.frames()) f.gt = world.ground_truth();
   } else {
     const io::Sequence sequence = io::open_sequence(a.sequence, a.layout);
     for (const std::string& path : sequence.images) {
@@ -118,6 +137,11 @@ Frames load_frames(const DistractorSetup& a, const DetectorOptions& options) {
       f.gray.push_back(image);
     }
     f.source = a.sequence + ", " + std::to_string(f.gray.size()) + " frames";
+    if (!a.gt.empty()) {
+      eval::GtOptions o;
+      o.frames = static_cast<std::int64_t>(f.gray.size());
+      f.gt = eval::load_groundtruth(a.gt, o);
+    }
   }
   f.width = f.gray.front().cols;
   f.height = f.gray.front().rows;
@@ -146,10 +170,14 @@ struct ModeRun {
   double bytes_per_frame = 0;            // resident memory added / frames
   std::size_t descriptor_bytes = 0;      // descriptor storage per frame
   double rss_mb = 0;
+  double peak_rss_mb = 0;               // the process's peak while the mode ran
+  std::int64_t index_bytes = 0;         // Detector::save_index() at the end (0: no index)
+  double index_save_s = 0;              // ... the time it took
   std::int64_t frames = 0;
   std::vector<std::int64_t> best;  // reported candidate per query
   std::vector<std::int64_t> loops;  // declared loop per query (-1: none)
   std::int64_t declared = 0;         // loops declared
+  std::int64_t declared_false = 0;   // ... to a distractor or, by the ground truth, not a loop (-1: no GT)
   // Of exhaustive search's declared loops, the share this mode declares too,
   // to the same frame (the operating point at this map size).
   double declared_vs_exhaustive = 0;
@@ -161,6 +189,7 @@ ModeRun run_mode(const std::string& mode, const DistractorSetup& a, const Detect
   options.search.mode = mode;
   ModeRun r;
   r.mode = mode;
+  reset_peak_rss();
   const std::int64_t rss0 = current_rss_bytes();
   {
     Detector detector(options);
@@ -170,13 +199,13 @@ ModeRun run_mode(const std::string& mode, const DistractorSetup& a, const Detect
     if (options.verification.has(kGeometricStage)) records.push_back({kGeometricStage, 1, {}});
     const std::vector<std::uint8_t> state = encode_records(records);
     Descriptor exact, stored;
-    const Stopwatch fill;
     for (std::int64_t k = 0; k < a.distractors; ++k) {
       make_distractor(f.exact[static_cast<std::size_t>(k % static_cast<std::int64_t>(f.exact.size()))], k,
                       options.descriptor.storage, exact, stored);
       detector.restore_frame(f.width, f.height, stored, state);
     }
     std::vector<double> query, insert, total;
+    r.declared_false = f.gt ? 0 : -1;
     for (std::size_t i = 0; i < f.gray.size(); ++i) {
       const Result res = detector.process(f.gray[i]);
       const double q = res.timings.search_ms - res.timings.insert_ms;
@@ -190,6 +219,11 @@ ModeRun run_mode(const std::string& mode, const DistractorSetup& a, const Detect
       r.best.push_back(res.best.frame);
       r.loops.push_back(res.loop ? res.best.frame : -1);
       r.declared += res.loop ? 1 : 0;
+      if (res.loop) {
+        // Sequence frame i is detector frame N + i; a distractor is never the same place.
+        const std::int64_t j = res.best.frame - a.distractors;
+        if (f.gt && (j < 0 || !f.gt->is_loop(static_cast<std::int64_t>(i), j))) ++r.declared_false;
+      }
     }
     r.query = spread(query);
     r.insert = insert.empty() ? Spread{} : spread(insert);
@@ -197,6 +231,14 @@ ModeRun run_mode(const std::string& mode, const DistractorSetup& a, const Detect
     r.frames = detector.size();
     r.descriptor_bytes = detector.bytes_per_frame();
     const std::int64_t rss1 = current_rss_bytes();
+    r.peak_rss_mb = static_cast<double>(peak_rss_since_reset()) / (1 << 20);
+    {
+      const Stopwatch save;
+      std::vector<std::uint8_t> graph;
+      detector.save_index(graph);
+      r.index_save_s = save.elapsed().wall_ms * 1e-3;
+      r.index_bytes = static_cast<std::int64_t>(graph.size());
+    }
     r.rss_mb = static_cast<double>(rss1) / (1 << 20);
     r.bytes_per_frame = static_cast<double>(rss1 - rss0) / static_cast<double>(r.frames);
   }
@@ -215,10 +257,14 @@ nlohmann::json row_json(const ModeRun& r) {
           {"recall_vs_exhaustive", r.recall_vs_exhaustive},
           {"compared_queries", r.compared},
           {"declared", r.declared},
+          {"declared_false", r.declared_false},
           {"declared_vs_exhaustive", r.declared_vs_exhaustive},
           {"bytes_per_frame", r.bytes_per_frame},
           {"descriptor_bytes_per_frame", r.descriptor_bytes},
-          {"rss_mb", r.rss_mb}};
+          {"rss_mb", r.rss_mb},
+          {"peak_rss_mb", r.peak_rss_mb},
+          {"index_bytes_per_frame", static_cast<double>(r.index_bytes) / static_cast<double>(r.frames)},
+          {"index_save_s", r.index_save_s}};
 }
 
 }  // namespace
@@ -269,7 +315,7 @@ void run_distractors(const DistractorSetup& a, const DetectorOptions& options) {
   }
   std::cout << std::fixed << std::setprecision(3)
             << "mode        frames   query ms (median, p95)   insert ms (median, p95)   build s   "
-               "recall_vs_exhaustive   declared (same as exhaustive)   bytes/frame (descriptor)\n";
+               "recall_vs_exhaustive   declared (same as exhaustive)   false   bytes/frame (descriptor)\n";
   for (const ModeRun& r : runs) {
     std::cout << std::left << std::setw(10) << r.mode << std::right << std::setw(9) << r.frames << "   "
               << std::setw(8) << r.query.median << " " << std::setw(8) << r.query.p95 << "          "
@@ -277,8 +323,15 @@ void run_distractors(const DistractorSetup& a, const DetectorOptions& options) {
               << std::setw(8) << std::setprecision(2) << r.build_s << std::setprecision(3) << "   "
               << std::setw(8) << r.recall_vs_exhaustive << " (" << r.compared << " queries)   "
               << std::setw(6) << r.declared << " (" << r.declared_vs_exhaustive << ")   "
+              << std::setw(4) << r.declared_false << "   "
               << std::setprecision(0) << r.bytes_per_frame << " (" << r.descriptor_bytes << ")"
               << std::setprecision(3) << "\n";
+    std::cout << "          peak memory " << std::setprecision(0) << r.peak_rss_mb << " MB";
+    if (r.index_bytes > 0) {
+      std::cout << ", saved index " << static_cast<double>(r.index_bytes) / static_cast<double>(r.frames)
+                << " bytes/frame in " << std::setprecision(2) << r.index_save_s << " s";
+    }
+    std::cout << std::setprecision(3) << "\n";
   }
   std::cout.unsetf(std::ios::floatfield);
   if (!a.json.empty()) {

@@ -14,6 +14,7 @@ namespace lsgd::cli::bench {
 struct DistractorSetup {
   std::int64_t distractors = 0;  // N
   std::string sequence;          // empty: the synthetic street
+  std::string gt;                // --sequence's loop ground truth (any lsgd eval format); empty: none
   io::SequenceOptions layout;    // how `sequence` is read
   std::int64_t frames = 1090;    // synthetic street: frames (route frame i % 1090)
   int width = 1241, height = 376;

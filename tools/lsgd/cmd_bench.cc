@@ -38,6 +38,7 @@ struct BenchArgs {
   DetectorFlags detector;
   std::int64_t distractors = 0;  // > 0: bench::run_distractors
   std::string sequence;          // --distractors: a real sequence instead of the street
+  std::string gt;                // ... and its ground truth
   SequenceFlags layout;
   CLI::App* command = nullptr;
 };
@@ -180,6 +181,10 @@ void distractors_command(const BenchArgs& args) {
   bench::DistractorSetup d;
   d.distractors = args.distractors;
   d.sequence = args.sequence;
+  d.gt = args.gt;
+  if (!d.gt.empty() && d.sequence.empty()) {
+    throw InvalidArgument("--gt is the ground truth of --sequence: the synthetic street has its own");
+  }
   d.layout = args.layout.resolve();
   d.frames = args.command->count("--frames") > 0 ? args.setup.frames : 1090;
   d.width = args.setup.width;
@@ -191,6 +196,7 @@ void distractors_command(const BenchArgs& args) {
   CommandFiles files;
   files.input(args.detector.config, "--config");
   files.input(args.sequence, "--sequence");
+  files.input(args.gt, "--gt");
   if (!args.sequence.empty()) {  // the JSON may not land on one of the images read
     files.inputs(io::open_sequence(args.sequence, d.layout).images, "--sequence", "input image");
   }
@@ -202,8 +208,8 @@ void distractors_command(const BenchArgs& args) {
 
 void bench_command(const BenchArgs& args) {
   if (args.distractors > 0) return distractors_command(args);
-  if (!args.sequence.empty()) {
-    throw InvalidArgument("--sequence is the sequence of --distractors: give --distractors N too");
+  if (!args.sequence.empty() || !args.gt.empty()) {
+    throw InvalidArgument("--sequence and --gt are the sequence of --distractors: give --distractors N too");
   }
   const bench::Setup& a = args.setup;
   if (a.warmup >= a.frames) {
@@ -266,6 +272,10 @@ void register_bench(CLI::App& app) {
   cmd->add_option("--sequence", args->sequence,
                   "with --distractors: a real sequence (folder, list or dataset layout); default: "
                   "the synthetic street (--frames frames, 1090 by default)")
+      ->check(kNonEmptyPath);
+  cmd->add_option("--gt", args->gt,
+                  "with --distractors --sequence: its loop ground truth (as lsgd eval reads it), "
+                  "to count the declared loops that are true; the synthetic street has its own")
       ->check(kNonEmptyPath);
   args->layout.add_to(*cmd);
   args->command = cmd;

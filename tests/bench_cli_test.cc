@@ -174,6 +174,7 @@ TEST(BenchCli, DistractorsCompareTheModesOnOneMap) {
   }
   EXPECT_EQ(j["modes"][0]["index_bytes_per_frame"], 0.0);
   EXPECT_GT(j["index_bytes_per_frame"].get<double>(), 0.0);
+  EXPECT_GT(j["index_restore_s"].get<double>(), 0.0);
   const auto nodes = lsgd("bench --distractors 10 --frames 20 --width 160 --height 120 --mode nodes");
   EXPECT_EQ(nodes.code, 1);
   EXPECT_NE(nodes.err.find("nodes cannot take distractors"), std::string::npos) << nodes.err;

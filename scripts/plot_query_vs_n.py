@@ -11,6 +11,7 @@ the map grows (nodes cannot take distractors: their groups are built by
 running Algorithm 1 over every frame). Prints the table it plotted.
 """
 import json
+import os
 import sys
 
 import matplotlib
@@ -28,6 +29,9 @@ def main(argv):
         k = args.index("--nodes")
         nodes = args[k + 1]
         args = args[:k] + args[k + 2:]
+    inputs = args + ([nodes] if nodes else [])
+    if any(os.path.realpath(out) == os.path.realpath(p) for p in inputs):
+        sys.exit(f"plot_query_vs_n.py: {out} is one of the inputs; it is never overwritten")
     series = {}  # mode -> [(frames, median, p95)]
     for path in args:
         with open(path) as f:

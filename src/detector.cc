@@ -273,7 +273,7 @@ std::vector<std::uint8_t> Detector::frame_state(std::int64_t frame) const {
 
 void Detector::restore_index(const std::uint8_t* data, std::size_t size) {
   const Exclusive exclusive(busy_, "restore_index");
-  search_->restore_index(store_, data, size);
+  search_->restore_index(store_, options_.similarity.metric, data, size);
 }
 
 void Detector::restore_frame(int width, int height, const Descriptor& descriptor,

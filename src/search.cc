@@ -131,7 +131,8 @@ const std::vector<std::int64_t>& CandidateSearch::members(std::int64_t group) co
   internal::throw_invalid("search mode ", name(), " has no groups (group ", group, " asked for)");
 }
 
-void CandidateSearch::restore_index(const FrameStore&, const std::uint8_t*, std::size_t size) {
+void CandidateSearch::restore_index(const FrameStore&, SimilarityMetric, const std::uint8_t*,
+                                    std::size_t size) {
   internal::throw_invalid("search mode ", name(), " keeps no index to restore (", size,
                           " bytes given)");
 }

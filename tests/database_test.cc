@@ -339,6 +339,16 @@ TEST(DatabaseIndex, DamagedSavedIndexIsRefusedAndRebuildIgnoresIt) {
   bad = graph;
   bad[0] = 'x';
   refused(bad, "not an index snapshot");
+  // The same frames' graph made for another similarity metric.
+  {
+    DetectorOptions l1 = o;
+    l1.similarity.metric = SimilarityMetric::kL1;
+    Detector other(l1);
+    run(other, 0, kSplit);
+    std::vector<std::uint8_t> foreign;
+    ASSERT_GT(other.save_index(foreign), 0);
+    refused(foreign, "made for similarity metric");
+  }
   // Another map's graph (the same options, other frames): its keys.
   {
     Detector other(o);

@@ -58,7 +58,7 @@ struct IndexOptions {
 };
 
 struct SearchOptions {
-  // A registered search mode (search_modes()): "exhaustive" or "nodes".
+  // A registered search mode (search_modes()): "exhaustive", "nodes" or "index".
   std::string mode = kExhaustiveSearch;
   // Temporal window w in frames, [0, 1e9]: frame j is a candidate for query i
   // only if j < i - w. Reference disc_num: 50.
@@ -142,8 +142,8 @@ class CandidateSearch : public Stateful {
   // restored from storage need not rebuild it. save_index() writes it as it
   // is now and returns the frames it covers (0 .. covered - 1; 0 and nothing
   // written for a mode without one). restore_index() takes what save_index()
-  // wrote, for a mode with the same options, before the mode's first query
-  // after its frames were restored to `store`; frames after the covered ones
+  // wrote, for a mode with the same options and similarity `metric`, before
+  // the mode's first query after its frames were restored to `store`; frames after the covered ones
   // are indexed at the next query as usual. Throws InvalidArgument naming
   // what is wrong when the bytes are damaged or do not fit `store`, and then
   // holds no index (the next query rebuilds it).
@@ -151,7 +151,8 @@ class CandidateSearch : public Stateful {
     out.clear();
     return 0;
   }
-  virtual void restore_index(const FrameStore& store, const std::uint8_t* data, std::size_t size);
+  virtual void restore_index(const FrameStore& store, SimilarityMetric metric,
+                             const std::uint8_t* data, std::size_t size);
 };
 
 // A registered search mode.

@@ -92,6 +92,11 @@ std::uint32_t crc_bytes(std::uint32_t crc, const void* data, std::size_t n) {
   return crc;
 }
 
+// CRC-32 of n bytes on their own.
+std::uint32_t crc_of(const void* data, std::size_t n) {
+  return crc_bytes(static_cast<std::uint32_t>(crc32(0, Z_NULL, 0)), data, n);
+}
+
 std::uint32_t crc_int(std::uint32_t crc, std::int64_t v) {
   std::uint8_t b[8];
   for (int i = 0; i < 8; ++i)
@@ -161,7 +166,7 @@ std::uint32_t meta_checksum(const std::map<std::string, std::string>& meta) {
   for (const auto& [key, value] : meta) {
     if (key != "checksum") text += key + "=" + value + "\n";
   }
-  return crc_bytes(static_cast<std::uint32_t>(crc32(0, Z_NULL, 0)), text.data(), text.size());
+  return crc_of(text.data(), text.size());
 }
 
 // ---- SQLite helpers
@@ -233,9 +238,12 @@ const char* kSchema =
     "id INTEGER PRIMARY KEY, session INTEGER NOT NULL, name TEXT NOT NULL,"
     "histogram BLOB NOT NULL, pixels BLOB NOT NULL, node INTEGER, place INTEGER,"
     "features BLOB, crc32 INTEGER NOT NULL, loop INTEGER, loop_inliers REAL, frame INTEGER,"
-    "state BLOB);"
-    "CREATE TABLE indexes(mode TEXT NOT NULL, part INTEGER NOT NULL, frames INTEGER NOT NULL,"
-    "data BLOB NOT NULL, crc32 INTEGER NOT NULL, PRIMARY KEY(mode, part));";
+    "state BLOB);";
+// Format 5's table of saved search indexes (made with the schema, and by the
+// upgrade of older files).
+const char* kIndexesTable =
+    "CREATE TABLE IF NOT EXISTS indexes(mode TEXT NOT NULL, part INTEGER NOT NULL,"
+    "frames INTEGER NOT NULL, data BLOB NOT NULL, crc32 INTEGER NOT NULL, PRIMARY KEY(mode, part));";
 
 // Columns a format lacks read as NULL: loop state before 2, frame ids before
 // 3, the components' state before 4.
@@ -258,9 +266,6 @@ const char* kUpgradeV1 =
     "ALTER TABLE frames ADD COLUMN loop INTEGER; ALTER TABLE frames ADD COLUMN loop_inliers REAL;";
 const char* kUpgradeV2 = "ALTER TABLE frames ADD COLUMN frame INTEGER;";
 const char* kUpgradeV3 = "ALTER TABLE frames ADD COLUMN state BLOB;";
-const char* kUpgradeV4 =
-    "CREATE TABLE IF NOT EXISTS indexes(mode TEXT NOT NULL, part INTEGER NOT NULL, frames INTEGER NOT NULL,"
-    "data BLOB NOT NULL, crc32 INTEGER NOT NULL, PRIMARY KEY(mode, part));";
 
 // A saved index is stored in parts of at most this many bytes (SQLite's
 // largest blob is 1e9 bytes; a graph of 10^6 frames is about 1.4 GB).
@@ -607,7 +612,7 @@ Database Database::open(const std::string& path, Mode mode) {
       if (m.format < 2) exec_write(m.db, path, kUpgradeV1);
       if (m.format < 3) exec_write(m.db, path, kUpgradeV2);
       if (m.format < 4) exec_write(m.db, path, kUpgradeV3);
-      exec_write(m.db, path, kUpgradeV4);
+      exec_write(m.db, path, kIndexesTable);
       m.meta["format_version"] = std::to_string(kDatabaseFormatVersion);
       m.meta["options"] = to_yaml(m.options);
       m.write_meta();
@@ -651,6 +656,7 @@ Database Database::create(const std::string& path, const DetectorOptions& option
     try {
       exec_write(impl.db, path, "PRAGMA synchronous=FULL; BEGIN;");
       exec_write(impl.db, path, kSchema);
+      exec_write(impl.db, path, kIndexesTable);
       impl.meta = {{"format_version", std::to_string(kDatabaseFormatVersion)},
                    {"library_version", lsgd::version()},
                    {"options", to_yaml(options)},
@@ -1032,9 +1038,17 @@ std::int64_t Database::Impl::read_index(const std::string& mode, std::int64_t st
                                         std::vector<std::uint8_t>& out) const {
   out.clear();
   if (format < 5) return 0;
+  {
+    // One allocation for the whole blob (a graph of 10^6 frames is ~1.4 GB).
+    Statement size(db, path, "SELECT sum(length(data)) FROM indexes WHERE mode = ?1");
+    sqlite3_bind_text(size.get(), 1, mode.c_str(), static_cast<int>(mode.size()), SQLITE_TRANSIENT);
+    if (step_read(db, size.get(), path) && sqlite3_column_type(size.get(), 0) == SQLITE_INTEGER) {
+      out.reserve(static_cast<std::size_t>(std::max<sqlite3_int64>(0, sqlite3_column_int64(size.get(), 0))));
+    }
+  }
   Statement stmt(db, path, "SELECT part, frames, data, crc32 FROM indexes WHERE mode = ?1 ORDER BY part");
   sqlite3_bind_text(stmt.get(), 1, mode.c_str(), static_cast<int>(mode.size()), SQLITE_TRANSIENT);
-  std::int64_t frames = -1, part = 0;
+  std::int64_t covered = -1, part = 0;
   while (step_read(db, stmt.get(), path)) {
     sqlite3_stmt* s = stmt.get();
     const auto bad = [&](const auto&... parts) {
@@ -1046,17 +1060,17 @@ std::int64_t Database::Impl::read_index(const std::string& mode, std::int64_t st
     }
     if (sqlite3_column_type(s, 1) != SQLITE_INTEGER) bad("frames is not an integer");
     const std::int64_t f = sqlite3_column_int64(s, 1);
-    if (f < 1 || f > stored || (frames >= 0 && f != frames)) {
-      bad("covers ", f, " frames (", stored, " stored", frames >= 0 ? concat(", part 0 says ", frames) : "",
+    if (f < 1 || f > stored || (covered >= 0 && f != covered)) {
+      bad("covers ", f, " frames (", stored, " stored", covered >= 0 ? concat(", part 0 says ", covered) : "",
           ")");
     }
-    frames = f;
+    covered = f;
     if (sqlite3_column_type(s, 2) != SQLITE_BLOB || sqlite3_column_type(s, 3) != SQLITE_INTEGER) {
       bad("data is not a blob or crc32 not an integer");
     }
     const auto* data = static_cast<const std::uint8_t*>(sqlite3_column_blob(s, 2));
     const auto size = static_cast<std::size_t>(sqlite3_column_bytes(s, 2));
-    const std::uint32_t crc = crc_bytes(static_cast<std::uint32_t>(crc32(0, Z_NULL, 0)), data, size);
+    const std::uint32_t crc = crc_of(data, size);
     if (static_cast<std::int64_t>(crc) != sqlite3_column_int64(s, 3)) {
       bad("checksum ", sqlite3_column_int64(s, 3), " does not match its data (", crc,
           "): the file was modified or damaged");
@@ -1064,7 +1078,7 @@ std::int64_t Database::Impl::read_index(const std::string& mode, std::int64_t st
     out.insert(out.end(), data, data + size);
     ++part;
   }
-  return frames < 0 ? 0 : frames;
+  return covered < 0 ? 0 : covered;
 }
 
 
@@ -1269,8 +1283,7 @@ std::int64_t Database::save_index(const Detector& detector) {
       sqlite3_bind_int64(s, 2, part);
       sqlite3_bind_int64(s, 3, covered);
       sqlite3_bind_blob(s, 4, bytes.data() + at, static_cast<int>(n), SQLITE_STATIC);
-      sqlite3_bind_int64(s, 5, crc_bytes(static_cast<std::uint32_t>(crc32(0, Z_NULL, 0)),
-                                         bytes.data() + at, n));
+      sqlite3_bind_int64(s, 5, crc_of(bytes.data() + at, n));
       if (sqlite3_step(s) != SQLITE_DONE) io_error(m.path, "cannot write (", sqlite3_errmsg(m.db), ")");
     }
   });

@@ -116,7 +116,7 @@ class IndexSearch final : public CandidateSearch {
   // A shortlist by single frames: the best aligned sequence of a revisit may
   // sit a few frames off its best single frame (lip6-outdoor: 978 of 981
   // reported candidates as exhaustive search's with 16, 972 without;
-  // docs/performance.md).
+  // docs/results.md).
   std::int64_t realign_reach() const override { return 16; }
 
   Outcome search(const Query& q, std::vector<Candidate>& out, std::vector<double>&) override {
@@ -128,7 +128,8 @@ class IndexSearch final : public CandidateSearch {
       if (inserted_ < limit) {
         const std::int64_t start = internal::now_ns();
         outcome.inserted = limit - inserted_;
-        while (inserted_ < limit) insert(q.store, q.metric, inserted_++);
+        // Counted only once in the graph: a failed insertion is retried.
+        for (; inserted_ < limit; ++inserted_) insert(q.store, q.metric, inserted_);
         outcome.insert_ms = internal::ms_since(start);
       }
       if (inserted_ == 0) return outcome;
@@ -153,11 +154,13 @@ class IndexSearch final : public CandidateSearch {
       }
       std::sort(ids_.begin(), ids_.end());
       ids_.erase(std::unique(ids_.begin(), ids_.end()), ids_.end());
+      // Re-scored exactly, in one batch: the candidates' scores are the metric's own.
+      views_.clear();
+      for (const std::int64_t j : ids_) views_.push_back(q.store.view(j));
+      scores_.resize(views_.size());
+      similarities(q.descriptor, views_.data(), views_.size(), q.metric, scores_.data());
       scratch_.clear();
-      // Re-scored exactly: the candidates' scores are the metric's own.
-      for (const std::int64_t j : ids_) {
-        scratch_.push_back({j, similarity(q.descriptor, q.store.view(j), q.metric)});
-      }
+      for (std::size_t i = 0; i < ids_.size(); ++i) scratch_.push_back({ids_[i], scores_[i]});
     } catch (const InvalidArgument&) {
       throw;
     } catch (const std::exception& e) {  // hnswlib reports allocation failures as runtime_error
@@ -179,7 +182,8 @@ class IndexSearch final : public CandidateSearch {
   // State, version 1: the places the frame's candidates pointed to (count,
   // then int64 ids), for the frame after it; written for the last frame ended
   // (older frames: an empty record, as only the last one is read). The graph
-  // itself is rebuilt from the stored frames at the first query.
+  // itself is saved whole (save_index), or rebuilt from the stored frames at
+  // the first query.
   bool has_state() const override { return true; }
   void save_frame(std::int64_t frame, StateWriter& out) const override {
     if (frame != previous_frame_) return;
@@ -208,31 +212,6 @@ class IndexSearch final : public CandidateSearch {
     for (std::int64_t k = 0; k < n; ++k) previous_.push_back(in.get_i64());
   }
 
- private:
-  void insert(const FrameStore& store, SimilarityMetric metric, std::int64_t frame) {
-    const DescriptorView d = store.view(frame);
-    if (!space_) space_ = std::make_unique<KeySpace>(d.cells, metric);
-    if (d.cells != space_->cells() || metric != space_->metric()) {
-      internal::throw_invalid("search mode index: frame ", frame, " has ", d.cells, " cells and metric ",
-                              to_string(metric), ", the graph's frames ", space_->cells(), " and ",
-                              to_string(space_->metric()));
-    }
-    key_.resize(space_->get_data_size());
-    make_key(d, key_.data());
-    if (!graph_ || graph_->cur_element_count >= graph_->max_elements_) {
-      const std::size_t capacity = graph_ ? 2 * graph_->max_elements_ : 1024;
-      if (!graph_) {
-        graph_ = std::make_unique<hnswlib::HierarchicalNSW<float>>(
-            space_.get(), capacity, static_cast<std::size_t>(options_.index.m),
-            static_cast<std::size_t>(options_.index.ef_construction), /*random_seed=*/100);
-      } else {
-        graph_->resizeIndex(capacity);
-      }
-    }
-    graph_->addPoint(key_.data(), static_cast<hnswlib::labeltype>(frame));
-  }
-
- public:
   // The graph, version 1 (StateWriter's little-endian integers, then
   // hnswlib's own layout of this machine, marked by a native 32-bit 1):
   //   "lsgdhnsw", version, native marker, cells, metric, M, ef_construction,
@@ -279,10 +258,11 @@ class IndexSearch final : public CandidateSearch {
     return static_cast<std::int64_t>(g.cur_element_count);
   }
 
-  void restore_index(const FrameStore& store, const std::uint8_t* data, std::size_t size) override {
+  void restore_index(const FrameStore& store, SimilarityMetric metric, const std::uint8_t* data,
+                     std::size_t size) override {
     if (inserted_ > 0) internal::throw_invalid("search mode index: restore_index after the graph was built");
     try {
-      load(store, data, size);
+      load(store, metric, data, size);
     } catch (...) {
       graph_.reset();
       space_.reset();
@@ -295,7 +275,8 @@ class IndexSearch final : public CandidateSearch {
   static constexpr char kMagic[9] = "lsgdhnsw";
   static constexpr std::int64_t kSnapshotVersion = 1;
 
-  void load(const FrameStore& store, const std::uint8_t* data, std::size_t size) {
+  void load(const FrameStore& store, SimilarityMetric expected_metric, const std::uint8_t* data,
+            std::size_t size) {
     StateReader in(data, size, "index snapshot");
     const auto bad = [](const auto&... parts) { internal::throw_invalid("index snapshot: ", parts...); };
     if (std::memcmp(in.get_bytes(8), kMagic, 8) != 0) bad("not an index snapshot (no lsgdhnsw mark)");
@@ -310,7 +291,9 @@ class IndexSearch final : public CandidateSearch {
     if (store.empty() || cells != store.view(0).cells) {
       bad(cells, " cells per frame, the stored frames have ", store.empty() ? 0 : store.view(0).cells);
     }
-    if (metric < 0 || metric > static_cast<std::int64_t>(SimilarityMetric::kNormalizedL1)) bad("metric ", metric);
+    if (metric != static_cast<std::int64_t>(expected_metric)) {
+      bad("made for similarity metric ", metric, ", the detector's is ", to_string(expected_metric));
+    }
     if (m != options_.index.m || ef != options_.index.ef_construction) {
       bad("made with m ", m, ", ef_construction ", ef, "; the options say ", options_.index.m, ", ",
           options_.index.ef_construction);
@@ -396,6 +379,29 @@ class IndexSearch final : public CandidateSearch {
     inserted_ = count;
   }
 
+  void insert(const FrameStore& store, SimilarityMetric metric, std::int64_t frame) {
+    const DescriptorView d = store.view(frame);
+    if (!space_) space_ = std::make_unique<KeySpace>(d.cells, metric);
+    if (d.cells != space_->cells() || metric != space_->metric()) {
+      internal::throw_invalid("search mode index: frame ", frame, " has ", d.cells, " cells and metric ",
+                              to_string(metric), ", the graph's frames ", space_->cells(), " and ",
+                              to_string(space_->metric()));
+    }
+    key_.resize(space_->get_data_size());
+    make_key(d, key_.data());
+    if (!graph_ || graph_->cur_element_count >= graph_->max_elements_) {
+      const std::size_t capacity = graph_ ? 2 * graph_->max_elements_ : 1024;
+      if (!graph_) {
+        graph_ = std::make_unique<hnswlib::HierarchicalNSW<float>>(
+            space_.get(), capacity, static_cast<std::size_t>(options_.index.m),
+            static_cast<std::size_t>(options_.index.ef_construction), /*random_seed=*/100);
+      } else {
+        graph_->resizeIndex(capacity);
+      }
+    }
+    graph_->addPoint(key_.data(), static_cast<hnswlib::labeltype>(frame));
+  }
+
   SearchOptions options_;
   std::unique_ptr<KeySpace> space_;  // made at the first insertion (it needs the cell count)
   std::unique_ptr<hnswlib::HierarchicalNSW<float>> graph_;
@@ -404,6 +410,8 @@ class IndexSearch final : public CandidateSearch {
   std::vector<std::int64_t> previous_;  // ... and its candidates' frames, best first
   std::vector<std::int64_t> ids_;
   std::vector<std::uint8_t> key_;
+  std::vector<DescriptorView> views_;  // the shortlist's descriptors ...
+  std::vector<double> scores_;         // ... and their exact scores
   std::vector<Candidate> scratch_;
 };
 

@@ -245,7 +245,7 @@ ModeRun run_mode(const std::string& mode, const DistractorSetup& a, const Detect
         // What a resume costs instead of a rebuild (without reading the file).
         const std::unique_ptr<CandidateSearch> fresh = make_search(options.search);
         const Stopwatch restore;
-        fresh->restore_index(detector.store(), graph.data(), graph.size());
+        fresh->restore_index(detector.store(), options.similarity.metric, graph.data(), graph.size());
         r.index_restore_s = restore.elapsed().wall_ms * 1e-3;
       }
     }

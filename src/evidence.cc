@@ -18,6 +18,14 @@ std::int64_t offsets(std::int64_t query, std::int64_t min_gap) {
   return std::max<std::int64_t>(0, query - min_gap);
 }
 
+// The stride of the sampled diagonals among `offsets`: the smallest power of
+// two that keeps at most kMaxSampledDiagonals of them.
+std::int64_t sampled_stride(std::int64_t offsets) {
+  std::int64_t s = 1;
+  while ((offsets + s - 1) / s > kMaxSampledDiagonals) s *= 2;
+  return s;
+}
+
 }  // namespace
 
 ScoreStatistics statistics(const double* values, std::size_t n) {
@@ -34,9 +42,12 @@ ScoreStatistics statistics(const double* values, std::size_t n) {
 }
 
 AppearanceEvidence::AppearanceEvidence(const SequenceOptions& sequence, std::int64_t min_gap,
-                                       bool sample)
-    : options_(sequence), min_gap_(min_gap), sample_(sample) {
+                                       bool sample, std::int64_t exact_statistics)
+    : options_(sequence), min_gap_(min_gap), sample_(sample), exact_statistics_(exact_statistics) {
   if (min_gap < 0) internal::throw_invalid("AppearanceEvidence: min_gap ", min_gap, " < 0");
+  if (exact_statistics < 0) {
+    internal::throw_invalid("AppearanceEvidence: exact_statistics ", exact_statistics, " < 0");
+  }
   if (options_.enabled) {
     if (options_.frames < 1 || options_.long_frames < 0 || options_.tolerance < 0) {
       internal::throw_invalid("AppearanceEvidence: sequence lengths ", options_.frames, ", ",
@@ -48,10 +59,21 @@ AppearanceEvidence::AppearanceEvidence(const SequenceOptions& sequence, std::int
 }
 
 std::int64_t AppearanceEvidence::stride(std::int64_t query) const {
-  if (!sample_) return 1;
-  std::int64_t s = 1;
-  while ((offsets(query, min_gap_) + s - 1) / s > kMaxSampledDiagonals) s *= 2;
-  return s;
+  return sample_ ? sampled_stride(offsets(query, min_gap_)) : 1;
+}
+
+std::int64_t AppearanceEvidence::statistics_stride(std::int64_t query) const {
+  const std::int64_t n = offsets(query, min_gap_);
+  return sample_ || n > exact_statistics_ ? sampled_stride(n) : 1;
+}
+
+ScoreStatistics AppearanceEvidence::kept_statistics(std::int64_t query,
+                                                    const std::vector<double>& values) {
+  const auto every = static_cast<std::size_t>(statistics_stride(query) / stride(query));
+  if (every == 1) return statistics(values.data(), values.size());
+  subset_.clear();
+  for (std::size_t k = 0; k < values.size(); k += every) subset_.push_back(values[k]);
+  return statistics(subset_.data(), subset_.size());
 }
 
 std::int64_t AppearanceEvidence::diagonals(std::int64_t query) const {
@@ -136,7 +158,7 @@ void AppearanceEvidence::add_query(const FrameStore& store, const DescriptorView
                             last_query_, " with ", store.size(), " frames stored");
   }
   diagonal_similarities(store, descriptor, query, metric, row, scratch_);
-  level1_ = statistics(scratch_.data(), scratch_.size());
+  level1_ = kept_statistics(query, scratch_);
   level2_ = ScoreStatistics{};
   scored_.clear();
   last_query_ = query;
@@ -163,7 +185,7 @@ void AppearanceEvidence::add_query(const FrameStore& store, const DescriptorView
   const std::size_t n = scratch_.size();
   sequence_.resize(n);
   for (std::size_t k = 0; k < n; ++k) sequence_[k] = sequence_mean(short_sum_[k], long_sum_[k]);
-  if (level1_.valid()) level2_ = statistics(sequence_.data(), n);
+  if (level1_.valid()) level2_ = kept_statistics(query, sequence_);
   // Pairs whose first frame no later sequence reaches.
   const std::int64_t oldest = query + 1 - span_;
   for (auto it = pairs_.begin(); it != pairs_.end();) {
@@ -245,25 +267,30 @@ void AppearanceEvidence::realign(const FrameStore& store, const DescriptorView& 
   out.clear();
   if (!level2_.valid()) return;
   const std::int64_t limit = last_query_ - min_gap_;  // candidates j < limit
-  for (const Candidate& c : raw) {
-    Candidate aligned{-1, -std::numeric_limits<double>::infinity()};
-    const std::int64_t lo = std::max<std::int64_t>(0, c.frame - options_.tolerance);
-    const std::int64_t hi = std::min(limit - 1, c.frame + options_.tolerance);
-    for (std::int64_t j = lo; j <= hi; ++j) {
-      const Candidate s{j, sequence(store, descriptor, j, metric)};
-      if (aligned.frame < 0 || better(s, aligned)) aligned = s;
+  const auto score = [&](std::int64_t j) { return Candidate{j, sequence(store, descriptor, j, metric)}; };
+  // The best frame of [lo, hi] (better(): ties to the older frame).
+  const auto best_in = [&](std::int64_t lo, std::int64_t hi) {
+    Candidate best{-1, -std::numeric_limits<double>::infinity()};
+    for (std::int64_t j = std::max<std::int64_t>(0, lo); j <= std::min(limit - 1, hi); ++j) {
+      const Candidate s = score(j);
+      if (best.frame < 0 || better(s, best)) best = s;
     }
-    // Beyond the window: uphill along the sequence score, at most `reach`
-    // frames, while each step is better (a shortlist finds a revisit by its
-    // single frames, whose best frame may sit a few frames off the best
-    // aligned sequence).
-    for (const std::int64_t dir : {std::int64_t{-1}, std::int64_t{1}}) {
-      if (reach <= 0 || aligned.frame != (dir < 0 ? lo : hi)) continue;
-      for (std::int64_t j = aligned.frame + dir, steps = 0; j >= 0 && j < limit && steps < reach;
-           j += dir, ++steps) {
-        const Candidate s{j, sequence(store, descriptor, j, metric)};
-        if (!better(s, aligned)) break;
-        aligned = s;
+    return best;
+  };
+  const std::int64_t tolerance = options_.tolerance;
+  const std::int64_t radius = 2 * tolerance + 1;  // best_places()
+  for (const Candidate& c : raw) {
+    Candidate aligned = best_in(c.frame - tolerance, c.frame + tolerance);
+    if (reach > 0) {
+      // Climb to the place best_places() would report: a frame no other
+      // within `radius` beats. A shortlist finds a revisit by its single
+      // frames, whose best frame may sit a few frames off the best aligned
+      // sequence. A climb that would go more than `reach` frames past the
+      // window is dropped: it is no place of its own.
+      while (aligned.frame >= 0) {
+        const Candidate top = best_in(aligned.frame - radius, aligned.frame + radius);
+        if (top.frame == aligned.frame) break;
+        aligned = std::abs(top.frame - c.frame) > tolerance + reach ? Candidate{-1, 0} : top;
       }
     }
     const bool seen = std::any_of(out.begin(), out.end(),
@@ -296,7 +323,7 @@ void AppearanceEvidence::rebuild(const FrameStore& store, SimilarityMetric metri
     const std::int64_t ratio = s_last / stride(q);
     Row r;
     r.query = q;
-    r.stats = statistics(scratch_.data(), scratch_.size());
+    r.stats = kept_statistics(q, scratch_);
     for (std::size_t k = 0; k < scratch_.size(); k += static_cast<std::size_t>(ratio)) {
       r.z.push_back(quantise(r.stats, scratch_[k]));
     }

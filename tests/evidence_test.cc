@@ -7,9 +7,11 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 #include <map>
+#include <utility>
 
 #include "lsgd/error.h"
 #include "test_util.h"
@@ -40,6 +42,30 @@ Descriptor frame(int i, int period) {
   return d;
 }
 
+// Like frame(), but neighbouring places look alike (each cell a bump that
+// moves 3 bins a place), so sequence scores rise smoothly to a revisit.
+Descriptor smooth_frame(int i, int period) {
+  std::uint64_t state = 91 + static_cast<std::uint64_t>(i);
+  const int p = i % period;
+  Descriptor d;
+  d.grid = {1, 2};
+  d.hist.assign(2 * kBins, 0);
+  for (int c = 0; c < 2; ++c) {
+    const int centre = (p * 3 + c * 97) % kBins;
+    for (int k = -12; k <= 12; ++k) {
+      const int bin = (centre + k + kBins) % kBins;
+      d.hist[static_cast<std::size_t>(c * kBins + bin)] =
+          static_cast<Bin>(40 - std::abs(k) * 3 + static_cast<int>(test::splitmix64(state) % 6));
+    }
+  }
+  for (int c = 0; c < 2; ++c) {
+    Count sum = 0;
+    for (int b = 0; b < kBins; ++b) sum += d.hist[static_cast<std::size_t>(c * kBins + b)];
+    d.pixels.push_back(sum);
+  }
+  return d;
+}
+
 constexpr double kScale = 1024.0;
 
 // The definition, computed directly: every similarity, every statistic.
@@ -48,24 +74,25 @@ struct Reference {
   std::int64_t min_gap;
   SequenceOptions options;
   bool sample;
-  AppearanceEvidence stride_of{{}, 0, false};  // only for stride() / diagonals()
+  AppearanceEvidence stride_of{{}, 0, false};  // only for stride() / statistics_stride()
 
-  Reference(std::vector<Descriptor> f, std::int64_t w, SequenceOptions o, bool s)
-      : frames(std::move(f)), min_gap(w), options(o), sample(s), stride_of(o, w, s) {}
+  Reference(std::vector<Descriptor> f, std::int64_t w, SequenceOptions o, bool s,
+            std::int64_t exact = kExactStatisticsCandidates)
+      : frames(std::move(f)), min_gap(w), options(o), sample(s), stride_of(o, w, s, exact) {}
 
   double sim(std::int64_t a, std::int64_t b) const {
     return similarity(frames[a].view(), frames[b].view(), SimilarityMetric::kReference);
   }
-  // Frames of the kept diagonals of query q.
-  std::vector<std::int64_t> kept(std::int64_t q) const {
+  // Frames of the diagonals the statistics of query q are computed over.
+  std::vector<std::int64_t> sampled(std::int64_t q) const {
     std::vector<std::int64_t> out;
-    const std::int64_t s = stride_of.stride(q);
+    const std::int64_t s = stride_of.statistics_stride(q);
     for (std::int64_t d = min_gap + 1; d <= q; d += s) out.push_back(q - d);
     return out;
   }
   ScoreStatistics level1(std::int64_t q) const {
     std::vector<double> v;
-    for (std::int64_t j : kept(q)) v.push_back(sim(q, j));
+    for (std::int64_t j : sampled(q)) v.push_back(sim(q, j));
     return statistics(v.data(), v.size());
   }
   std::int64_t z(std::int64_t a, std::int64_t b) const {
@@ -92,7 +119,7 @@ struct Reference {
   double evidence(std::int64_t q, std::int64_t j) const {
     if (!level1(q).valid()) return std::numeric_limits<double>::quiet_NaN();
     std::vector<double> all;
-    for (std::int64_t f : kept(q)) all.push_back(sequence_mean(q, f));
+    for (std::int64_t f : sampled(q)) all.push_back(sequence_mean(q, f));
     const ScoreStatistics s = statistics(all.data(), all.size());
     if (!s.valid()) return std::numeric_limits<double>::quiet_NaN();
     return s.standardise(sequence_mean(q, j));
@@ -102,7 +129,9 @@ struct Reference {
 struct EvidenceRun {
   FrameStore store;
   AppearanceEvidence evidence;
-  EvidenceRun(const SequenceOptions& o, std::int64_t w, bool s) : evidence(o, w, s) {}
+  EvidenceRun(const SequenceOptions& o, std::int64_t w, bool s,
+              std::int64_t exact = kExactStatisticsCandidates)
+      : evidence(o, w, s, exact) {}
   // Adds query q = store.size() (exhaustive: with its similarity row).
   void add(const Descriptor& d, std::int64_t w, bool with_row) {
     const std::int64_t q = store.size();
@@ -204,23 +233,131 @@ TEST(AppearanceEvidence, SampledDiagonalsMatchTheDefinition) {
   EXPECT_EQ(run.evidence.stride(n - 1), 4);
 }
 
+// Beyond exact_statistics candidates, exhaustive search standardises with the
+// sampled diagonals' statistics, so it scores every candidate bit for bit as
+// the sampled modes do; up to it, over every candidate.
+TEST(AppearanceEvidence, BeyondTheExactLimitExhaustiveScoresAsTheSampledModes) {
+  SequenceOptions o;
+  o.frames = 3;
+  o.long_frames = 8;
+  const std::int64_t w = 2, exact = 300;
+  const int n = 1100;  // the sampled stride reaches 4
+  std::vector<Descriptor> frames;
+  for (int i = 0; i < n; ++i) frames.push_back(frame(i, 200));
+  const Reference ref(frames, w, o, false, exact);
+  EvidenceRun all(o, w, false, exact), sampled(o, w, true);
+  for (std::int64_t q = 0; q < n; ++q) {
+    all.add(frames[q], w, true);
+    sampled.add(frames[q], w, false);
+    const ScoreStatistics& a = all.evidence.similarity_statistics();
+    const ScoreStatistics& b = sampled.evidence.similarity_statistics();
+    if (q - w <= exact) {
+      EXPECT_EQ(a.count, std::max<std::int64_t>(0, q - w)) << q;
+      EXPECT_EQ(all.evidence.statistics_stride(q), 1);
+    } else {
+      SCOPED_TRACE(q);
+      EXPECT_EQ(all.evidence.statistics_stride(q), sampled.evidence.stride(q));
+      EXPECT_EQ(a.count, b.count);
+      EXPECT_EQ(a.mean, b.mean);  // bit for bit
+      EXPECT_EQ(a.sd, b.sd);
+      EXPECT_EQ(all.evidence.sequence_statistics().mean, sampled.evidence.sequence_statistics().mean);
+      EXPECT_EQ(all.evidence.sequence_statistics().sd, sampled.evidence.sequence_statistics().sd);
+      if (q % 97 == 0 || q == n - 1) {
+        for (const std::int64_t j : {q - w - 1, q - w - 2, q - w - 3, std::int64_t{5}, q / 3}) {
+          const double x = all.evidence.sequence(all.store, frames[q].view(), j, SimilarityMetric::kReference);
+          const double y = sampled.evidence.sequence(sampled.store, frames[q].view(), j,
+                                                     SimilarityMetric::kReference);
+          EXPECT_EQ(x, y) << "frame " << j;
+          EXPECT_NEAR(x, ref.evidence(q, j), 1e-9) << "frame " << j;
+        }
+      }
+    }
+    all.store.add(frames[q]);
+    sampled.store.add(frames[q]);
+  }
+  EXPECT_EQ(sampled.evidence.stride(n - 1), 4);
+  EXPECT_THROW(AppearanceEvidence(o, w, false, -1), InvalidArgument);
+}
+
+// A shortlist realigned with a reach reports the places exhaustive search
+// ranks (best_places: local maxima within 2 * tolerance + 1 frames), with
+// the same scores, from candidates a few frames off them; a shortlist
+// without reach only looks within +-tolerance.
+TEST(AppearanceEvidence, RealignedShortlistReportsExhaustiveSearchsPlaces) {
+  SequenceOptions o;
+  o.frames = 4;
+  o.long_frames = 12;
+  o.tolerance = 2;
+  const std::int64_t w = 3, exact = 64;
+  const int n = 700;
+  std::vector<Descriptor> frames;
+  for (int i = 0; i < n; ++i) frames.push_back(smooth_frame(i, 120));  // every place 5 times
+  EvidenceRun all(o, w, false, exact), sampled(o, w, true);
+  for (std::int64_t q = 0; q < n; ++q) {
+    all.add(frames[q], w, true);
+    sampled.add(frames[q], w, false);
+    if (q == 650 || q == 699) {
+      SCOPED_TRACE(q);
+      std::vector<Candidate> peaks, top, raw, out;
+      all.evidence.best_places(100000, peaks);
+      all.evidence.best_places(4, top);
+      ASSERT_EQ(top.size(), 4u);
+      // Each of the best places from a frame 4 past it (outside the window),
+      // and frames between places.
+      for (const Candidate& c : top) raw.push_back({c.frame + 4, 0});
+      for (const std::int64_t j : {std::int64_t{17}, std::int64_t{333}, std::int64_t{401}}) raw.push_back({j, 0});
+      sampled.evidence.realign(sampled.store, frames[q].view(), raw, SimilarityMetric::kReference,
+                               4, 16, out);
+      ASSERT_EQ(out.size(), top.size());
+      for (std::size_t k = 0; k < out.size(); ++k) {
+        EXPECT_EQ(out[k].frame, top[k].frame);
+        EXPECT_EQ(out[k].score, top[k].score);  // bit for bit
+      }
+      // Every reported place is one of exhaustive search's.
+      sampled.evidence.realign(sampled.store, frames[q].view(), raw, SimilarityMetric::kReference,
+                               100, 16, out);
+      for (const Candidate& c : out) {
+        const bool peak = std::any_of(peaks.begin(), peaks.end(), [&](const Candidate& p) {
+          return p.frame == c.frame && p.score == c.score;
+        });
+        EXPECT_TRUE(peak) << "frame " << c.frame;
+      }
+      // Without reach: the best of +-tolerance around each candidate.
+      sampled.evidence.realign(sampled.store, frames[q].view(), raw, SimilarityMetric::kReference,
+                               100, 0, out);
+      for (const Candidate& c : out) {
+        const bool near = std::any_of(raw.begin(), raw.end(), [&](const Candidate& r) {
+          return std::llabs(r.frame - c.frame) <= o.tolerance;
+        });
+        EXPECT_TRUE(near) << "frame " << c.frame;
+      }
+    }
+    all.store.add(frames[q]);
+    sampled.store.add(frames[q]);
+  }
+}
+
 // A detector restored from storage rebuilds its evidence from the stored
 // frames; from then on it must score exactly as one that never stopped.
 TEST(AppearanceEvidence, RebuildContinuesBitForBit) {
-  for (const bool sample : {false, true}) {
+  // Exhaustive, sampled, and exhaustive past its exact statistics.
+  for (const auto& [sample, exact] : {std::pair{false, kExactStatisticsCandidates},
+                                      std::pair{true, kExactStatisticsCandidates},
+                                      std::pair{false, std::int64_t{40}}}) {
     SequenceOptions o;
     o.frames = 5;
     o.long_frames = 9;
     const std::int64_t w = 4;
-    const int n = sample ? static_cast<int>(kMaxSampledDiagonals + 60) : 150;
+    const int n = sample || exact < 100 ? static_cast<int>(kMaxSampledDiagonals + 60) : 150;
     std::vector<Descriptor> frames;
     for (int i = 0; i < n; ++i) frames.push_back(frame(i, 70));
     // Stops early (a partial ring), mid-run and, sampled, right after the
     // stride doubled (the rebuilt ring mixes two strides).
     for (const int stop : {3, 60, static_cast<int>(kMaxSampledDiagonals + w + 3)}) {
       if (stop >= n - 5) continue;
-      SCOPED_TRACE(testing::Message() << (sample ? "sampled" : "exhaustive") << " stop " << stop);
-      EvidenceRun live(o, w, sample), fresh(o, w, sample);
+      SCOPED_TRACE(testing::Message() << (sample ? "sampled" : "exhaustive") << " exact " << exact
+                                      << " stop " << stop);
+      EvidenceRun live(o, w, sample, exact), fresh(o, w, sample, exact);
       for (int q = 0; q < n; ++q) {
         live.add(frames[q], w, !sample);
         if (q >= stop) {

@@ -21,12 +21,17 @@
 //    on the frame rate and the scene; R measures how far the candidate's
 //    sequence stands out from every other place the query could be, in sigma.
 //
-// The distributions come from every candidate in exhaustive search. With
-// dynamic nodes (which do not score every frame) they come from a sample of
-// diagonals: offsets d = i - j of min_gap + 1 + k * stride, at most
-// kMaxSampledDiagonals of them (the stride doubles as the map grows). Along a
-// diagonal the offset is constant, so each diagonal's running sums carry from
-// query to query in both modes.
+// The distributions come from every candidate in exhaustive search, up to
+// kExactStatisticsCandidates of them. The modes that do not score every frame
+// (dynamic nodes, index) take them from a sample of diagonals: offsets
+// d = i - j of min_gap + 1 + k * stride, at most kMaxSampledDiagonals of them
+// (the stride doubles as the map grows). Beyond kExactStatisticsCandidates
+// exhaustive search takes them from the same sample too, so in a large map
+// every mode standardises with the same statistics and scores any candidate
+// bit for bit alike: the modes differ only in which candidates they look at.
+// (A 512-value sample puts the mean within 0.05 sigma, the standard deviation
+// within 3 %.) Along a diagonal the offset is constant, so each diagonal's
+// running sums carry from query to query in every mode.
 //
 // All sums are exact: z is kept in fixed point (1/1024 sigma), so a detector
 // restored from a database (which recomputes the last long_frames queries'
@@ -49,8 +54,11 @@ namespace lsgd {
 // candidates (exhaustive) or sampled diagonals (nodes); before that it
 // reports no candidate.
 constexpr std::int64_t kMinCalibration = 32;
-// Dynamic nodes: the most diagonals sampled per query (between half this and this).
+// The most diagonals sampled per query (between half this and this).
 constexpr std::int64_t kMaxSampledDiagonals = 512;
+// Exhaustive search: statistics over every candidate up to this many, over the
+// sampled diagonals beyond (above every real sequence of docs/results.md).
+constexpr std::int64_t kExactStatisticsCandidates = 8192;
 
 struct ScoreStatistics {
   double mean = 0;
@@ -74,7 +82,11 @@ struct SequenceOptions {
 // sequence sums along the kept diagonals. Not thread-safe.
 class AppearanceEvidence {
  public:
-  AppearanceEvidence(const SequenceOptions& sequence, std::int64_t min_gap, bool sample);
+  // sample: the search does not score every frame (sampled diagonals);
+  // exact_statistics: without sample, the most candidates the statistics
+  // are computed over (kExactStatisticsCandidates; tests use a smaller one).
+  AppearanceEvidence(const SequenceOptions& sequence, std::int64_t min_gap, bool sample,
+                     std::int64_t exact_statistics = kExactStatisticsCandidates);
 
   // Adds query `query` (== store.size(): the frame is not stored yet, its
   // descriptor is `descriptor`). `row`, when given, holds s(query, j) for
@@ -122,6 +134,9 @@ class AppearanceEvidence {
   // Diagonals kept for `query`: offsets min_gap + 1 + k * stride(query), k < count.
   std::int64_t stride(std::int64_t query) const;
   std::int64_t diagonals(std::int64_t query) const;
+  // Stride of the diagonals the statistics of `query` are computed over (a
+  // multiple of stride(query)).
+  std::int64_t statistics_stride(std::int64_t query) const;
 
  private:
   struct Row {
@@ -131,6 +146,9 @@ class AppearanceEvidence {
   };
   std::int32_t quantise(const ScoreStatistics& stats, double similarity) const;
   void push_row(Row row);
+  // Statistics of `values` (one per kept diagonal of `query`) over the
+  // diagonals of statistics_stride(query).
+  ScoreStatistics kept_statistics(std::int64_t query, const std::vector<double>& values);
   // Fills `out` with s(query, query - d) for the kept diagonals of `query`.
   void diagonal_similarities(const FrameStore& store, const DescriptorView& descriptor,
                              std::int64_t query, SimilarityMetric metric,
@@ -144,6 +162,7 @@ class AppearanceEvidence {
   SequenceOptions options_;
   std::int64_t min_gap_ = 0;
   bool sample_ = false;
+  std::int64_t exact_statistics_ = kExactStatisticsCandidates;
   int span_ = 1;                   // rows kept: max(frames, long_frames) with sequences, else 1
   std::int64_t last_query_ = -1;
   std::int64_t stride_ = 1;        // current stride (sampled mode)
@@ -155,6 +174,7 @@ class AppearanceEvidence {
   // the kept diagonals (nodes mode); pairs no later sequence reaches are dropped.
   std::unordered_map<std::uint64_t, double> pairs_;
   std::vector<double> scratch_;
+  std::vector<double> subset_;     // kept_statistics()
   std::vector<Candidate> scored_;  // sequence scores computed for the last query
 };
 

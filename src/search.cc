@@ -70,9 +70,11 @@ const OptionTable<IndexOptions>& IndexOptions::fields() {
       integer_option("ef_construction", &S::ef_construction, 8, 2000, "frames",
                      "candidates examined when a frame is inserted"),
       integer_option("ef_search", &S::ef_search, 1, 10000, "frames",
-                     "candidates examined per query (at least the shortlist)"),
+                     "candidates examined per query (at least rescore)"),
+      integer_option("rescore", &S::rescore, 1, 10000, "frames",
+                     "frames the graph returns, re-scored exactly (at least the shortlist)"),
       integer_option("shortlist", &S::shortlist, 1, 1000, "frames",
-                     "frames the graph returns, re-scored exactly (at least top_n)"),
+                     "of them, the best by exact similarity the temporal stage realigns (at least top_n)"),
   };
   return table;
 }

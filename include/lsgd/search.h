@@ -49,9 +49,14 @@ struct IndexOptions {
   int m = 16;
   // Candidates examined when a frame is inserted, [8, 2000].
   int ef_construction = 100;
-  // Candidates examined per query (at least the shortlist), [1, 10000].
+  // Candidates examined per query (at least rescore), [1, 10000].
   int ef_search = 64;
-  // Frames the graph returns, re-scored exactly (at least top_n), [1, 1000].
+  // Frames the graph returns, re-scored exactly (at least the shortlist),
+  // [1, 10000]: the graph ranks by a coarse key, so the best single frames
+  // may rank below the shortlist there.
+  int rescore = 64;
+  // Of them, the best by exact similarity the temporal stage realigns (at
+  // least top_n), [1, 1000].
   int shortlist = 10;
   void check() const;
   static const OptionTable<IndexOptions>& fields();  // lsgd/options.h

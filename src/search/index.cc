@@ -133,17 +133,23 @@ class IndexSearch final : public CandidateSearch {
         outcome.insert_ms = internal::ms_since(start);
       }
       if (inserted_ == 0) return outcome;
+      // The graph's `rescore` nearest keys, re-scored exactly; the best
+      // `shortlist` of them by similarity go on (the key is coarse: a frame's
+      // rank by key and by similarity differ).
       const auto k = static_cast<std::size_t>(std::min<std::int64_t>(
           inserted_, std::max<std::int64_t>(options_.index.shortlist, options_.top_n)));
-      graph_->setEf(std::max<std::size_t>(k, static_cast<std::size_t>(options_.index.ef_search)));
+      const auto fetch = std::max(k, static_cast<std::size_t>(std::min<std::int64_t>(
+                                         inserted_, options_.index.rescore)));
+      graph_->setEf(std::max<std::size_t>(fetch, static_cast<std::size_t>(options_.index.ef_search)));
       key_.resize(space_->get_data_size());
       make_key(q.descriptor, key_.data());
-      auto found = graph_->searchKnn(key_.data(), k);
+      auto found = graph_->searchKnn(key_.data(), fetch);
       ids_.clear();
       while (!found.empty()) {
         ids_.push_back(static_cast<std::int64_t>(found.top().second));
         found.pop();
       }
+      const std::size_t from_graph = ids_.size();
       // The previous frame's places, one frame on along their diagonals: a
       // revisit whose sequence stands out stays in the shortlist even where
       // single frames look alike elsewhere.
@@ -152,15 +158,23 @@ class IndexSearch final : public CandidateSearch {
           if (j >= 0 && j + 1 < limit) ids_.push_back(j + 1);
         }
       }
-      std::sort(ids_.begin(), ids_.end());
-      ids_.erase(std::unique(ids_.begin(), ids_.end()), ids_.end());
       // Re-scored exactly, in one batch: the candidates' scores are the metric's own.
       views_.clear();
       for (const std::int64_t j : ids_) views_.push_back(q.store.view(j));
       scores_.resize(views_.size());
       similarities(q.descriptor, views_.data(), views_.size(), q.metric, scores_.data());
       scratch_.clear();
-      for (std::size_t i = 0; i < ids_.size(); ++i) scratch_.push_back({ids_[i], scores_[i]});
+      for (std::size_t i = 0; i < from_graph; ++i) scratch_.push_back({ids_[i], scores_[i]});
+      if (scratch_.size() > k) {
+        std::partial_sort(scratch_.begin(), scratch_.begin() + static_cast<std::ptrdiff_t>(k),
+                          scratch_.end(), better);
+        scratch_.resize(k);
+      }
+      for (std::size_t i = from_graph; i < ids_.size(); ++i) {
+        const bool seen = std::any_of(scratch_.begin(), scratch_.end(),
+                                      [&](const Candidate& c) { return c.frame == ids_[i]; });
+        if (!seen) scratch_.push_back({ids_[i], scores_[i]});
+      }
     } catch (const InvalidArgument&) {
       throw;
     } catch (const std::exception& e) {  // hnswlib reports allocation failures as runtime_error

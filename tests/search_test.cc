@@ -326,6 +326,29 @@ TEST(SearchIndex, AShortlistAsLargeAsTheMapIsExhaustive) {
   }
 }
 
+// The graph ranks by a coarse key; the shortlist is the most similar of its
+// `rescore` nearest keys by the metric itself. With rescore covering the map
+// it is exactly exhaustive search's best frames.
+TEST(SearchIndex, TheShortlistIsTheMostSimilarOfTheRescoredFrames) {
+  std::vector<Descriptor> frames;
+  for (int i = 0; i < 150; ++i) frames.push_back(random_descriptor(6, 900 + i % 41));  // revisits
+  SearchOptions o;
+  o.mode = kIndexSearch;
+  o.min_gap = 5;
+  o.top_n = 3;
+  o.index.shortlist = 3;
+  o.index.rescore = 400;
+  const auto all = run_index(frames, o, SimilarityMetric::kReference);
+  const FrameStore store = store_of(frames);
+  for (std::size_t q = 0; q < frames.size(); ++q) {
+    SCOPED_TRACE(testing::Message() << "query " << q);
+    const std::int64_t limit = std::max<std::int64_t>(0, static_cast<std::int64_t>(q) - 5);
+    ASSERT_EQ(all[q].size(), static_cast<std::size_t>(std::min<std::int64_t>(3, limit)));
+    expect_same(all[q], brute_force(store, frames[q].view(), static_cast<std::int64_t>(q), 5, 3,
+                                     SimilarityMetric::kReference));
+  }
+}
+
 // With a small shortlist the graph still finds the nearest frame for almost
 // every query of a map with revisits, and reads far fewer than all frames.
 TEST(SearchIndex, ASmallShortlistFindsTheNearestFrame) {

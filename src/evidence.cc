@@ -267,12 +267,11 @@ void AppearanceEvidence::realign(const FrameStore& store, const DescriptorView& 
   out.clear();
   if (!level2_.valid()) return;
   const std::int64_t limit = last_query_ - min_gap_;  // candidates j < limit
-  const auto score = [&](std::int64_t j) { return Candidate{j, sequence(store, descriptor, j, metric)}; };
   // The best frame of [lo, hi] (better(): ties to the older frame).
   const auto best_in = [&](std::int64_t lo, std::int64_t hi) {
     Candidate best{-1, -std::numeric_limits<double>::infinity()};
     for (std::int64_t j = std::max<std::int64_t>(0, lo); j <= std::min(limit - 1, hi); ++j) {
-      const Candidate s = score(j);
+      const Candidate s{j, sequence(store, descriptor, j, metric)};
       if (best.frame < 0 || better(s, best)) best = s;
     }
     return best;

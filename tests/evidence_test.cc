@@ -24,22 +24,14 @@ namespace {
 Descriptor frame(int i, int period) {
   std::uint64_t state = 77 + static_cast<std::uint64_t>(i);
   const int p = i % period;
-  Descriptor d;
-  d.grid = {1, 2};
-  d.hist.assign(2 * kBins, 0);
+  std::vector<std::vector<std::pair<int, Count>>> cells(2);
   for (int c = 0; c < 2; ++c) {
     for (int k = 0; k < 12; ++k) {
-      const int bin = (p * 5 + k * 17 + c * 101) % kBins;
-      d.hist[static_cast<std::size_t>(c * kBins + bin)] =
-          static_cast<Bin>(20 + (p * 7 + k * 3) % 30 + static_cast<int>(test::splitmix64(state) % 4));
+      cells[c].push_back({(p * 5 + k * 17 + c * 101) % kBins,
+                          20 + (p * 7 + k * 3) % 30 + static_cast<Count>(test::splitmix64(state) % 4)});
     }
   }
-  for (int c = 0; c < 2; ++c) {
-    Count sum = 0;
-    for (int b = 0; b < kBins; ++b) sum += d.hist[static_cast<std::size_t>(c * kBins + b)];
-    d.pixels.push_back(sum);
-  }
-  return d;
+  return test::make_descriptor(cells);
 }
 
 // Like frame(), but neighbouring places look alike (each cell a bump that
@@ -47,23 +39,16 @@ Descriptor frame(int i, int period) {
 Descriptor smooth_frame(int i, int period) {
   std::uint64_t state = 91 + static_cast<std::uint64_t>(i);
   const int p = i % period;
-  Descriptor d;
-  d.grid = {1, 2};
-  d.hist.assign(2 * kBins, 0);
+  std::vector<std::vector<std::pair<int, Count>>> cells(2);
   for (int c = 0; c < 2; ++c) {
     const int centre = (p * 3 + c * 97) % kBins;
     for (int k = -12; k <= 12; ++k) {
-      const int bin = (centre + k + kBins) % kBins;
-      d.hist[static_cast<std::size_t>(c * kBins + bin)] =
-          static_cast<Bin>(40 - std::abs(k) * 3 + static_cast<int>(test::splitmix64(state) % 6));
+      cells[c].push_back({(centre + k + kBins) % kBins,
+                          static_cast<Count>(40 - std::abs(k) * 3) +
+                              static_cast<Count>(test::splitmix64(state) % 6)});
     }
   }
-  for (int c = 0; c < 2; ++c) {
-    Count sum = 0;
-    for (int b = 0; b < kBins; ++b) sum += d.hist[static_cast<std::size_t>(c * kBins + b)];
-    d.pixels.push_back(sum);
-  }
-  return d;
+  return test::make_descriptor(cells);
 }
 
 constexpr double kScale = 1024.0;

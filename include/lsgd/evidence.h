@@ -117,9 +117,11 @@ class AppearanceEvidence {
   void best_places(int top_n, std::vector<Candidate>& out) const;
 
   // Re-aligns each raw candidate within +-tolerance frames to its best
-  // sequence, and from the window's edge on uphill (each step better) for at
-  // most `reach` more frames; drops duplicates, and writes the best top_n by
-  // R (modes that do not score every frame; reach: CandidateSearch::realign_reach()).
+  // sequence; with reach > 0 it then climbs to the place best_places() would
+  // report (no frame within 2 * tolerance + 1 beats it), dropping a climb that
+  // goes more than `reach` frames past the window. Drops duplicates and writes
+  // the best top_n by R (modes that do not score every frame; reach:
+  // CandidateSearch::realign_reach()).
   void realign(const FrameStore& store, const DescriptorView& descriptor,
                const std::vector<Candidate>& raw, SimilarityMetric metric, int top_n,
                std::int64_t reach, std::vector<Candidate>& out);

@@ -114,7 +114,7 @@ class IndexSearch final : public CandidateSearch {
   const char* name() const override { return kIndexSearch; }
   bool scores_every_frame() const override { return false; }
   // A shortlist by single frames: the best aligned sequence of a revisit may
-  // sit a few frames off its best single frame (lip6-outdoor: 978 of 981
+  // sit a few frames off its best single frame (lip6-outdoor: 979 of 981
   // reported candidates as exhaustive search's with 16, 972 without;
   // docs/results.md).
   std::int64_t realign_reach() const override { return 16; }

@@ -9,7 +9,9 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cmath>
 #include <cstdint>
+#include <cstdlib>
 #include <limits>
 #include <string>
 #include <vector>
@@ -18,6 +20,7 @@
 #include "lsgd/error.h"
 #include "lsgd/frame_store.h"
 #include "lsgd/similarity.h"
+#include "search/index_key.h"
 #include "test_util.h"
 
 namespace lsgd {
@@ -368,6 +371,39 @@ TEST(SearchIndex, ASmallShortlistFindsTheNearestFrame) {
     same += !all[q].empty() && all[q][0].frame == exact[0].frame ? 1 : 0;
   }
   EXPECT_GE(same, queries * 97 / 100) << same << " of " << queries;
+}
+
+// The graph's key distance (four cells at a time, the rest one by one) is the
+// sum over cells of the cell's SAD, or of its square root for the reference
+// metric, for every cell count; zero between a key and itself, symmetric.
+TEST(IndexKey, DistanceIsTheSumOfTheCellsCosts) {
+  std::uint64_t seed = 11;
+  for (int cells = 1; cells <= 13; ++cells) {
+    std::vector<std::uint8_t> a(static_cast<std::size_t>(cells) * internal::kKeyBins), b(a.size());
+    for (auto& v : a) v = static_cast<std::uint8_t>(splitmix64(seed));
+    for (auto& v : b) v = static_cast<std::uint8_t>(splitmix64(seed));
+    for (const bool root : {false, true}) {
+      SCOPED_TRACE(testing::Message() << cells << " cells, sqrt " << root);
+      const internal::KeySpaceParam p{cells, root};
+      double expected = 0;
+      for (int c = 0; c < cells; ++c) {
+        int sad = 0;
+        for (int i = 0; i < internal::kKeyBins; ++i) {
+          const std::size_t at = static_cast<std::size_t>(c) * internal::kKeyBins + static_cast<std::size_t>(i);
+          sad += std::abs(int{a[at]} - int{b[at]});
+        }
+        expected += root ? std::sqrt(static_cast<double>(sad)) : sad;
+      }
+      const float got = internal::key_distance(a.data(), b.data(), &p);
+      if (root) {
+        EXPECT_NEAR(got, expected, 1e-6 * expected);
+      } else {
+        EXPECT_EQ(got, static_cast<float>(expected));  // integers: exact in float
+      }
+      EXPECT_EQ(internal::key_distance(b.data(), a.data(), &p), got);
+      EXPECT_EQ(internal::key_distance(a.data(), a.data(), &p), 0.0f);
+    }
+  }
 }
 
 // Its state: the places the last frame's candidates pointed to, followed one

@@ -6,10 +6,6 @@
 #define NO_MANUAL_VECTORIZATION
 #include <hnswlib/hnswlib.h>
 
-#if defined(__SSE2__)
-#include <emmintrin.h>
-#endif
-
 #include <algorithm>
 #include <cmath>
 #include <cstring>
@@ -20,82 +16,23 @@
 #include "internal/check.h"
 #include "internal/clock.h"
 #include "lsgd/state.h"
+#include "search/index_key.h"
 #include "search/scoring.h"
 
 namespace lsgd {
 namespace {
 
-// The graph's key of a frame: per cell, its histogram pooled into kKeyBins
-// bins of kBins / kKeyBins intensities, normalised to kKeyMass (rounded), so
-// a cell's key is 16 bytes and a frame's key cells * 16 bytes (1,280 bytes for
-// a 1241x376 frame at 80 cells, an eighth of its compact descriptor). Pooling
-// adjacent bins never increases an L1 distance, so the key distance
-// sum_k sqrt(SAD_k) (reference metric; sum_k SAD_k for the L1 metrics) is a
-// coarse lower-bound-like proxy of the metric that reads 1/8 (compact) or 1/32
-// (exact) of the bytes, from the graph's own memory next to the links.
-constexpr int kKeyBins = 16;
-constexpr int kKeyMass = 255;
-// A cell's key sums to at most kKeyMass plus half a unit of rounding per bin.
-constexpr int kMaxKeySad = 2 * (kKeyMass + kKeyBins / 2);
-
-void make_key(const DescriptorView& d, std::uint8_t* key) {
-  for (int c = 0; c < d.cells; ++c) {
-    std::uint32_t pooled[kKeyBins] = {};
-    double mass = 0;
-    if (d.compact != nullptr) {
-      const CompactBin* h = d.compact + static_cast<std::size_t>(c) * kCompactBins;
-      constexpr int per = kCompactBins / kKeyBins;
-      for (int b = 0; b < kCompactBins; ++b) pooled[b / per] += h[b];
-      for (const std::uint32_t v : pooled) mass += v;
-    } else {
-      const Bin* h = d.hist + static_cast<std::size_t>(c) * kBins;
-      constexpr int per = kBins / kKeyBins;
-      for (int b = 0; b < kBins; ++b) pooled[b / per] += h[b];
-      mass = d.pixels[c];
-    }
-    for (int b = 0; b < kKeyBins; ++b) {
-      const double v = mass > 0 ? std::round(pooled[b] * kKeyMass / mass) : 0.0;
-      key[static_cast<std::size_t>(c) * kKeyBins + b] = static_cast<std::uint8_t>(std::min(v, 255.0));
-    }
-  }
-}
-
-// What the graph's distance function reads: the key length and the per-cell
-// cost of a SAD (its square root for the reference metric).
-struct KeySpaceParam {
-  int cells = 0;
-  float cost[kMaxKeySad + 1] = {};
-};
-
-float key_distance(const void* a, const void* b, const void* param) {
-  const auto& p = *static_cast<const KeySpaceParam*>(param);
-  const auto* x = static_cast<const std::uint8_t*>(a);
-  const auto* y = static_cast<const std::uint8_t*>(b);
-  float sum = 0;
-  for (int c = 0; c < p.cells; ++c, x += kKeyBins, y += kKeyBins) {
-#if defined(__SSE2__)
-    // One psadbw per cell (SSE2 is the x86-64 baseline: no dispatch needed).
-    const __m128i d = _mm_sad_epu8(_mm_loadu_si128(reinterpret_cast<const __m128i*>(x)),
-                                   _mm_loadu_si128(reinterpret_cast<const __m128i*>(y)));
-    const int sad = _mm_cvtsi128_si32(d) + _mm_extract_epi16(d, 4);
-#else
-    int sad = 0;
-    for (int i = 0; i < kKeyBins; ++i) sad += std::abs(int{x[i]} - int{y[i]});
-#endif
-    sum += p.cost[sad];
-  }
-  return sum;
-}
+using internal::KeySpaceParam;
+using internal::key_distance;
+using internal::kKeyBins;
+using internal::make_key;
 
 // hnswlib's space: the frame's key as the data, key_distance as the distance.
 class KeySpace final : public hnswlib::SpaceInterface<float> {
  public:
   KeySpace(int cells, SimilarityMetric metric) : metric_(metric) {
     param_.cells = cells;
-    for (int s = 0; s <= kMaxKeySad; ++s) {
-      param_.cost[s] = metric == SimilarityMetric::kReference ? std::sqrt(static_cast<float>(s))
-                                                              : static_cast<float>(s);
-    }
+    param_.sqrt = metric == SimilarityMetric::kReference;
   }
   size_t get_data_size() override { return static_cast<std::size_t>(param_.cells) * kKeyBins; }
   hnswlib::DISTFUNC<float> get_dist_func() override { return key_distance; }
@@ -412,7 +349,7 @@ class IndexSearch final : public CandidateSearch {
       } else {
         graph_->resizeIndex(capacity);
       }
-    }
+      }
     graph_->addPoint(key_.data(), static_cast<hnswlib::labeltype>(frame));
   }
 

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <utility>
 
 #include "internal/check.h"
 
@@ -150,6 +151,10 @@ const AppearanceEvidence::Row* AppearanceEvidence::ring_row(std::int64_t query) 
   return &ring_[static_cast<std::size_t>(query - ring_.front().query)];
 }
 
+AppearanceEvidence::Row* AppearanceEvidence::ring_row(std::int64_t query) {
+  return const_cast<Row*>(std::as_const(*this).ring_row(query));
+}
+
 void AppearanceEvidence::add_query(const FrameStore& store, const DescriptorView& descriptor,
                                    std::int64_t query, SimilarityMetric metric,
                                    const std::vector<double>* row) {
@@ -186,11 +191,6 @@ void AppearanceEvidence::add_query(const FrameStore& store, const DescriptorView
   sequence_.resize(n);
   for (std::size_t k = 0; k < n; ++k) sequence_[k] = sequence_mean(short_sum_[k], long_sum_[k]);
   if (level1_.valid()) level2_ = kept_statistics(query, sequence_);
-  // Pairs whose first frame no later sequence reaches.
-  const std::int64_t oldest = query + 1 - span_;
-  for (auto it = pairs_.begin(); it != pairs_.end();) {
-    it = static_cast<std::int64_t>(it->first >> 32) < oldest ? pairs_.erase(it) : std::next(it);
-  }
 }
 
 double AppearanceEvidence::single_frame(double similarity) const {
@@ -199,10 +199,9 @@ double AppearanceEvidence::single_frame(double similarity) const {
 
 std::int32_t AppearanceEvidence::stored_z(const FrameStore& store, std::int64_t a, std::int64_t b,
                                           SimilarityMetric metric) {
-  const Row* r = ring_row(a);
+  Row* r = ring_row(a);
   if (r == nullptr || b < 0 || !r->stats.valid()) return 0;
-  const std::uint64_t key = static_cast<std::uint64_t>(a) << 32 | static_cast<std::uint64_t>(b);
-  const auto [it, inserted] = pairs_.try_emplace(key, 0.0);
+  const auto [it, inserted] = r->pairs.try_emplace(b, 0.0);
   if (inserted) it->second = similarity(store.view(a), store.view(b), metric);
   return quantise(r->stats, it->second);
 }
@@ -305,7 +304,6 @@ void AppearanceEvidence::rebuild(const FrameStore& store, SimilarityMetric metri
   short_sum_.clear();
   long_sum_.clear();
   sequence_.clear();
-  pairs_.clear();
   scored_.clear();
   level1_ = level2_ = ScoreStatistics{};
   last_query_ = store.size() - 1;

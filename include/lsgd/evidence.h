@@ -145,6 +145,10 @@ class AppearanceEvidence {
     std::int64_t query = -1;
     ScoreStatistics stats;
     std::vector<std::int32_t> z;  // fixed point, one per kept diagonal (slot order)
+    // Similarities s(query, b) of frames b off the kept diagonals, for the
+    // sequences of later queries' candidates (modes that do not score every
+    // frame); they leave with the row, when no later sequence reaches them.
+    std::unordered_map<std::int64_t, double> pairs;
   };
   std::int32_t quantise(const ScoreStatistics& stats, double similarity) const;
   void push_row(Row row);
@@ -160,6 +164,7 @@ class AppearanceEvidence {
   std::int32_t stored_z(const FrameStore& store, std::int64_t a, std::int64_t b,
                         SimilarityMetric metric);
   const Row* ring_row(std::int64_t query) const;
+  Row* ring_row(std::int64_t query);
 
   SequenceOptions options_;
   std::int64_t min_gap_ = 0;
@@ -172,9 +177,6 @@ class AppearanceEvidence {
   std::vector<std::int32_t> short_sum_, long_sum_;  // per kept diagonal
   std::vector<double> sequence_;   // A per kept diagonal of the last query
   ScoreStatistics level1_, level2_;
-  // Similarities of stored pairs (a, b) for the sequences of candidates off
-  // the kept diagonals (nodes mode); pairs no later sequence reaches are dropped.
-  std::unordered_map<std::uint64_t, double> pairs_;
   std::vector<double> scratch_;
   std::vector<double> subset_;     // kept_statistics()
   std::vector<Candidate> scored_;  // sequence scores computed for the last query

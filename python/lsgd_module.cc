@@ -184,6 +184,8 @@ PYBIND11_MODULE(_lsgd, m) {
       .def_readonly("segment_ms", &lsgd::Timings::segment_ms)
       .def_readonly("describe_ms", &lsgd::Timings::describe_ms)
       .def_readonly("search_ms", &lsgd::Timings::search_ms)
+      .def_readonly("insert_ms", &lsgd::Timings::insert_ms)
+      .def_readonly("evidence_ms", &lsgd::Timings::evidence_ms)
       .def_readonly("verify_ms", &lsgd::Timings::verify_ms)
       .def_readonly("total_ms", &lsgd::Timings::total_ms);
   py::class_<lsgd::Result>(m, "Result")

@@ -176,10 +176,12 @@ Result Detector::process_gray(double convert_ms, std::int64_t start_ns) {
   result.node_created = outcome.created;
   result.timings.insert_ms = outcome.insert_ms;
   // After a restore the evidence is recomputed from the stored frames first.
+  const std::int64_t evidence_start = now_ns();
   if (evidence_.last_query() != result.frame - 1) evidence_.rebuild(store_, metric);
   evidence_.add_query(store_, descriptor_.view(), result.frame, metric,
                       search_->scores_every_frame() ? &row_ : nullptr);
   score_candidates(result);
+  result.timings.evidence_ms = ms_since(evidence_start);
   result.timings.search_ms = ms_since(t);
 
   t = now_ns();

@@ -165,6 +165,19 @@ TEST(BenchCli, DistractorsCompareTheModesOnOneMap) {
   EXPECT_EQ(j["modes"][0]["recall_vs_exhaustive"], 1.0);
   EXPECT_EQ(j["modes"][0]["insert_ms_median"], 0.0);  // no index
   EXPECT_GT(j["modes"][0]["compared_queries"].get<int>(), 20);
+  // The recall apart for queries whose exhaustive candidate is a sequence
+  // frame and a distractor: the two parts add up to the whole.
+  for (const auto& m : j["modes"]) {
+    const int seq = m["compared_queries_sequence"], dis = m["compared_queries_distractor"];
+    EXPECT_EQ(seq + dis, m["compared_queries"].get<int>());
+    EXPECT_NEAR(m["recall_vs_exhaustive_sequence"].get<double>() * seq +
+                    m["recall_vs_exhaustive_distractor"].get<double>() * dis,
+                m["recall_vs_exhaustive"].get<double>() * (seq + dis), 1e-9);
+    EXPECT_GE(m["evidence_ms_median"].get<double>(), 0.0);
+    EXPECT_GE(m["candidates_ms_median"].get<double>(), 0.0);
+  }
+  EXPECT_EQ(j["modes"][0]["recall_vs_exhaustive_sequence"], 1.0);
+  EXPECT_GT(j["evidence_ms_median"].get<double>(), 0.0);
   // Memory, the saved graph's size, and the loops declared, judged by the
   // street's ground truth (a loop to a distractor is false).
   for (const auto& m : j["modes"]) {

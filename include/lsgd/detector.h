@@ -54,6 +54,7 @@ struct Timings {
   double describe_ms = 0;  // storage encoding (compact) of the histograms
   double search_ms = 0;    // candidate search (and node assignment, index insertion)
   double insert_ms = 0;    // ... of which adding frames to the search's index (index mode)
+  double evidence_ms = 0;  // ... and the appearance evidence: statistics, sequence scores, realignment
   double verify_ms = 0;    // verification stages, including feature extraction
   double total_ms = 0;     // the whole process() call
 };

@@ -201,6 +201,9 @@ def test_result_fields():
     r = max(results, key=lambda r: r.best.score)
     assert r.candidates and r.candidates[0].frame >= 0
     assert r.timings.total_ms > 0
+    # The search's parts: index insertion (none in exhaustive mode) and the evidence.
+    assert r.timings.insert_ms == 0
+    assert 0 < r.timings.evidence_ms <= r.timings.search_ms
     assert all(v.stage in ("temporal", "geometric") for x in results for v in x.verification)
     assert r.evidence.inliers >= -1
     assert "Result(frame=" in repr(r)

@@ -11,11 +11,13 @@
 // so geometry never confirms one), then the sequence is processed frame by
 // frame as a SLAM system would; every frame is a query against N + i frames.
 //
-// Per mode: query ms (the search and its evidence, without index insertion),
-// insert ms (adding one frame to the mode's index), build seconds (the first
+// Per mode: query ms (the search and its evidence, without index insertion;
+// also split into the mode's candidate search and the evidence: statistics,
+// sequence scores, realignment), insert ms (adding one frame to the mode's index), build seconds (the first
 // query, which indexes the N distractors), recall_vs_exhaustive (the share of
 // the queries with a candidate in exhaustive search whose reported candidate
-// is exhaustive's), loops declared and declared_vs_exhaustive (the share of
+// is exhaustive's; also apart for the queries whose exhaustive candidate is a
+// sequence frame and those whose is a distractor), loops declared and declared_vs_exhaustive (the share of
 // exhaustive search's declared loops this mode declares, to the same frame),
 // and memory per frame (resident memory the detector added,
 // over its frames; the descriptor alone beside it).
@@ -166,9 +168,15 @@ Frames load_frames(const DistractorSetup& a, const DetectorOptions& options) {
 struct ModeRun {
   std::string mode;
   Spread query, insert, total;
+  Spread candidates, evidence;  // the query's two parts: the mode's candidate search, the evidence
   double build_s = 0;
   double recall_vs_exhaustive = 0;
   std::int64_t compared = 0;  // queries with an exhaustive candidate
+  // ... split by where exhaustive search's candidate is: a frame of the
+  // sequence, or a distractor (a query that revisits nothing, whose best
+  // candidate is the highest of a million sequences of noise scores).
+  double recall_sequence = 0, recall_distractor = 0;
+  std::int64_t compared_sequence = 0, compared_distractor = 0;
   double bytes_per_frame = 0;            // resident memory added / frames
   std::size_t descriptor_bytes = 0;      // descriptor storage per frame
   double rss_mb = 0;
@@ -207,7 +215,7 @@ ModeRun run_mode(const std::string& mode, const DistractorSetup& a, const Detect
                       options.descriptor.storage, exact, stored);
       detector.restore_frame(f.width, f.height, stored, state);
     }
-    std::vector<double> query, insert, total;
+    std::vector<double> query, insert, total, candidates, evidence;
     r.declared_false = f.gt ? 0 : -1;
     for (std::size_t i = 0; i < f.gray.size(); ++i) {
       const Result res = detector.process(f.gray[i]);
@@ -216,6 +224,8 @@ ModeRun run_mode(const std::string& mode, const DistractorSetup& a, const Detect
         r.build_s = res.timings.insert_ms * 1e-3;  // the distractors enter the index
       } else {
         query.push_back(q);
+        candidates.push_back(q - res.timings.evidence_ms);
+        evidence.push_back(res.timings.evidence_ms);
         if (res.timings.insert_ms > 0) insert.push_back(res.timings.insert_ms);
         total.push_back(res.timings.total_ms);
       }
@@ -229,6 +239,8 @@ ModeRun run_mode(const std::string& mode, const DistractorSetup& a, const Detect
       }
     }
     r.query = spread(query);
+    r.candidates = spread(candidates);
+    r.evidence = spread(evidence);
     r.insert = insert.empty() ? Spread{} : spread(insert);
     r.total = spread(total);
     r.frames = detector.size();
@@ -260,12 +272,18 @@ nlohmann::json row_json(const ModeRun& r) {
           {"frames", r.frames},
           {"query_ms_median", r.query.median},
           {"query_ms_p95", r.query.p95},
+          {"candidates_ms_median", r.candidates.median},
+          {"evidence_ms_median", r.evidence.median},
           {"insert_ms_median", r.insert.median},
           {"insert_ms_p95", r.insert.p95},
           {"process_ms_median", r.total.median},
           {"build_s", r.build_s},
           {"recall_vs_exhaustive", r.recall_vs_exhaustive},
           {"compared_queries", r.compared},
+          {"recall_vs_exhaustive_sequence", r.recall_sequence},
+          {"compared_queries_sequence", r.compared_sequence},
+          {"recall_vs_exhaustive_distractor", r.recall_distractor},
+          {"compared_queries_distractor", r.compared_distractor},
           {"declared", r.declared},
           {"declared_false", r.declared_false},
           {"declared_vs_exhaustive", r.declared_vs_exhaustive},
@@ -308,14 +326,22 @@ void run_distractors(const DistractorSetup& a, const DetectorOptions& options) {
   }
   const std::vector<std::int64_t>& reference = runs.front().best;
   for (ModeRun& r : runs) {
-    std::int64_t compared = 0, same = 0;
+    std::int64_t compared[2] = {}, same[2] = {};  // [0]: into the sequence, [1]: a distractor
     for (std::size_t i = 1; i < reference.size(); ++i) {
       if (reference[i] < 0) continue;
-      ++compared;
-      same += r.best[i] == reference[i] ? 1 : 0;
+      const int k = reference[i] < a.distractors ? 1 : 0;
+      ++compared[k];
+      same[k] += r.best[i] == reference[i] ? 1 : 0;
     }
-    r.compared = compared;
-    r.recall_vs_exhaustive = compared > 0 ? static_cast<double>(same) / compared : 0;
+    const auto share = [](std::int64_t part, std::int64_t whole) {
+      return whole > 0 ? static_cast<double>(part) / static_cast<double>(whole) : 0.0;
+    };
+    r.compared = compared[0] + compared[1];
+    r.recall_vs_exhaustive = share(same[0] + same[1], r.compared);
+    r.compared_sequence = compared[0];
+    r.recall_sequence = share(same[0], compared[0]);
+    r.compared_distractor = compared[1];
+    r.recall_distractor = share(same[1], compared[1]);
     std::int64_t declared = 0, kept = 0;
     for (std::size_t i = 0; i < reference.size(); ++i) {
       if (runs.front().loops[i] < 0) continue;
@@ -337,7 +363,11 @@ void run_distractors(const DistractorSetup& a, const DetectorOptions& options) {
               << std::setw(4) << r.declared_false << "   "
               << std::setprecision(0) << r.bytes_per_frame << " (" << r.descriptor_bytes << ")"
               << std::setprecision(3) << "\n";
-    std::cout << "          peak memory " << std::setprecision(0) << r.peak_rss_mb << " MB";
+    std::cout << "          recall where exhaustive search's candidate is in the sequence "
+              << r.recall_sequence << " (" << r.compared_sequence << " queries), a distractor "
+              << r.recall_distractor << " (" << r.compared_distractor << ")\n";
+    std::cout << "          query = candidates " << r.candidates.median << " + evidence " << r.evidence.median
+              << " ms (medians); peak memory " << std::setprecision(0) << r.peak_rss_mb << " MB";
     if (r.index_bytes > 0) {
       std::cout << ", saved index " << static_cast<double>(r.index_bytes) / static_cast<double>(r.frames)
                 << " bytes/frame, saved in " << std::setprecision(2) << r.index_save_s

@@ -13,11 +13,12 @@
 //
 // Per mode: query ms (the search and its evidence, without index insertion;
 // also split into the mode's candidate search and the evidence: statistics,
-// sequence scores, realignment), insert ms (adding one frame to the mode's index), build seconds (the first
-// query, which indexes the N distractors), recall_vs_exhaustive (the share of
-// the queries with a candidate in exhaustive search whose reported candidate
-// is exhaustive's; also apart for the queries whose exhaustive candidate is a
-// sequence frame and those whose is a distractor), loops declared and declared_vs_exhaustive (the share of
+// sequence scores, realignment), insert ms (adding one frame to the mode's
+// index), build seconds (the first query, which indexes the N distractors),
+// recall_vs_exhaustive (the share of the queries with a candidate in
+// exhaustive search whose reported candidate is exhaustive's; also apart for
+// the queries whose exhaustive candidate is a sequence frame and those whose
+// is a distractor), loops declared and declared_vs_exhaustive (the share of
 // exhaustive search's declared loops this mode declares, to the same frame),
 // and memory per frame (resident memory the detector added,
 // over its frames; the descriptor alone beside it).
@@ -174,7 +175,7 @@ struct ModeRun {
   std::int64_t compared = 0;  // queries with an exhaustive candidate
   // ... split by where exhaustive search's candidate is: a frame of the
   // sequence, or a distractor (a query that revisits nothing, whose best
-  // candidate is the highest of a million sequences of noise scores).
+  // candidate is the highest of N sequences of noise scores).
   double recall_sequence = 0, recall_distractor = 0;
   std::int64_t compared_sequence = 0, compared_distractor = 0;
   double bytes_per_frame = 0;            // resident memory added / frames

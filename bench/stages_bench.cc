@@ -46,6 +46,7 @@
 #include "lsgd/segmentation.h"
 #include "lsgd/similarity.h"
 #include "lsgd/verification.h"
+#include "search/index_key.h"
 
 namespace {
 
@@ -517,6 +518,35 @@ void BM_AppearanceEvidence(benchmark::State& state) {
   state.SetItemsProcessed(state.iterations());
 }
 
+// ---------------------------------------------------------------- index
+
+// The index's graph distance between two frames' keys (search/index_key.h),
+// the work of most of an insertion: keys of 4,096 route frames at KITTI size
+// (80 cells, 1,280 bytes each, 5 MB: in cache, so this is its compute),
+// each iteration one distance between consecutive pairs of a shuffled order.
+void BM_IndexKeyDistance(benchmark::State& state) {
+  constexpr std::int64_t kKeys = 4096;
+  const lsgd::FrameStore& route = route_store(kKitti, kKeys, lsgd::HistogramStorage::kCompact);
+  const int cells = route.view(0).cells;
+  const std::size_t bytes = static_cast<std::size_t>(cells) * lsgd::internal::kKeyBins;
+  std::vector<std::uint8_t> keys(bytes * kKeys);
+  for (std::int64_t j = 0; j < kKeys; ++j) {
+    lsgd::internal::make_key(route.view(j), keys.data() + static_cast<std::size_t>(j) * bytes);
+  }
+  std::vector<std::size_t> order(kKeys);
+  for (std::size_t j = 0; j < order.size(); ++j) order[j] = j;
+  std::shuffle(order.begin(), order.end(), std::mt19937(3));
+  const lsgd::internal::KeySpaceParam param{cells, /*sqrt=*/true};  // the reference metric
+  std::size_t k = 0;
+  for (auto _ : state) {
+    const float d = lsgd::internal::key_distance(keys.data() + order[k] * bytes,
+                                                 keys.data() + order[(k + 1) % kKeys] * bytes, &param);
+    benchmark::DoNotOptimize(d);
+    k = (k + 1) % kKeys;
+  }
+  state.SetItemsProcessed(state.iterations());
+}
+
 // ---------------------------------------------------------------- geometric
 
 void BM_GeometricAdd(benchmark::State& state) {
@@ -640,6 +670,7 @@ void register_all(bool large) {
       ->Arg(1000)
       ->Arg(5000)
       ->Unit(benchmark::kMicrosecond);
+  benchmark::RegisterBenchmark(("BM_IndexKeyDistance/" + size_label(kKitti)).c_str(), BM_IndexKeyDistance);
   benchmark::RegisterBenchmark("BM_GeometricAdd/320x240", BM_GeometricAdd)
       ->Unit(benchmark::kMillisecond);
   benchmark::RegisterBenchmark("BM_GeometricVerify/320x240", BM_GeometricVerify)

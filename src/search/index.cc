@@ -54,23 +54,14 @@ class KeySpace final : public hnswlib::SpaceInterface<float> {
 // few thousand frames scattered over the block (1.4 GB at 10^6 frames), and
 // with 4 KiB pages each read also walks page tables that no longer fit the
 // caches. A hint on the whole 2 MiB pages inside the block; hnswlib
-// reallocates the block when the graph grows, so it is given again then,
-// and the frames already in it, faulted in on small pages before the hint,
-// are collapsed onto huge pages (Linux 6.1+; a copy of the block at each
-// doubling, so amortised a constant per frame).
+// reallocates the block when the graph grows, so it is given again then.
 void advise_huge_pages(const hnswlib::HierarchicalNSW<float>& g) {
 #ifdef __linux__
   constexpr std::uintptr_t kHuge = std::uintptr_t{2} << 20;
   const auto begin = reinterpret_cast<std::uintptr_t>(g.data_level0_memory_);
-  const auto whole = [&](std::size_t frames, int advice) {
-    const std::uintptr_t end = begin + frames * g.size_data_per_element_;
-    const std::uintptr_t from = (begin + kHuge - 1) & ~(kHuge - 1), to = end & ~(kHuge - 1);
-    if (to > from) madvise(reinterpret_cast<void*>(from), to - from, advice);
-  };
-  whole(g.max_elements_, MADV_HUGEPAGE);
-#ifdef MADV_COLLAPSE
-  whole(g.cur_element_count, MADV_COLLAPSE);  // a hint too: refused, the pages stay small
-#endif
+  const std::uintptr_t end = begin + g.max_elements_ * g.size_data_per_element_;
+  const std::uintptr_t from = (begin + kHuge - 1) & ~(kHuge - 1), to = end & ~(kHuge - 1);
+  if (to > from) madvise(reinterpret_cast<void*>(from), to - from, MADV_HUGEPAGE);
 #else
   (void)g;
 #endif

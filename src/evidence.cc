@@ -197,33 +197,72 @@ double AppearanceEvidence::single_frame(double similarity) const {
   return level1_.valid() ? level1_.standardise(similarity) : kNaN;
 }
 
+double& AppearanceEvidence::PairCache::find_or_insert(std::int64_t b, bool& inserted) {
+  if (2 * (size_ + 1) > keys_.size()) {  // at most half full
+    std::vector<std::int64_t> keys(std::max<std::size_t>(64, 2 * keys_.size()), -1);
+    std::vector<double> values(keys.size());
+    const std::size_t mask = keys.size() - 1;
+    for (std::size_t k = 0; k < keys_.size(); ++k) {
+      if (keys_[k] < 0) continue;
+      std::size_t at = static_cast<std::size_t>(keys_[k]) & mask;
+      while (keys[at] >= 0) at = (at + 1) & mask;
+      keys[at] = keys_[k];
+      values[at] = values_[k];
+    }
+    keys_.swap(keys);
+    values_.swap(values);
+  }
+  const std::size_t mask = keys_.size() - 1;
+  std::size_t at = static_cast<std::size_t>(b) & mask;
+  while (keys_[at] >= 0 && keys_[at] != b) at = (at + 1) & mask;
+  inserted = keys_[at] < 0;
+  if (inserted) {
+    keys_[at] = b;
+    values_[at] = 0;
+    ++size_;
+  }
+  return values_[at];
+}
+
 std::int32_t AppearanceEvidence::stored_z(const FrameStore& store, std::int64_t a, std::int64_t b,
                                           SimilarityMetric metric) {
   Row* r = ring_row(a);
   if (r == nullptr || b < 0 || !r->stats.valid()) return 0;
-  const auto [it, inserted] = r->pairs.try_emplace(b, 0.0);
-  if (inserted) it->second = similarity(store.view(a), store.view(b), metric);
-  return quantise(r->stats, it->second);
+  bool inserted = false;
+  double& s = r->pairs.find_or_insert(b, inserted);
+  if (inserted) s = similarity(store.view(a), store.view(b), metric);
+  return quantise(r->stats, s);
 }
 
 double AppearanceEvidence::sequence(const FrameStore& store, const DescriptorView& descriptor,
                                     std::int64_t frame, SimilarityMetric metric) {
   if (!options_.enabled) internal::throw_invalid("AppearanceEvidence: sequences are off");
   if (!level2_.valid() || level2_.sd <= 0) return kNaN;
-  for (const Candidate& c : scored_) {
-    if (c.frame == frame) return level2_.standardise(c.score);
-  }
+  if (const auto it = scored_.find(frame); it != scored_.end()) return level2_.standardise(it->second);
   const std::int64_t i = last_query_;
   // On a kept diagonal the sums are already there.
   const std::int64_t d = i - frame, s = stride(i);
   if ((d - min_gap_ - 1) % s == 0) {
     const std::int64_t k = (d - min_gap_ - 1) / s;
     if (k >= 0 && k < static_cast<std::int64_t>(sequence_.size())) {
-      scored_.push_back({frame, sequence_[static_cast<std::size_t>(k)]});
-      return level2_.standardise(scored_.back().score);
+      const double a = sequence_[static_cast<std::size_t>(k)];
+      scored_.emplace(frame, a);
+      return level2_.standardise(a);
     }
   }
-  std::int64_t short_sum = quantise(level1_, similarity(descriptor, store.view(frame), metric));
+  // s(i, frame) joins the query's row: the next queries' sequences on this
+  // diagonal read it there.
+  Row* row = ring_row(i);
+  double s0 = 0;
+  if (row != nullptr) {
+    bool inserted = false;
+    double& cached = row->pairs.find_or_insert(frame, inserted);
+    if (inserted) cached = similarity(descriptor, store.view(frame), metric);
+    s0 = cached;
+  } else {
+    s0 = similarity(descriptor, store.view(frame), metric);
+  }
+  std::int64_t short_sum = quantise(level1_, s0);
   std::int64_t long_sum = short_sum;
   const int steps = std::max(options_.frames, options_.long_frames);
   for (int t = 1; t < steps && frame - t >= 0; ++t) {
@@ -231,8 +270,9 @@ double AppearanceEvidence::sequence(const FrameStore& store, const DescriptorVie
     if (t < options_.frames) short_sum += z;
     long_sum += z;
   }
-  scored_.push_back({frame, sequence_mean(short_sum, long_sum)});
-  return level2_.standardise(scored_.back().score);
+  const double a = sequence_mean(short_sum, long_sum);
+  scored_.emplace(frame, a);
+  return level2_.standardise(a);
 }
 
 void AppearanceEvidence::best_places(int top_n, std::vector<Candidate>& out) const {
@@ -266,34 +306,70 @@ void AppearanceEvidence::realign(const FrameStore& store, const DescriptorView& 
   out.clear();
   if (!level2_.valid()) return;
   const std::int64_t limit = last_query_ - min_gap_;  // candidates j < limit
-  // The best frame of [lo, hi] (better(): ties to the older frame).
-  const auto best_in = [&](std::int64_t lo, std::int64_t hi) {
-    Candidate best{-1, -std::numeric_limits<double>::infinity()};
-    for (std::int64_t j = std::max<std::int64_t>(0, lo); j <= std::min(limit - 1, hi); ++j) {
-      const Candidate s{j, sequence(store, descriptor, j, metric)};
-      if (best.frame < 0 || better(s, best)) best = s;
-    }
-    return best;
-  };
   const std::int64_t tolerance = options_.tolerance;
-  const std::int64_t radius = 2 * tolerance + 1;  // best_places()
-  for (const Candidate& c : raw) {
-    Candidate aligned = best_in(c.frame - tolerance, c.frame + tolerance);
-    if (reach > 0) {
-      // Climb to the place best_places() would report: a frame no other
-      // within `radius` beats. A shortlist finds a revisit by its single
-      // frames, whose best frame may sit a few frames off the best aligned
-      // sequence. A climb that would go more than `reach` frames past the
-      // window is dropped: it is no place of its own.
-      while (aligned.frame >= 0) {
-        const Candidate top = best_in(aligned.frame - radius, aligned.frame + radius);
-        if (top.frame == aligned.frame) break;
-        aligned = std::abs(top.frame - c.frame) > tolerance + reach ? Candidate{-1, 0} : top;
+  const auto add = [&](const Candidate& c) {
+    const bool seen = std::any_of(out.begin(), out.end(), [&](const Candidate& o) { return o.frame == c.frame; });
+    if (c.frame >= 0 && !seen) out.push_back(c);
+  };
+  if (reach <= 0) {
+    // The best frame of +-tolerance around each candidate (better(): ties to
+    // the older frame).
+    for (const Candidate& c : raw) {
+      Candidate best{-1, 0};
+      for (std::int64_t j = std::max<std::int64_t>(0, c.frame - tolerance);
+           j <= std::min(limit - 1, c.frame + tolerance); ++j) {
+        const Candidate s{j, sequence(store, descriptor, j, metric)};
+        if (best.frame < 0 || better(s, best)) best = s;
+      }
+      add(best);
+    }
+  } else {
+    // Every place within tolerance + reach of a candidate: a frame no other
+    // within 2 * tolerance + 1 beats, as best_places() reports them. A
+    // shortlist finds a revisit by its single frames, whose best frame may
+    // sit a few frames off the best aligned sequence, and two places of one
+    // stretch of road may sit between them; climbing uphill would find one.
+    const std::int64_t radius = 2 * tolerance + 1;
+    const std::int64_t span = tolerance + reach;
+    // The frames to score: the candidates' windows and their radius, merged.
+    windows_.clear();
+    for (const Candidate& c : raw) {
+      const std::int64_t lo = std::max<std::int64_t>(0, c.frame - span - radius);
+      const std::int64_t hi = std::min(limit - 1, c.frame + span + radius);
+      if (lo <= hi) windows_.push_back({lo, hi});
+    }
+    std::sort(windows_.begin(), windows_.end());
+    window_scores_.clear();
+    std::int64_t scored_to = -1;  // frames up to here are in window_scores_
+    for (const auto& [lo, hi] : windows_) {
+      for (std::int64_t j = std::max(lo, scored_to + 1); j <= hi; ++j) {
+        window_scores_.push_back({j, sequence(store, descriptor, j, metric)});
+      }
+      scored_to = std::max(scored_to, hi);
+    }
+    // window_scores_ is in frame order: the index of frame j's score.
+    const auto index = [&](std::int64_t j) {
+      return std::lower_bound(window_scores_.begin(), window_scores_.end(), j,
+                              [](const Candidate& c, std::int64_t f) { return c.frame < f; }) -
+             window_scores_.begin();
+    };
+    for (const Candidate& c : raw) {
+      const std::int64_t lo = std::max<std::int64_t>(0, c.frame - span);
+      const std::int64_t hi = std::min(limit - 1, c.frame + span);
+      if (lo > hi) continue;
+      // Frames lo - radius .. hi + radius (within the map) are contiguous there.
+      const std::ptrdiff_t k0 = index(lo), first = k0 - (lo - std::max<std::int64_t>(0, lo - radius));
+      const std::ptrdiff_t last = k0 + (std::min(limit - 1, hi + radius) - lo);
+      for (std::ptrdiff_t k = k0; k <= k0 + (hi - lo); ++k) {
+        bool peak = true;
+        for (std::ptrdiff_t m = std::max(first, k - radius); m <= std::min(last, k + radius) && peak; ++m) {
+          if (m != k && better(window_scores_[static_cast<std::size_t>(m)], window_scores_[static_cast<std::size_t>(k)])) {
+            peak = false;
+          }
+        }
+        if (peak) add(window_scores_[static_cast<std::size_t>(k)]);
       }
     }
-    const bool seen = std::any_of(out.begin(), out.end(),
-                                  [&](const Candidate& o) { return o.frame == aligned.frame; });
-    if (aligned.frame >= 0 && !seen) out.push_back(aligned);
   }
   std::sort(out.begin(), out.end(), better);
   if (out.size() > static_cast<std::size_t>(top_n)) out.resize(static_cast<std::size_t>(top_n));

@@ -266,8 +266,9 @@ TEST(AppearanceEvidence, BeyondTheExactLimitExhaustiveScoresAsTheSampledModes) {
 
 // A shortlist realigned with a reach reports the places exhaustive search
 // ranks (best_places: local maxima within 2 * tolerance + 1 frames), with
-// the same scores, from candidates a few frames off them; a shortlist
-// without reach only looks within +-tolerance.
+// the same scores, from candidates a few frames off them, and every such
+// place near a candidate; a shortlist without reach only looks within
+// +-tolerance.
 TEST(AppearanceEvidence, RealignedShortlistReportsExhaustiveSearchsPlaces) {
   SequenceOptions o;
   o.frames = 4;
@@ -298,15 +299,38 @@ TEST(AppearanceEvidence, RealignedShortlistReportsExhaustiveSearchsPlaces) {
         EXPECT_EQ(out[k].frame, top[k].frame);
         EXPECT_EQ(out[k].score, top[k].score);  // bit for bit
       }
-      // Every reported place is one of exhaustive search's.
-      sampled.evidence.realign(sampled.store, frames[q].view(), raw, SimilarityMetric::kReference,
-                               100, 16, out);
-      for (const Candidate& c : out) {
-        const bool peak = std::any_of(peaks.begin(), peaks.end(), [&](const Candidate& p) {
-          return p.frame == c.frame && p.score == c.score;
-        });
-        EXPECT_TRUE(peak) << "frame " << c.frame;
+      // Exactly exhaustive search's places within tolerance + reach of a
+      // candidate, every one of them: also two places with a candidate
+      // between them (an uphill climb from it finds only one).
+      const std::int64_t reach = 16, span = o.tolerance + reach;
+      std::int64_t between = -1;
+      for (const Candidate& a : peaks) {
+        for (const Candidate& b : peaks) {
+          if (b.frame > a.frame && b.frame - a.frame <= 2 * span && b.frame - a.frame > 2 * o.tolerance + 2) {
+            between = (a.frame + b.frame) / 2;
+          }
+        }
       }
+      ASSERT_GE(between, 0) << "no two places close enough for the test";
+      raw.push_back({between, 0});
+      sampled.evidence.realign(sampled.store, frames[q].view(), raw, SimilarityMetric::kReference,
+                               100000, reach, out);
+      std::vector<Candidate> expected;
+      for (const Candidate& p : peaks) {
+        const bool near = std::any_of(raw.begin(), raw.end(), [&](const Candidate& r) {
+          return std::llabs(r.frame - p.frame) <= span;
+        });
+        if (near) expected.push_back(p);
+      }
+      ASSERT_EQ(out.size(), expected.size());
+      for (std::size_t k = 0; k < out.size(); ++k) {
+        EXPECT_EQ(out[k].frame, expected[k].frame);
+        EXPECT_EQ(out[k].score, expected[k].score);  // bit for bit
+      }
+      EXPECT_GE(std::count_if(out.begin(), out.end(), [&](const Candidate& c) {
+                  return std::llabs(c.frame - between) <= span;
+                }),
+                2);
       // Without reach: the best of +-tolerance around each candidate.
       sampled.evidence.realign(sampled.store, frames[q].view(), raw, SimilarityMetric::kReference,
                                100, 0, out);

@@ -42,6 +42,7 @@
 #include <cstdint>
 #include <deque>
 #include <unordered_map>
+#include <utility>
 #include <vector>
 
 #include "lsgd/frame_store.h"
@@ -117,10 +118,10 @@ class AppearanceEvidence {
   void best_places(int top_n, std::vector<Candidate>& out) const;
 
   // Re-aligns each raw candidate within +-tolerance frames to its best
-  // sequence; with reach > 0 it then climbs to the place best_places() would
-  // report (no frame within 2 * tolerance + 1 beats it), dropping a climb that
-  // goes more than `reach` frames past the window. Drops duplicates and writes
-  // the best top_n by R (modes that do not score every frame; reach:
+  // sequence; with reach > 0 it reports instead every place best_places()
+  // would report (a frame no other within 2 * tolerance + 1 beats) within
+  // tolerance + reach frames of a candidate. Drops duplicates and writes the
+  // best top_n by R (modes that do not score every frame; reach:
   // CandidateSearch::realign_reach()).
   void realign(const FrameStore& store, const DescriptorView& descriptor,
                const std::vector<Candidate>& raw, SimilarityMetric metric, int top_n,
@@ -141,6 +142,18 @@ class AppearanceEvidence {
   std::int64_t statistics_stride(std::int64_t query) const;
 
  private:
+  // s(a, b) of one query a by frame b: open addressing, linear probing (a
+  // sequence reads up to long_frames of them per candidate frame).
+  class PairCache {
+   public:
+    // The slot of frame b (>= 0); `inserted`: it was not there, its value is 0.
+    double& find_or_insert(std::int64_t b, bool& inserted);
+
+   private:
+    std::vector<std::int64_t> keys_;  // -1: empty
+    std::vector<double> values_;
+    std::size_t size_ = 0;
+  };
   struct Row {
     std::int64_t query = -1;
     ScoreStatistics stats;
@@ -148,7 +161,7 @@ class AppearanceEvidence {
     // Similarities s(query, b) of frames b off the kept diagonals, for the
     // sequences of later queries' candidates (modes that do not score every
     // frame); they leave with the row, when no later sequence reaches them.
-    std::unordered_map<std::int64_t, double> pairs;
+    PairCache pairs;
   };
   std::int32_t quantise(const ScoreStatistics& stats, double similarity) const;
   void push_row(Row row);
@@ -179,7 +192,9 @@ class AppearanceEvidence {
   ScoreStatistics level1_, level2_;
   std::vector<double> scratch_;
   std::vector<double> subset_;     // kept_statistics()
-  std::vector<Candidate> scored_;  // sequence scores computed for the last query
+  std::unordered_map<std::int64_t, double> scored_;  // A of the frames scored for the last query
+  std::vector<std::pair<std::int64_t, std::int64_t>> windows_;  // realign(): frames to score ...
+  std::vector<Candidate> window_scores_;                        // ... and their R, in frame order
 };
 
 }  // namespace lsgd

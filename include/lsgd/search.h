@@ -123,10 +123,10 @@ class CandidateSearch : public Stateful {
   virtual Outcome search(const Query& query, std::vector<Candidate>& out,
                          std::vector<double>& row) = 0;
 
-  // How far past +-tolerance the temporal stage may climb a candidate's
-  // sequence score to the place exhaustive search would report, when it
-  // realigns a shortlist (AppearanceEvidence::realign). 0: no climb, the best
-  // of +-tolerance (nodes mode, as the paper's groups were measured).
+  // How far past +-tolerance of a candidate the temporal stage looks for the
+  // places exhaustive search would report, when it realigns a shortlist
+  // (AppearanceEvidence::realign). 0: none, the best of +-tolerance (nodes
+  // mode, as the paper's groups were measured).
   virtual std::int64_t realign_reach() const { return 0; }
 
   // Called once per frame after the detector ranked its candidates (the

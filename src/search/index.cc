@@ -116,6 +116,12 @@ class IndexSearch final : public CandidateSearch {
           if (j >= 0 && j + 1 < limit) ids_.push_back(j + 1);
         }
       }
+      // The newest frame in the graph, just past the temporal window: a query
+      // that revisits nothing is often most like its own recent past, a
+      // sequence no single frame of which stands out (street + 10^4
+      // distractors: 10 of the 13 queries whose place differed from
+      // exhaustive search's; docs/performance.md).
+      ids_.push_back(limit - 1);
       // Re-scored exactly, in one batch: the candidates' scores are the metric's own.
       views_.clear();
       for (const std::int64_t j : ids_) views_.push_back(q.store.view(j));

@@ -197,7 +197,16 @@ double AppearanceEvidence::single_frame(double similarity) const {
   return level1_.valid() ? level1_.standardise(similarity) : kNaN;
 }
 
-double& AppearanceEvidence::PairCache::find_or_insert(std::int64_t b, bool& inserted) {
+const double* AppearanceEvidence::PairCache::find(std::int64_t b) const {
+  if (keys_.empty()) return nullptr;
+  const std::size_t mask = keys_.size() - 1;
+  for (std::size_t at = static_cast<std::size_t>(b) & mask;; at = (at + 1) & mask) {
+    if (keys_[at] == b) return &values_[at];
+    if (keys_[at] < 0) return nullptr;
+  }
+}
+
+void AppearanceEvidence::PairCache::insert(std::int64_t b, double similarity) {
   if (2 * (size_ + 1) > keys_.size()) {  // at most half full
     std::vector<std::int64_t> keys(std::max<std::size_t>(64, 2 * keys_.size()), -1);
     std::vector<double> values(keys.size());
@@ -215,22 +224,18 @@ double& AppearanceEvidence::PairCache::find_or_insert(std::int64_t b, bool& inse
   const std::size_t mask = keys_.size() - 1;
   std::size_t at = static_cast<std::size_t>(b) & mask;
   while (keys_[at] >= 0 && keys_[at] != b) at = (at + 1) & mask;
-  inserted = keys_[at] < 0;
-  if (inserted) {
-    keys_[at] = b;
-    values_[at] = 0;
-    ++size_;
-  }
-  return values_[at];
+  if (keys_[at] < 0) ++size_;
+  keys_[at] = b;
+  values_[at] = similarity;
 }
 
 std::int32_t AppearanceEvidence::stored_z(const FrameStore& store, std::int64_t a, std::int64_t b,
                                           SimilarityMetric metric) {
   Row* r = ring_row(a);
   if (r == nullptr || b < 0 || !r->stats.valid()) return 0;
-  bool inserted = false;
-  double& s = r->pairs.find_or_insert(b, inserted);
-  if (inserted) s = similarity(store.view(a), store.view(b), metric);
+  if (const double* cached = r->pairs.find(b)) return quantise(r->stats, *cached);
+  const double s = similarity(store.view(a), store.view(b), metric);
+  r->pairs.insert(b, s);
   return quantise(r->stats, s);
 }
 
@@ -253,15 +258,9 @@ double AppearanceEvidence::sequence(const FrameStore& store, const DescriptorVie
   // s(i, frame) joins the query's row: the next queries' sequences on this
   // diagonal read it there.
   Row* row = ring_row(i);
-  double s0 = 0;
-  if (row != nullptr) {
-    bool inserted = false;
-    double& cached = row->pairs.find_or_insert(frame, inserted);
-    if (inserted) cached = similarity(descriptor, store.view(frame), metric);
-    s0 = cached;
-  } else {
-    s0 = similarity(descriptor, store.view(frame), metric);
-  }
+  const double* cached = row != nullptr ? row->pairs.find(frame) : nullptr;
+  const double s0 = cached != nullptr ? *cached : similarity(descriptor, store.view(frame), metric);
+  if (row != nullptr && cached == nullptr) row->pairs.insert(frame, s0);
   std::int64_t short_sum = quantise(level1_, s0);
   std::int64_t long_sum = short_sum;
   const int steps = std::max(options_.frames, options_.long_frames);

@@ -146,8 +146,10 @@ class AppearanceEvidence {
   // sequence reads up to long_frames of them per candidate frame).
   class PairCache {
    public:
-    // The slot of frame b (>= 0); `inserted`: it was not there, its value is 0.
-    double& find_or_insert(std::int64_t b, bool& inserted);
+    // s(a, b) of frame b (>= 0), nullptr when not cached.
+    const double* find(std::int64_t b) const;
+    // Caches s(a, b) of a frame b not cached yet.
+    void insert(std::int64_t b, double similarity);
 
    private:
     std::vector<std::int64_t> keys_;  // -1: empty

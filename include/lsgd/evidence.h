@@ -160,9 +160,11 @@ class AppearanceEvidence {
     std::int64_t query = -1;
     ScoreStatistics stats;
     std::vector<std::int32_t> z;  // fixed point, one per kept diagonal (slot order)
-    // Similarities s(query, b) of frames b off the kept diagonals, for the
-    // sequences of later queries' candidates (modes that do not score every
-    // frame); they leave with the row, when no later sequence reaches them.
+    // Similarities s(query, b) of frames b off the kept diagonals that a
+    // sequence() read, this query's own (t = 0) or a later query's; a later
+    // query's sequence on the same diagonal reads them here instead of
+    // computing them again. They leave with the row, when no later sequence
+    // reaches them.
     PairCache pairs;
   };
   std::int32_t quantise(const ScoreStatistics& stats, double similarity) const;

@@ -166,6 +166,9 @@ void AppearanceEvidence::add_query(const FrameStore& store, const DescriptorView
   level1_ = kept_statistics(query, scratch_);
   level2_ = ScoreStatistics{};
   scored_.clear();
+  // The previous query's carries are this one's (add_query takes the queries in order).
+  std::swap(carried_, carrying_);
+  carrying_.clear();
   last_query_ = query;
   if (!options_.enabled) return;
 
@@ -197,7 +200,8 @@ double AppearanceEvidence::single_frame(double similarity) const {
   return level1_.valid() ? level1_.standardise(similarity) : kNaN;
 }
 
-const double* AppearanceEvidence::PairCache::find(std::int64_t b) const {
+template <typename V>
+const V* AppearanceEvidence::Table<V>::find(std::int64_t b) const {
   if (keys_.empty()) return nullptr;
   const std::size_t mask = keys_.size() - 1;
   for (std::size_t at = static_cast<std::size_t>(b) & mask;; at = (at + 1) & mask) {
@@ -206,10 +210,11 @@ const double* AppearanceEvidence::PairCache::find(std::int64_t b) const {
   }
 }
 
-void AppearanceEvidence::PairCache::insert(std::int64_t b, double similarity) {
+template <typename V>
+void AppearanceEvidence::Table<V>::insert(std::int64_t b, const V& value) {
   if (2 * (size_ + 1) > keys_.size()) {  // at most half full
     std::vector<std::int64_t> keys(std::max<std::size_t>(64, 2 * keys_.size()), -1);
-    std::vector<double> values(keys.size());
+    std::vector<V> values(keys.size());
     const std::size_t mask = keys.size() - 1;
     for (std::size_t k = 0; k < keys_.size(); ++k) {
       if (keys_[k] < 0) continue;
@@ -226,7 +231,14 @@ void AppearanceEvidence::PairCache::insert(std::int64_t b, double similarity) {
   while (keys_[at] >= 0 && keys_[at] != b) at = (at + 1) & mask;
   if (keys_[at] < 0) ++size_;
   keys_[at] = b;
-  values_[at] = similarity;
+  values_[at] = value;
+}
+
+template <typename V>
+void AppearanceEvidence::Table<V>::clear() {
+  if (size_ == 0) return;
+  std::fill(keys_.begin(), keys_.end(), -1);
+  size_ = 0;
 }
 
 std::int32_t AppearanceEvidence::stored_z(const FrameStore& store, std::int64_t a, std::int64_t b,
@@ -261,14 +273,27 @@ double AppearanceEvidence::sequence(const FrameStore& store, const DescriptorVie
   const double* cached = row != nullptr ? row->pairs.find(frame) : nullptr;
   const double s0 = cached != nullptr ? *cached : similarity(descriptor, store.view(frame), metric);
   if (row != nullptr && cached == nullptr) row->pairs.insert(frame, s0);
-  std::int64_t short_sum = quantise(level1_, s0);
-  std::int64_t long_sum = short_sum;
+  const std::int32_t z0 = quantise(level1_, s0);
+  std::int64_t short_sum = z0;
+  std::int64_t long_sum = z0;
   const int steps = std::max(options_.frames, options_.long_frames);
-  for (int t = 1; t < steps && frame - t >= 0; ++t) {
-    const std::int32_t z = stored_z(store, i - t, frame - t, metric);
-    if (t < options_.frames) short_sum += z;
-    long_sum += z;
+  if (const Carry* c = carried_.find(d)) {
+    // The previous query scored this diagonal: its terms t >= 1 are that
+    // sequence's, less its oldest (the same fixed-point values, so the same sums).
+    short_sum += c->short_sum;
+    long_sum += c->long_sum;
+  } else {
+    for (int t = 1; t < steps && frame - t >= 0; ++t) {
+      const std::int32_t z = stored_z(store, i - t, frame - t, metric);
+      if (t < options_.frames) short_sum += z;
+      long_sum += z;
+    }
   }
+  // For the next query on this diagonal: both sums without their oldest term
+  // (0 when it does not exist: a frame before the map or a query before the ring).
+  const int s_last = options_.frames - 1, l_last = steps - 1;
+  carrying_.insert(d, Carry{short_sum - stored_z(store, i - s_last, frame - s_last, metric),
+                            long_sum - stored_z(store, i - l_last, frame - l_last, metric)});
   const double a = sequence_mean(short_sum, long_sum);
   scored_.emplace(frame, a);
   return level2_.standardise(a);
@@ -380,6 +405,8 @@ void AppearanceEvidence::rebuild(const FrameStore& store, SimilarityMetric metri
   long_sum_.clear();
   sequence_.clear();
   scored_.clear();
+  carried_.clear();
+  carrying_.clear();
   level1_ = level2_ = ScoreStatistics{};
   last_query_ = store.size() - 1;
   if (!options_.enabled || store.empty()) return;

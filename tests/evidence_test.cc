@@ -76,10 +76,12 @@ struct Reference {
     return out;
   }
   ScoreStatistics level1(std::int64_t q) const {
+    if (const auto it = level1_of.find(q); it != level1_of.end()) return it->second;
     std::vector<double> v;
     for (std::int64_t j : sampled(q)) v.push_back(sim(q, j));
-    return statistics(v.data(), v.size());
+    return level1_of[q] = statistics(v.data(), v.size());
   }
+  mutable std::map<std::int64_t, ScoreStatistics> level1_of;  // level1(), computed once
   std::int64_t z(std::int64_t a, std::int64_t b) const {
     if (a < 0 || b < 0) return 0;
     const ScoreStatistics s = level1(a);
@@ -216,6 +218,42 @@ TEST(AppearanceEvidence, SampledDiagonalsMatchTheDefinition) {
     run.store.add(frames[q]);
   }
   EXPECT_EQ(run.evidence.stride(n - 1), 4);
+}
+
+// A sequence scored again one query later on the same diagonal continues the
+// previous query's sums (its terms t >= 1, less the oldest); it must equal
+// the definition, near the map's start too (terms before frame 0), and after
+// a query that skipped the diagonal (sums computed afresh).
+TEST(AppearanceEvidence, SequencesFollowedAlongADiagonalMatchTheDefinition) {
+  SequenceOptions o;
+  o.frames = 3;
+  o.long_frames = 8;
+  const std::int64_t w = 3;
+  const int n = static_cast<int>(kMaxSampledDiagonals + 100);
+  std::vector<Descriptor> frames;
+  for (int i = 0; i < n; ++i) frames.push_back(frame(i, 37));
+  const Reference ref(frames, w, o, true);
+  EvidenceRun run(o, w, true);
+  for (std::int64_t q = 0; q < n; ++q) {
+    run.add(frames[q], w, false);
+    if (q >= n - 40) {
+      SCOPED_TRACE(q);
+      ASSERT_EQ(run.evidence.stride(q), 2);  // kept: even offsets (w + 1 + 2 k)
+      // Offsets off the kept diagonals, followed every query (571: frames 1
+      // to 40, so at first terms before the map's start); every other query.
+      std::vector<std::int64_t> offsets = {37, 101, 571};
+      if (q % 2 == 0) offsets.push_back(43);
+      for (const std::int64_t d : offsets) {
+        const std::int64_t j = q - d;
+        if (j < 0 || j >= q - w) continue;
+        const double want = ref.evidence(q, j);
+        const double got = run.evidence.sequence(run.store, frames[q].view(), j,
+                                                 SimilarityMetric::kReference);
+        EXPECT_NEAR(got, want, 1e-9) << "frame " << j << " offset " << d;
+      }
+    }
+    run.store.add(frames[q]);
+  }
 }
 
 // Beyond exact_statistics candidates, exhaustive search standardises with the

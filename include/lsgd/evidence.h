@@ -142,19 +142,29 @@ class AppearanceEvidence {
   std::int64_t statistics_stride(std::int64_t query) const;
 
  private:
-  // s(a, b) of one query a by frame b: open addressing, linear probing (a
-  // sequence reads up to long_frames of them per candidate frame).
-  class PairCache {
+  // A value by frame (or offset) b >= 0: open addressing, linear probing.
+  template <typename V>
+  class Table {
    public:
-    // s(a, b) of frame b (>= 0), nullptr when not cached.
-    const double* find(std::int64_t b) const;
-    // Caches s(a, b) of a frame b not cached yet.
-    void insert(std::int64_t b, double similarity);
+    // The value of b, nullptr when there is none.
+    const V* find(std::int64_t b) const;
+    // Adds the value of a b not in the table yet.
+    void insert(std::int64_t b, const V& value);
+    void clear();
 
    private:
     std::vector<std::int64_t> keys_;  // -1: empty
-    std::vector<double> values_;
+    std::vector<V> values_;
     std::size_t size_ = 0;
+  };
+  // s(a, b) of one query a by frame b (a sequence reads up to long_frames of
+  // them per candidate frame).
+  using PairCache = Table<double>;
+  // A sequence's sums (fixed point) without its oldest term: what the next
+  // query's sequence on the same diagonal adds its own term to.
+  struct Carry {
+    std::int64_t short_sum = 0;
+    std::int64_t long_sum = 0;
   };
   struct Row {
     std::int64_t query = -1;
@@ -197,6 +207,10 @@ class AppearanceEvidence {
   std::vector<double> scratch_;
   std::vector<double> subset_;     // kept_statistics()
   std::unordered_map<std::int64_t, double> scored_;  // A of the frames scored for the last query
+  // By diagonal (offset query - frame): the carries of the sequences the
+  // previous query scored off the kept diagonals (read by this query's
+  // sequence()), and those this query scored (for the next one).
+  Table<Carry> carried_, carrying_;
   std::vector<std::pair<std::int64_t, std::int64_t>> windows_;  // realign(): frames to score ...
   std::vector<Candidate> window_scores_;                        // ... and their R, in frame order
 };

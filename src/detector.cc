@@ -192,7 +192,7 @@ Result Detector::process_gray(double convert_ms, std::int64_t start_ns) {
   // node the store has no group for (frames restored without their nodes)
   // gets a new one rather than an error.
   store_.add(descriptor_, std::clamp<std::int64_t>(result.node, 0, store_.groups()));
-  search_->end(result.frame, result.candidates);
+  search_->end(result.frame, places_);
   if (result.frame == 0) width_ = gray_.width, height_ = gray_.height;
 
   result.timings.total_ms = ms_since(start_ns);
@@ -207,18 +207,25 @@ void Detector::score_candidates(Result& result) {
   if (options_.verification.has(kTemporalStage)) {
     if (search_->scores_every_frame()) {
       evidence_.best_places(top_n, result.candidates);
+      places_ = result.candidates;
     } else {
-      evidence_.realign(store_, descriptor_.view(), raw_, metric, top_n, search_->realign_reach(),
-                        result.candidates);
+      // The top_n places, then those the search follows to the next query.
+      evidence_.realign(store_, descriptor_.view(), raw_, search_->followed(), metric, top_n,
+                        search_->realign_reach(), top_n + search_->follow(), places_);
+      result.candidates.assign(places_.begin(),
+                               places_.begin() + static_cast<std::ptrdiff_t>(std::min(
+                                                     places_.size(), static_cast<std::size_t>(top_n))));
     }
     return;
   }
   result.candidates.clear();
-  if (!evidence_.similarity_statistics().valid()) return;
-  const std::size_t n = std::min(raw_.size(), static_cast<std::size_t>(top_n));
-  for (std::size_t i = 0; i < n; ++i) {
-    result.candidates.push_back({raw_[i].frame, evidence_.single_frame(raw_[i].score)});
+  if (evidence_.similarity_statistics().valid()) {
+    const std::size_t n = std::min(raw_.size(), static_cast<std::size_t>(top_n));
+    for (std::size_t i = 0; i < n; ++i) {
+      result.candidates.push_back({raw_[i].frame, evidence_.single_frame(raw_[i].score)});
+    }
   }
+  places_ = result.candidates;
 }
 
 // The verification stages and the loop decision (decision.h).

@@ -327,8 +327,19 @@ void AppearanceEvidence::best_places(int top_n, std::vector<Candidate>& out) con
 void AppearanceEvidence::realign(const FrameStore& store, const DescriptorView& descriptor,
                                  const std::vector<Candidate>& raw, SimilarityMetric metric,
                                  int top_n, std::int64_t reach, std::vector<Candidate>& out) {
+  static const std::vector<std::int64_t> none;
+  realign(store, descriptor, raw, none, metric, top_n, reach, top_n, out);
+}
+
+void AppearanceEvidence::realign(const FrameStore& store, const DescriptorView& descriptor,
+                                 const std::vector<Candidate>& raw,
+                                 const std::vector<std::int64_t>& followed, SimilarityMetric metric,
+                                 int top_n, std::int64_t reach, int keep,
+                                 std::vector<Candidate>& out) {
   out.clear();
   if (!level2_.valid()) return;
+  top_n = std::max(top_n, 0);
+  keep = std::max(keep, top_n);
   const std::int64_t limit = last_query_ - min_gap_;  // candidates j < limit
   const std::int64_t tolerance = options_.tolerance;
   const auto add = [&](const Candidate& c) {
@@ -347,17 +358,23 @@ void AppearanceEvidence::realign(const FrameStore& store, const DescriptorView& 
       }
       add(best);
     }
-  } else {
-    // Every place within tolerance + reach of a candidate: a frame no other
-    // within 2 * tolerance + 1 beats, as best_places() reports them. A
-    // shortlist finds a revisit by its single frames, whose best frame may
-    // sit a few frames off the best aligned sequence, and two places of one
-    // stretch of road may sit between them; climbing uphill would find one.
-    const std::int64_t radius = 2 * tolerance + 1;
-    const std::int64_t span = tolerance + reach;
+    std::sort(out.begin(), out.end(), better);
+    if (out.size() > static_cast<std::size_t>(top_n)) out.resize(static_cast<std::size_t>(top_n));
+    return;
+  }
+  // Every place within tolerance + reach of a candidate: a frame no other
+  // within 2 * tolerance + 1 beats, as best_places() reports them. A
+  // shortlist finds a revisit by its single frames, whose best frame may
+  // sit a few frames off the best aligned sequence, and two places of one
+  // stretch of road may sit between them; climbing uphill would find one.
+  const std::int64_t radius = 2 * tolerance + 1;
+  const std::int64_t span = tolerance + reach;
+  raw_all_.assign(raw.begin(), raw.end());
+  for (;;) {
+    out.clear();
     // The frames to score: the candidates' windows and their radius, merged.
     windows_.clear();
-    for (const Candidate& c : raw) {
+    for (const Candidate& c : raw_all_) {
       const std::int64_t lo = std::max<std::int64_t>(0, c.frame - span - radius);
       const std::int64_t hi = std::min(limit - 1, c.frame + span + radius);
       if (lo <= hi) windows_.push_back({lo, hi});
@@ -377,7 +394,7 @@ void AppearanceEvidence::realign(const FrameStore& store, const DescriptorView& 
                               [](const Candidate& c, std::int64_t f) { return c.frame < f; }) -
              window_scores_.begin();
     };
-    for (const Candidate& c : raw) {
+    for (const Candidate& c : raw_all_) {
       const std::int64_t lo = std::max<std::int64_t>(0, c.frame - span);
       const std::int64_t hi = std::min(limit - 1, c.frame + span);
       if (lo > hi) continue;
@@ -394,9 +411,51 @@ void AppearanceEvidence::realign(const FrameStore& store, const DescriptorView& 
         if (peak) add(window_scores_[static_cast<std::size_t>(k)]);
       }
     }
+    std::sort(out.begin(), out.end(), better);
+    // The followed frames no candidate's window examined: a sequence that
+    // would rank among the top_n becomes a candidate (its window then
+    // reports the places around it), the others are only ranked.
+    extra_.clear();
+    bool promoted = false;
+    for (const std::int64_t f : followed) {
+      if (f < 0 || f >= limit) continue;
+      const bool examined = std::any_of(raw_all_.begin(), raw_all_.end(), [&](const Candidate& c) {
+        return f >= c.frame - span && f <= c.frame + span;
+      });
+      if (examined) continue;
+      const Candidate c{f, sequence(store, descriptor, f, metric)};
+      if (out.size() < static_cast<std::size_t>(top_n) || better(c, out[static_cast<std::size_t>(top_n) - 1])) {
+        raw_all_.push_back(c);
+        promoted = true;
+      } else {
+        extra_.push_back(c);
+      }
+    }
+    if (!promoted) break;
   }
-  std::sort(out.begin(), out.end(), better);
-  if (out.size() > static_cast<std::size_t>(top_n)) out.resize(static_cast<std::size_t>(top_n));
+  if (out.size() <= static_cast<std::size_t>(top_n) && extra_.empty()) return;
+  // Beyond the top_n places: the next places and the followed frames, best
+  // first; a followed frame within radius of a better one or of a place is
+  // left out (the same stretch of diagonals).
+  const std::size_t n = std::min(out.size(), static_cast<std::size_t>(top_n));
+  const std::size_t places = out.size();
+  for (const Candidate& c : extra_) {
+    const bool near = std::any_of(out.begin(), out.begin() + static_cast<std::ptrdiff_t>(places),
+                                  [&](const Candidate& o) { return std::abs(o.frame - c.frame) <= radius; });
+    if (!near) out.push_back(c);
+  }
+  std::sort(out.begin() + static_cast<std::ptrdiff_t>(n), out.end(), better);
+  std::size_t kept = n;
+  for (std::size_t k = n; k < out.size() && kept < static_cast<std::size_t>(keep); ++k) {
+    // (Places are never within radius of a place or of a followed frame
+    // kept, so this only leaves out followed frames.)
+    const Candidate c = out[k];
+    const bool covered = std::any_of(out.begin() + static_cast<std::ptrdiff_t>(n),
+                                     out.begin() + static_cast<std::ptrdiff_t>(kept),
+                                     [&](const Candidate& o) { return std::abs(o.frame - c.frame) <= radius; });
+    if (!covered) out[kept++] = c;
+  }
+  out.resize(kept);
 }
 
 void AppearanceEvidence::rebuild(const FrameStore& store, SimilarityMetric metric) {

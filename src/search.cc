@@ -75,6 +75,8 @@ const OptionTable<IndexOptions>& IndexOptions::fields() {
                      "frames the graph returns, re-scored exactly (at least the shortlist)"),
       integer_option("shortlist", &S::shortlist, 1, 1000, "frames",
                      "of them, the best by exact similarity the temporal stage realigns (at least top_n)"),
+      integer_option("follow", &S::follow, 0, 1000, "places",
+                     "places beyond top_n followed to the next query along their diagonals"),
   };
   return table;
 }
@@ -131,6 +133,11 @@ bool better(const Candidate& a, const Candidate& b) {
 
 const std::vector<std::int64_t>& CandidateSearch::members(std::int64_t group) const {
   internal::throw_invalid("search mode ", name(), " has no groups (group ", group, " asked for)");
+}
+
+const std::vector<std::int64_t>& CandidateSearch::followed() const {
+  static const std::vector<std::int64_t> none;
+  return none;
 }
 
 void CandidateSearch::restore_index(const FrameStore&, SimilarityMetric, const std::uint8_t*,

@@ -386,6 +386,83 @@ TEST(AppearanceEvidence, RealignedShortlistReportsExhaustiveSearchsPlaces) {
 
 // A detector restored from storage rebuilds its evidence from the stored
 // frames; from then on it must score exactly as one that never stopped.
+// Followed frames (a mode follows places beyond top_n to the next query):
+// one whose sequence would rank among the top_n is realigned as a candidate,
+// so the top_n are still exhaustive search's places near the candidates;
+// the others come after them, best first, without a second frame of the
+// same stretch of diagonals, up to `keep` in all.
+TEST(AppearanceEvidence, FollowedFramesAreRealignedWhenTheyWouldRankAndRankedOtherwise) {
+  SequenceOptions o;
+  o.frames = 4;
+  o.long_frames = 12;
+  o.tolerance = 2;
+  const std::int64_t w = 3, exact = 64, reach = 16, span = o.tolerance + reach;
+  const std::int64_t radius = 2 * o.tolerance + 1;
+  const int n = 700, top_n = 4, keep = 12;
+  std::vector<Descriptor> frames;
+  for (int i = 0; i < n; ++i) frames.push_back(smooth_frame(i, 120));
+  // The last query, with exhaustive search's places for it.
+  const std::int64_t q = n - 1;
+  std::vector<Candidate> peaks;
+  {
+    EvidenceRun a(o, w, false, exact), b(o, w, true);
+    for (std::int64_t k = 0; k <= q; ++k) {
+      a.add(frames[k], w, true);
+      b.add(frames[k], w, false);
+      if (k < q) a.store.add(frames[k]), b.store.add(frames[k]);
+    }
+    a.evidence.best_places(100000, peaks);
+    ASSERT_GE(peaks.size(), 9u);
+    // Candidates: the places ranked 5 to 8; followed: the best place (it
+    // ranks first, so it is realigned), and two neighbouring frames away
+    // from every place and candidate (ranked, the better one kept).
+    std::vector<Candidate> raw(peaks.begin() + 4, peaks.begin() + 8);
+    const auto far = [&](std::int64_t j) {
+      return std::none_of(peaks.begin(), peaks.begin() + 8, [&](const Candidate& p) {
+        return std::llabs(p.frame - j) <= 2 * span + radius;
+      });
+    };
+    std::int64_t x = -1;
+    for (std::int64_t j = 10; j + 1 < q - w && x < 0; ++j) {
+      if (far(j) && far(j + 1)) x = j;
+    }
+    ASSERT_GE(x, 0);
+    const std::vector<std::int64_t> followed = {peaks[0].frame, x, x + 1};
+    std::vector<Candidate> out;
+    b.evidence.realign(b.store, frames[q].view(), raw, followed, SimilarityMetric::kReference, top_n,
+                       reach, keep, out);
+    // Expected: exhaustive search's places near the candidates and the
+    // promoted best place's frame, best first; then x or x + 1, the better.
+    std::vector<Candidate> near;
+    for (const Candidate& p : peaks) {
+      const bool close = std::llabs(p.frame - peaks[0].frame) <= span ||
+                         std::any_of(raw.begin(), raw.end(), [&](const Candidate& r) {
+                           return std::llabs(r.frame - p.frame) <= span;
+                         });
+      if (close) near.push_back(p);
+    }
+    ASSERT_GE(near.size(), static_cast<std::size_t>(top_n));
+    EXPECT_EQ(near[0].frame, peaks[0].frame);
+    const double ax = b.evidence.sequence(b.store, frames[q].view(), x, SimilarityMetric::kReference);
+    const double ax1 = b.evidence.sequence(b.store, frames[q].view(), x + 1, SimilarityMetric::kReference);
+    ASSERT_LT(std::max(ax, ax1), near[top_n - 1].score) << "x would rank among the top_n";
+    std::vector<Candidate> expected = near;
+    expected.push_back(ax1 > ax ? Candidate{x + 1, ax1} : Candidate{x, ax});
+    std::sort(expected.begin() + top_n, expected.end(), better);
+    if (expected.size() > static_cast<std::size_t>(keep)) expected.resize(keep);
+    ASSERT_EQ(out.size(), expected.size());
+    for (std::size_t k = 0; k < out.size(); ++k) {
+      SCOPED_TRACE(k);
+      EXPECT_EQ(out[k].frame, expected[k].frame);
+      EXPECT_EQ(out[k].score, expected[k].score);  // bit for bit
+    }
+    // Without followed frames: the top_n of the candidates' places only.
+    b.evidence.realign(b.store, frames[q].view(), raw, {}, SimilarityMetric::kReference, top_n, reach,
+                       keep, out);
+    EXPECT_NE(out[0].frame, peaks[0].frame);
+  }
+}
+
 TEST(AppearanceEvidence, RebuildContinuesBitForBit) {
   // Exhaustive, sampled, and exhaustive past its exact statistics.
   for (const auto& [sample, exact] : {std::pair{false, kExactStatisticsCandidates},

@@ -423,7 +423,9 @@ TEST(SearchIndex, FollowsThePreviousFramesPlacesAndKeepsThemAsState) {
   o.mode = kIndexSearch;
   o.min_gap = 2;
   o.index.shortlist = 1;
+  o.top_n = 2;
   const std::unique_ptr<CandidateSearch> index = make_search(o);
+  EXPECT_EQ(index->follow(), o.index.follow);
   FrameStore store;
   std::vector<Candidate> out;
   std::vector<double> row;
@@ -432,13 +434,24 @@ TEST(SearchIndex, FollowsThePreviousFramesPlacesAndKeepsThemAsState) {
     index->end(i, {});
     store.add(frames[i]);
   }
-  index->end(29, {{11, 0.0}, {20, 0.0}});  // the detector's places for frame 29
+  // The detector's places for frame 29: top_n = 2 candidates, then two it
+  // follows and one that has not left the temporal window one frame on.
+  index->end(29, {{11, 0.0}, {20, 0.0}, {5, 0.0}, {8, 0.0}, {27, 0.0}});
   index->search({store, frames[30].view(), 30, SimilarityMetric::kReference}, out, row);
   std::vector<std::int64_t> ids;
   for (const Candidate& c : out) ids.push_back(c.frame);
   EXPECT_NE(std::find(ids.begin(), ids.end(), 12), ids.end());  // 11 + 1
   EXPECT_NE(std::find(ids.begin(), ids.end(), 21), ids.end());  // 20 + 1
   EXPECT_NE(std::find(ids.begin(), ids.end(), 27), ids.end());  // the newest past the window
+  EXPECT_EQ(index->followed(), (std::vector<std::int64_t>{6, 9}));  // 28 is inside the window
+  // The followed frames are not candidates: the same as without them.
+  std::vector<Candidate> top_only;
+  index->end(29, {{11, 0.0}, {20, 0.0}});
+  index->search({store, frames[30].view(), 30, SimilarityMetric::kReference}, top_only, row);
+  EXPECT_TRUE(index->followed().empty());
+  ASSERT_EQ(top_only.size(), out.size());
+  for (std::size_t k = 0; k < out.size(); ++k) EXPECT_EQ(top_only[k].frame, out[k].frame);
+  index->end(29, {{11, 0.0}, {20, 0.0}, {5, 0.0}, {8, 0.0}, {27, 0.0}});
   StateWriter w;
   index->save_frame(29, w);
   StateWriter none;
@@ -446,6 +459,20 @@ TEST(SearchIndex, FollowsThePreviousFramesPlacesAndKeepsThemAsState) {
   EXPECT_TRUE(none.empty());  // only the last frame's places are read on restore
   const std::unique_ptr<CandidateSearch> restored = make_search(o);
   EXPECT_NO_THROW(restored->check_frame(29, 1, 1, 1, StateReader(w.bytes().data(), w.bytes().size(), "x")));
+  // Restored, it follows the same places.
+  restored->restore_frame(29, 1, 1, 1, StateReader(w.bytes().data(), w.bytes().size(), "x"));
+  restored->search({store, frames[30].view(), 30, SimilarityMetric::kReference}, out, row);
+  EXPECT_EQ(restored->followed(), (std::vector<std::int64_t>{6, 9}));
+  // With follow 1, the first of them only; without follow, none.
+  for (const int follow : {1, 0}) {
+    SearchOptions f = o;
+    f.index.follow = follow;
+    const std::unique_ptr<CandidateSearch> s = make_search(f);
+    EXPECT_EQ(s->follow(), follow);
+    s->restore_frame(29, 1, 1, 1, StateReader(w.bytes().data(), w.bytes().size(), "x"));
+    s->search({store, frames[30].view(), 30, SimilarityMetric::kReference}, out, row);
+    EXPECT_EQ(s->followed(), follow == 1 ? std::vector<std::int64_t>{6} : std::vector<std::int64_t>{});
+  }
   StateWriter bad;
   bad.put_i64(1);
   bad.put_i64(29);  // not an earlier frame

@@ -169,6 +169,7 @@ class Detector {
   Descriptor exact_;       // the frame's histograms as computed
   Descriptor descriptor_;  // ... and as stored (descriptor.storage)
   std::vector<Candidate> raw_;  // the search's candidates, by similarity
+  std::vector<Candidate> places_;  // the ranked places, top_n and those the search follows
   std::vector<double> row_;     // exhaustive: the query's similarity to every candidate
   // Set while process() or restore_frame() runs: a second, overlapping
   // call throws (class Exclusive in detector.cc).

@@ -126,6 +126,16 @@ class AppearanceEvidence {
   void realign(const FrameStore& store, const DescriptorView& descriptor,
                const std::vector<Candidate>& raw, SimilarityMetric metric, int top_n,
                std::int64_t reach, std::vector<Candidate>& out);
+  // The same, and (reach > 0) frames `followed` scored at that frame only,
+  // without a window: one whose sequence would rank among the top_n places is
+  // realigned as a candidate, so the top_n written first are places as
+  // above. After them, up to keep - top_n more, best first: the next places
+  // and the followed frames no place or better followed frame within
+  // 2 * tolerance + 1 covers (what a mode follows to the next query).
+  void realign(const FrameStore& store, const DescriptorView& descriptor,
+               const std::vector<Candidate>& raw, const std::vector<std::int64_t>& followed,
+               SimilarityMetric metric, int top_n, std::int64_t reach, int keep,
+               std::vector<Candidate>& out);
 
   // Recomputes the state of the last max(frames, long_frames) queries from
   // the stored frames, as if they had been added one by one (after a detector
@@ -211,6 +221,8 @@ class AppearanceEvidence {
   // previous query scored off the kept diagonals (read by this query's
   // sequence()), and those this query scored (for the next one).
   Table<Carry> carried_, carrying_;
+  std::vector<Candidate> raw_all_;    // realign(): the candidates and the followed frames promoted
+  std::vector<Candidate> extra_;      // ... the followed frames' sequences
   std::vector<std::pair<std::int64_t, std::int64_t>> windows_;  // realign(): frames to score ...
   std::vector<Candidate> window_scores_;                        // ... and their R, in frame order
 };

@@ -58,6 +58,12 @@ struct IndexOptions {
   // Of them, the best by exact similarity the temporal stage realigns (at
   // least top_n), [1, 1000].
   int shortlist = 10;
+  // Places beyond top_n followed to the next query along their diagonals,
+  // [0, 1000]: their sequence is extended by one frame (no realignment
+  // window), so a place whose sequence builds up over many queries stays in
+  // view (a query that revisits nothing: its best place is the highest of
+  // the map's sequences of noise, no single frame of which stands out).
+  int follow = 22;
   void check() const;
   static const OptionTable<IndexOptions>& fields();  // lsgd/options.h
 };
@@ -129,8 +135,16 @@ class CandidateSearch : public Stateful {
   // mode, as the paper's groups were measured).
   virtual std::int64_t realign_reach() const { return 0; }
 
+  // Places beyond top_n the temporal stage ranks and passes to end() (the
+  // mode follows them along their diagonals), and the frames it followed to
+  // this query: their sequences are scored at that frame only, and one that
+  // ranks among the top_n is realigned as a candidate (AppearanceEvidence::realign).
+  virtual int follow() const { return 0; }
+  virtual const std::vector<std::int64_t>& followed() const;
+
   // Called once per frame after the detector ranked its candidates (the
-  // places its sequences point to, best first): a shortlist mode may follow
+  // places its sequences point to, best first, top_n of them, then up to
+  // follow() more places and followed frames): a shortlist mode may follow
   // them along their diagonals at the next query.
   virtual void end(std::int64_t frame, const std::vector<Candidate>& candidates) {
     (void)frame, (void)candidates;

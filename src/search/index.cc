@@ -76,9 +76,12 @@ class IndexSearch final : public CandidateSearch {
   // reported candidates as exhaustive search's with 16, 972 without;
   // docs/results.md).
   std::int64_t realign_reach() const override { return 16; }
+  int follow() const override { return options_.index.follow; }
+  const std::vector<std::int64_t>& followed() const override { return followed_; }
 
   Outcome search(const Query& q, std::vector<Candidate>& out, std::vector<double>&) override {
     out.clear();
+    followed_.clear();
     // Frames that left the temporal window join the graph.
     const std::int64_t limit = std::max<std::int64_t>(0, std::min(q.store.size(), q.id - options_.min_gap));
     Outcome outcome;
@@ -110,10 +113,20 @@ class IndexSearch final : public CandidateSearch {
       const std::size_t from_graph = ids_.size();
       // The previous frame's places, one frame on along their diagonals: a
       // revisit whose sequence stands out stays in the shortlist even where
-      // single frames look alike elsewhere.
+      // single frames look alike elsewhere. Its top_n are realigned as
+      // candidates; the places and frames it followed beyond them are
+      // followed again, their sequence only (a query that revisits nothing:
+      // its best place is the highest of the map's sequences of noise, which
+      // builds up over many queries and no single frame of which stands out).
       if (previous_frame_ == q.id - 1) {
-        for (const std::int64_t j : previous_) {
-          if (j >= 0 && j + 1 < limit) ids_.push_back(j + 1);
+        for (std::size_t rank = 0; rank < previous_.size(); ++rank) {
+          const std::int64_t j = previous_[rank] + 1;
+          if (j < 1 || j >= limit) continue;
+          if (rank < static_cast<std::size_t>(options_.top_n)) {
+            ids_.push_back(j);
+          } else if (followed_.size() < static_cast<std::size_t>(options_.index.follow)) {
+            followed_.push_back(j);
+          }
         }
       }
       // The newest frame in the graph, just past the temporal window: a query
@@ -157,8 +170,9 @@ class IndexSearch final : public CandidateSearch {
     for (const Candidate& c : candidates) previous_.push_back(c.frame);
   }
 
-  // State, version 1: the places the frame's candidates pointed to (count,
-  // then int64 ids), for the frame after it; written for the last frame ended
+  // State, version 1: the places the frame ranked, its top_n candidates' and
+  // those it followed beyond them (count, then int64 ids; a database written
+  // before follow holds the top_n only), for the frame after it; written for the last frame ended
   // (older frames: an empty record, as only the last one is read). The graph
   // itself is saved whole (save_index), or rebuilt from the stored frames at
   // the first query.
@@ -388,6 +402,7 @@ class IndexSearch final : public CandidateSearch {
   std::int64_t inserted_ = 0;  // frames 0 .. inserted_-1 are in the graph
   std::int64_t previous_frame_ = -1;    // the last frame ended
   std::vector<std::int64_t> previous_;  // ... and its candidates' frames, best first
+  std::vector<std::int64_t> followed_;  // previous_ beyond top_n, one frame on
   std::vector<std::int64_t> ids_;
   std::vector<std::uint8_t> key_;
   std::vector<DescriptorView> views_;  // the shortlist's descriptors ...

@@ -14,8 +14,11 @@
 // A frame enters the graph when it leaves the temporal window (at query
 // frame + min_gap + 1), so the window never crowds the shortlist. The
 // graph's `rescore` (64) nearest keys are re-scored exactly; the best
-// `shortlist` (10) of them, and the previous frame's places one frame on, are
-// realigned by the temporal stage to the places exhaustive search would rank. The graph is saved whole in
+// `shortlist` (10) of them, and the previous frame's top_n places one frame
+// on, are realigned by the temporal stage to the places exhaustive search
+// would rank; its next `follow` (22) places are followed one frame on along
+// their diagonals, their sequence only, and realigned when one would rank
+// among the top_n (AppearanceEvidence::realign). The graph is saved whole in
 // the place database (Database::save_index) and restored without a rebuild;
 // without a saved graph, a restored detector rebuilds it from the stored
 // descriptors at its first query.

@@ -424,7 +424,9 @@ void AppearanceEvidence::realign(const FrameStore& store, const DescriptorView& 
       });
       if (examined) continue;
       const Candidate c{f, sequence(store, descriptor, f, metric)};
-      if (out.size() < static_cast<std::size_t>(top_n) || better(c, out[static_cast<std::size_t>(top_n) - 1])) {
+      const bool ranks = top_n > 0 && (out.size() < static_cast<std::size_t>(top_n) ||
+                                       better(c, out[static_cast<std::size_t>(top_n) - 1]));
+      if (ranks) {
         raw_all_.push_back(c);
         promoted = true;
       } else {

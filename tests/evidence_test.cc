@@ -456,6 +456,13 @@ TEST(AppearanceEvidence, FollowedFramesAreRealignedWhenTheyWouldRankAndRankedOth
       EXPECT_EQ(out[k].frame, expected[k].frame);
       EXPECT_EQ(out[k].score, expected[k].score);  // bit for bit
     }
+    // top_n 0: no followed frame ranks among the top_n, so none is realigned;
+    // they and the places are ranked, up to keep.
+    b.evidence.realign(b.store, frames[q].view(), raw, followed, SimilarityMetric::kReference, 0, reach,
+                       3, out);
+    ASSERT_EQ(out.size(), 3u);
+    EXPECT_EQ(out[0].frame, peaks[0].frame);
+    EXPECT_EQ(out[0].score, peaks[0].score);
     // Without followed frames: the top_n of the candidates' places only.
     b.evidence.realign(b.store, frames[q].view(), raw, {}, SimilarityMetric::kReference, top_n, reach,
                        keep, out);

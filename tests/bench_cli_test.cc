@@ -7,6 +7,7 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdlib>
 #include <filesystem>
@@ -21,6 +22,7 @@
 #include <vector>
 
 #include "bench_support.h"
+#include "distractor.h"
 #include "lsgd/error.h"
 #include "lsgd/segmentation.h"
 
@@ -205,10 +207,19 @@ TEST(BenchCli, DistractorsCompareTheModesOnOneMap) {
   EXPECT_EQ(onto.code, 1);
   EXPECT_NE(onto.err.find("1.png"), std::string::npos) << onto.err;
   EXPECT_EQ(slurp(dir / "1.png"), before);
-  const auto alone = lsgd("bench --sequence x --frames 30");
-  EXPECT_EQ(alone.code, 1);
-  EXPECT_NE(alone.err.find("--sequence and --gt are the sequence of --distractors"), std::string::npos)
-      << alone.err;
+  for (const char* args : {"bench --sequence x --frames 30", "bench --distractor-run 10 --frames 30"}) {
+    const auto alone = lsgd(args);
+    EXPECT_EQ(alone.code, 1) << args;
+    EXPECT_NE(alone.err.find("are about --distractors: give --distractors N too"), std::string::npos)
+        << args << ": " << alone.err;
+  }
+  // Runs of distractors: the JSON says how they were made.
+  const fs::path runs_json = kTmp / "distractor-runs.json";
+  const auto runs = lsgd("bench --distractors 40 --distractor-run 20 --frames 60 --width 160 --height 120 "
+                         "--min-gap 10 --verify none --mode index --json '" + runs_json.string() + "'");
+  ASSERT_EQ(runs.code, 0) << runs.err;
+  EXPECT_EQ(nlohmann::json::parse(slurp(runs_json))["distractor_run"], 20);
+  EXPECT_EQ(nlohmann::json::parse(slurp(json))["distractor_run"], 1);
   const auto street_gt = lsgd("bench --distractors 5 --frames 30 --gt x");
   EXPECT_EQ(street_gt.code, 1);
   EXPECT_NE(street_gt.err.find("the synthetic street has its own"), std::string::npos) << street_gt.err;
@@ -218,12 +229,68 @@ TEST(BenchCli, BadArgumentsFailNamingTheFlag) {
   const std::pair<const char*, const char*> cases[] = {
       {"bench --frames 0", "--frames"},           {"bench --width 10", "--width"},
       {"bench --height 5000", "--height"},        {"bench --frames 10 --warmup 10", "--warmup"},
-      {"bench --frames 10 --block 0", "--block"}, {"bench --frames 10 --mode fast", "--mode"}};
+      {"bench --frames 10 --block 0", "--block"}, {"bench --frames 10 --mode fast", "--mode"},
+      {"bench --distractors 10 --distractor-run 0", "--distractor-run"}};
   for (const auto& [args, flag] : cases) {
     const auto r = lsgd(args);
     EXPECT_NE(r.code, 0) << args;
     EXPECT_NE(r.err.find(flag), std::string::npos) << args << ": " << r.err;
   }
+}
+
+// Twelve cells, each a spike at its own intensity with its own pixel count,
+// so a distractor's layout (the permutation) and lighting (the shift) can be
+// read back from it.
+lsgd::Descriptor spiked_base() {
+  lsgd::Descriptor d;
+  d.grid = {3, 4};
+  d.hist.assign(static_cast<std::size_t>(d.grid.cells()) * lsgd::kBins, 0);
+  for (int c = 0; c < d.grid.cells(); ++c) {
+    d.pixels.push_back(static_cast<lsgd::Count>(100 + c));
+    d.hist[static_cast<std::size_t>(c) * lsgd::kBins + 40 + 15 * c] = static_cast<lsgd::Bin>(100 + c);
+  }
+  return d;
+}
+
+TEST(Distractor, ARunSharesOneLayoutAndLighting) {
+  using lsgd::cli::bench::make_distractor;
+  const lsgd::Descriptor base = spiked_base();
+  const auto make = [&](std::int64_t k, std::int64_t run) {
+    lsgd::Descriptor exact, out;
+    make_distractor(base, k, run, lsgd::HistogramStorage::kExact, exact, out);
+    EXPECT_EQ(exact.hist, out.hist);
+    return exact;
+  };
+  // Each cell is a whole cell of the base moved (mass kept), and not the
+  // base itself.
+  const lsgd::Descriptor d0 = make(0, 1);
+  std::vector<lsgd::Count> sorted = d0.pixels;
+  std::sort(sorted.begin(), sorted.end());
+  EXPECT_EQ(sorted, base.pixels);
+  EXPECT_NE(d0.hist, base.hist);
+  for (int c = 0; c < d0.grid.cells(); ++c) {
+    std::uint32_t mass = 0;
+    for (int b = 0; b < lsgd::kBins; ++b) mass += d0.hist[static_cast<std::size_t>(c) * lsgd::kBins + b];
+    EXPECT_EQ(mass, d0.pixels[static_cast<std::size_t>(c)]) << c;
+  }
+  // Run 1: every distractor its own; distractor k of run R is what
+  // distractor k / R is with run 1.
+  EXPECT_NE(make(1, 1).hist, d0.hist);
+  EXPECT_NE(make(1, 1).pixels, d0.pixels);
+  for (std::int64_t k = 10; k < 15; ++k) {
+    const lsgd::Descriptor d = make(k, 5);
+    EXPECT_EQ(d.hist, make(2, 1).hist) << k;
+    EXPECT_EQ(d.pixels, make(2, 1).pixels) << k;
+  }
+  EXPECT_NE(make(15, 5).hist, make(14, 5).hist);
+  // Compact storage keeps the compacted exact distractor.
+  lsgd::Descriptor exact, out, expected;
+  make_distractor(base, 3, 1, lsgd::HistogramStorage::kCompact, exact, out);
+  lsgd::compact(exact, expected);
+  EXPECT_EQ(out.compact, expected.compact);
+  EXPECT_TRUE(out.hist.empty());
+  EXPECT_THROW(make_distractor(base, 3, 0, lsgd::HistogramStorage::kExact, exact, out),
+               lsgd::InvalidArgument);
 }
 
 TEST(BenchSupport, SlicRegionSizeMatchesOurGrid) {

@@ -1,15 +1,13 @@
 // lsgd bench --distractors N.
 //
-// The map holds N distractor frames before the sequence. Distractor k is
-// made from the descriptor of sequence frame k % M (M frames): its cells are
-// shuffled (a random permutation: another spatial layout of the same kind of
-// content) and each cell's histogram is moved by a random offset of -24 to
-// +24 intensity levels (a lighting change; mass pushed past 0 or 255 stays at
-// the end bin), with a generator seeded by k. So a distractor looks like a
-// place of the same world, never like a copy of a sequence frame. They are
-// stored with Detector::restore_frame (no image: they have no ORB features,
-// so geometry never confirms one), then the sequence is processed frame by
-// frame as a SLAM system would; every frame is a query against N + i frames.
+// The map holds N distractor frames before the sequence (distractor.h: how
+// each is made from a frame of the sequence; --distractor-run R: runs of R
+// consecutive ones are a stretch of one other place). So a distractor looks
+// like a place of the same world, never like a copy of a sequence frame. They
+// are stored with Detector::restore_frame (no image: they have no ORB
+// features, so geometry never confirms one), then the sequence is processed
+// frame by frame as a SLAM system would; every frame is a query against N + i
+// frames.
 //
 // Per mode: query ms (the search and its evidence, without index insertion;
 // also split into the mode's candidate search and the evidence: statistics,
@@ -37,6 +35,7 @@
 #include <opencv2/imgproc.hpp>
 
 #include "bench_support.h"
+#include "distractor.h"
 #include "lsgd/error.h"
 #include "lsgd/eval/gt_formats.h"
 #include "lsgd/eval/runner.h"
@@ -73,42 +72,6 @@ std::int64_t peak_rss_since_reset() {
 // Resets the peak to the current resident memory (Linux 4.0+: "5" to clear_refs).
 void reset_peak_rss() { std::ofstream("/proc/self/clear_refs") << "5"; }
 
-std::uint64_t next(std::uint64_t& s) {  // splitmix64
-  std::uint64_t z = (s += 0x9E3779B97F4A7C15ull);
-  z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
-  z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
-  return z ^ (z >> 31);
-}
-
-// Distractor k from `base` (an exact descriptor), stored as `storage`.
-void make_distractor(const Descriptor& base, std::int64_t k, HistogramStorage storage,
-                     Descriptor& exact, Descriptor& out) {
-  std::uint64_t s = 0x5eed0000ull + static_cast<std::uint64_t>(k);
-  const int cells = base.grid.cells();
-  std::vector<int> order(static_cast<std::size_t>(cells));
-  for (int c = 0; c < cells; ++c) order[static_cast<std::size_t>(c)] = c;
-  for (int c = cells - 1; c > 0; --c) std::swap(order[static_cast<std::size_t>(c)], order[next(s) % (c + 1)]);
-  exact.grid = base.grid;
-  exact.storage = HistogramStorage::kExact;
-  exact.hist.assign(base.hist.size(), 0);
-  exact.pixels = base.pixels;
-  for (int c = 0; c < cells; ++c) {
-    const int from = order[static_cast<std::size_t>(c)];
-    const int shift = static_cast<int>(next(s) % 49) - 24;
-    exact.pixels[static_cast<std::size_t>(c)] = base.pixels[static_cast<std::size_t>(from)];
-    Bin* to = &exact.hist[static_cast<std::size_t>(c) * kBins];
-    const Bin* src = &base.hist[static_cast<std::size_t>(from) * kBins];
-    for (int b = 0; b < kBins; ++b) {
-      const int t = std::clamp(b + shift, 0, kBins - 1);
-      to[t] = static_cast<Bin>(std::min<int>(65535, to[t] + src[b]));
-    }
-  }
-  if (storage == HistogramStorage::kCompact) {
-    compact(exact, out);
-  } else {
-    out = exact;
-  }
-}
 
 struct Frames {
   std::vector<cv::Mat> gray;       // the sequence, 8-bit gray
@@ -213,7 +176,7 @@ ModeRun run_mode(const std::string& mode, const DistractorSetup& a, const Detect
     Descriptor exact, stored;
     for (std::int64_t k = 0; k < a.distractors; ++k) {
       make_distractor(f.exact[static_cast<std::size_t>(k % static_cast<std::int64_t>(f.exact.size()))], k,
-                      options.descriptor.storage, exact, stored);
+                      a.run, options.descriptor.storage, exact, stored);
       detector.restore_frame(f.width, f.height, stored, state);
     }
     std::vector<double> query, insert, total, candidates, evidence;
@@ -388,9 +351,10 @@ void run_distractors(const DistractorSetup& a, const DetectorOptions& options) {
     j["height"] = f.height;
     j["storage"] = to_string(options.descriptor.storage);
     j["verification"] = verification_stages(options.verification);
+    j["distractor_run"] = a.run;
     j["distractor_recipe"] =
         "descriptor of sequence frame k % M, cells shuffled, each cell's histogram moved by a "
-        "random -24..+24 levels (seed k)";
+        "random -24..+24 levels (seed k / distractor_run: one layout and lighting per run)";
     j["machine"] = to_json(describe_machine());
     nlohmann::json rows = nlohmann::json::array();
     for (const ModeRun& r : runs) rows.push_back(row_json(r));

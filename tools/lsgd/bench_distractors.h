@@ -13,6 +13,7 @@ namespace lsgd::cli::bench {
 
 struct DistractorSetup {
   std::int64_t distractors = 0;  // N
+  std::int64_t run = 1;          // distractors per run (one layout and lighting; 1: each its own)
   std::string sequence;          // empty: the synthetic street
   std::string gt;                // --sequence's loop ground truth (any lsgd eval format); empty: none
   io::SequenceOptions layout;    // how `sequence` is read

@@ -37,6 +37,7 @@ struct BenchArgs {
   std::string json;
   DetectorFlags detector;
   std::int64_t distractors = 0;  // > 0: bench::run_distractors
+  std::int64_t distractor_run = 1;  // --distractor-run
   std::string sequence;          // --distractors: a real sequence instead of the street
   std::string gt;                // ... and its ground truth
   SequenceFlags layout;
@@ -180,6 +181,7 @@ void run(const bench::Setup& a, const DetectorOptions& options, bench::RunData& 
 void distractors_command(const BenchArgs& args) {
   bench::DistractorSetup d;
   d.distractors = args.distractors;
+  d.run = args.distractor_run;
   d.sequence = args.sequence;
   d.gt = args.gt;
   if (!d.gt.empty() && d.sequence.empty()) {
@@ -208,8 +210,9 @@ void distractors_command(const BenchArgs& args) {
 
 void bench_command(const BenchArgs& args) {
   if (args.distractors > 0) return distractors_command(args);
-  if (!args.sequence.empty() || !args.gt.empty()) {
-    throw InvalidArgument("--sequence and --gt are the sequence of --distractors: give --distractors N too");
+  if (!args.sequence.empty() || !args.gt.empty() || args.command->count("--distractor-run") > 0) {
+    throw InvalidArgument(
+        "--sequence, --gt and --distractor-run are about --distractors: give --distractors N too");
   }
   const bench::Setup& a = args.setup;
   if (a.warmup >= a.frames) {
@@ -269,6 +272,11 @@ void register_bench(CLI::App& app) {
                   "frames) and compare the search modes at that map size: query and insert ms, "
                   "recall_vs_exhaustive, bytes per frame (--mode: that mode and exhaustive)")
       ->check(at_least(0));
+  cmd->add_option("--distractor-run", args->distractor_run,
+                  "with --distractors: distractors per run, consecutive frames of the sequence "
+                  "given one layout and one lighting change, as a stretch of another place "
+                  "(default 1: every distractor its own)")
+      ->check(at_least(1));
   cmd->add_option("--sequence", args->sequence,
                   "with --distractors: a real sequence (folder, list or dataset layout); default: "
                   "the synthetic street (--frames frames, 1090 by default)")

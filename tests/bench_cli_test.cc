@@ -220,6 +220,16 @@ TEST(BenchCli, DistractorsCompareTheModesOnOneMap) {
   ASSERT_EQ(runs.code, 0) << runs.err;
   EXPECT_EQ(nlohmann::json::parse(slurp(runs_json))["distractor_run"], 20);
   EXPECT_EQ(nlohmann::json::parse(slurp(json))["distractor_run"], 1);
+  // A map larger than the machine's memory fails at once, naming the
+  // storage that would fit more, before any map is built.
+  if (lsgd::cli::bench::available_memory_bytes() >= 0) {
+    const auto huge = lsgd("bench --distractors 1000000000 --frames 30 --width 160 --height 120 --mode index");
+    EXPECT_EQ(huge.code, 1);
+    EXPECT_NE(huge.err.find("--distractors 1000000000: a map of 1000000030 frames"), std::string::npos)
+        << huge.err;
+    EXPECT_NE(huge.err.find("use --option descriptor.storage=compact"), std::string::npos) << huge.err;
+    EXPECT_EQ(huge.out.find("exhaustive ..."), std::string::npos) << huge.out;
+  }
   const auto street_gt = lsgd("bench --distractors 5 --frames 30 --gt x");
   EXPECT_EQ(street_gt.code, 1);
   EXPECT_NE(street_gt.err.find("the synthetic street has its own"), std::string::npos) << street_gt.err;
@@ -291,6 +301,37 @@ TEST(Distractor, ARunSharesOneLayoutAndLighting) {
   EXPECT_TRUE(out.hist.empty());
   EXPECT_THROW(make_distractor(base, 3, 0, lsgd::HistogramStorage::kExact, exact, out),
                lsgd::InvalidArgument);
+}
+
+TEST(Distractor, MapMemoryIsEstimatedAndCheckedAgainstTheMachine) {
+  using namespace lsgd::cli::bench;
+  lsgd::DetectorOptions options;
+  options.descriptor.storage = lsgd::HistogramStorage::kCompact;
+  // KITTI size (80 cells), compact: 10,240 descriptor bytes; the index adds
+  // its key (16 a cell), 2 M links of 4 bytes and 64 of bookkeeping.
+  EXPECT_EQ(map_bytes("index", 1000, 80, options), 1000 * (10240 + 1280 + 128 + 64));
+  EXPECT_EQ(map_bytes("exhaustive", 1000, 80, options), 1000 * (10240 + 8 * 48));
+  options.descriptor.storage = lsgd::HistogramStorage::kExact;
+  EXPECT_EQ(map_bytes("exhaustive", 1000, 80, options), 1000 * (41280 + 8 * 48));
+  options.verification.stages = {};
+  EXPECT_EQ(map_bytes("exhaustive", 2, 80, options), 2 * (41280 + 8));
+
+  std::istringstream meminfo("MemTotal:       24000000 kB\nMemFree:        1000 kB\nMemAvailable:   2048 kB\n");
+  EXPECT_EQ(mem_available_bytes(meminfo), 2048 * 1024);
+  std::istringstream none("MemTotal: 1 kB\n"), odd("MemAvailable: 12 pages\n");
+  EXPECT_EQ(mem_available_bytes(none), -1);
+  EXPECT_EQ(mem_available_bytes(odd), -1);
+  const auto room = [](const char* max, const char* current) {
+    std::istringstream m(max), c(current);
+    return cgroup_room_bytes(m, c);
+  };
+  EXPECT_EQ(room("1000000\n", "250000\n"), 750000);
+  EXPECT_EQ(room("max\n", "250000\n"), -1);
+  EXPECT_EQ(room("1000\n", "2000\n"), 0);
+  EXPECT_EQ(room("", "2000\n"), -1);
+  EXPECT_EQ(room("lots\n", "2000\n"), -1);
+  // The machine running the test says something (Linux) or nothing (-1).
+  EXPECT_GE(available_memory_bytes(), -1);
 }
 
 TEST(BenchSupport, SlicRegionSizeMatchesOurGrid) {

@@ -31,6 +31,7 @@
 #include <iostream>
 #include <memory>
 #include <optional>
+#include <sstream>
 #include <opencv2/core.hpp>
 #include <opencv2/imgproc.hpp>
 
@@ -260,6 +261,41 @@ nlohmann::json row_json(const ModeRun& r) {
           {"index_restore_s", r.index_restore_s}};
 }
 
+// Fails before any map is built when the largest mode's map would not fit
+// in the memory this process can still take (the modes run one after the
+// other, each on its own map), so a run too large for the machine is told
+// at once instead of being killed at its end.
+void check_memory(const DistractorSetup& a, const DetectorOptions& options, const Frames& f,
+                  const std::vector<std::string>& modes) {
+  const std::int64_t frames = a.distractors + static_cast<std::int64_t>(f.gray.size());
+  const int cells = f.exact.front().grid.cells();
+  std::int64_t map = 0;
+  for (const std::string& m : modes) map = std::max(map, map_bytes(m, frames, cells, options));
+  std::int64_t held = 0;  // the sequence's images and exact descriptors, held by the bench
+  for (std::size_t i = 0; i < f.gray.size(); ++i) {
+    held += static_cast<std::int64_t>(f.gray[i].total() + f.exact[i].hist.size() * sizeof(Bin));
+  }
+  const std::int64_t available = available_memory_bytes();
+  if (available < 0 || map + held <= available) return;
+  const auto gb = [](std::int64_t bytes) {
+    std::ostringstream out;
+    out << std::fixed << std::setprecision(1) << static_cast<double>(bytes) / 1e9 << " GB";
+    return out.str();
+  };
+  std::string advice = "fewer distractors";
+  if (options.descriptor.storage == HistogramStorage::kExact) {
+    advice = "--option descriptor.storage=compact (" +
+             std::to_string(Descriptor::bytes_per_frame(HistogramStorage::kCompact, cells)) +
+             " descriptor bytes a frame instead of " +
+             std::to_string(Descriptor::bytes_per_frame(HistogramStorage::kExact, cells)) + ") or " + advice;
+  }
+  throw InvalidArgument("--distractors " + std::to_string(a.distractors) + ": a map of " +
+                        std::to_string(frames) + " frames of " + std::to_string(cells) + " cells in " +
+                        to_string(options.descriptor.storage) + " storage needs about " + gb(map + held) +
+                        " of memory and " + gb(available) +
+                        " is available (MemAvailable, and the cgroup's limit); use " + advice);
+}
+
 }  // namespace
 
 void run_distractors(const DistractorSetup& a, const DetectorOptions& options) {
@@ -279,6 +315,7 @@ void run_distractors(const DistractorSetup& a, const DetectorOptions& options) {
   modes.erase(std::remove(modes.begin(), modes.end(), std::string(kExhaustiveSearch)), modes.end());
   modes.insert(modes.begin(), kExhaustiveSearch);  // the reference, first
   const Frames f = load_frames(a, options);
+  check_memory(a, options, f, modes);
   std::cout << "bench --distractors " << a.distractors << ": " << f.source << " (" << f.width << "x"
             << f.height << "), " << to_string(options.descriptor.storage) << " storage, verification "
             << verification_stages(options.verification) << "\n";

@@ -1,12 +1,16 @@
 #include "distractor.h"
 
 #include <algorithm>
+#include <fstream>
+#include <sstream>
 #include <cstddef>
 #include <string>
 #include <utility>
 #include <vector>
 
 #include "lsgd/error.h"
+#include "lsgd/search.h"
+#include "lsgd/verification.h"
 
 namespace lsgd::cli::bench {
 namespace {
@@ -48,6 +52,57 @@ void make_distractor(const Descriptor& base, std::int64_t k, std::int64_t run, H
   } else {
     out = exact;
   }
+}
+
+std::int64_t map_bytes(const std::string& mode, std::int64_t frames, int cells,
+                       const DetectorOptions& options) {
+  const auto descriptor = static_cast<std::int64_t>(Descriptor::bytes_per_frame(options.descriptor.storage, cells));
+  std::int64_t extra = 0;
+  if (mode == kIndexSearch) {
+    extra = 16 * std::int64_t{cells} + 8 * std::int64_t{options.search.index.m} + 64;
+  } else if (mode == kExhaustiveSearch) {
+    const TemporalOptions& t = options.verification.temporal_options;
+    const int rows = options.verification.has(kTemporalStage) ? std::max(t.frames, t.long_frames) : 1;
+    extra = 8 * std::int64_t{rows};
+  }
+  return frames * (descriptor + extra);
+}
+
+std::int64_t mem_available_bytes(std::istream& meminfo) {
+  std::string line;
+  while (std::getline(meminfo, line)) {
+    if (line.rfind("MemAvailable:", 0) != 0) continue;
+    std::istringstream in(line.substr(13));
+    std::int64_t kb = -1;
+    std::string unit;
+    if (in >> kb >> unit && kb >= 0 && unit == "kB") return kb * 1024;
+    return -1;
+  }
+  return -1;
+}
+
+std::int64_t cgroup_room_bytes(std::istream& max, std::istream& current) {
+  std::string limit;
+  std::int64_t used = -1;
+  if (!(max >> limit) || limit == "max" || !(current >> used) || used < 0) return -1;
+  std::int64_t cap = -1;
+  try {
+    cap = std::stoll(limit);
+  } catch (const std::exception&) {
+    return -1;
+  }
+  return std::max<std::int64_t>(0, cap - used);
+}
+
+std::int64_t available_memory_bytes() {
+  std::ifstream meminfo("/proc/meminfo");
+  std::int64_t room = meminfo ? mem_available_bytes(meminfo) : -1;
+  std::ifstream max("/sys/fs/cgroup/memory.max"), current("/sys/fs/cgroup/memory.current");
+  if (max && current) {
+    const std::int64_t cgroup = cgroup_room_bytes(max, current);
+    if (cgroup >= 0) room = room < 0 ? cgroup : std::min(room, cgroup);
+  }
+  return room;
 }
 
 }  // namespace lsgd::cli::bench

@@ -3,8 +3,11 @@
 #pragma once
 
 #include <cstdint>
+#include <istream>
+#include <string>
 
 #include "lsgd/descriptor.h"
+#include "lsgd/detector.h"
 
 namespace lsgd::cli::bench {
 
@@ -19,5 +22,23 @@ namespace lsgd::cli::bench {
 // `storage` keeps it).
 void make_distractor(const Descriptor& base, std::int64_t k, std::int64_t run,
                      HistogramStorage storage, Descriptor& exact, Descriptor& out);
+
+// Memory a detector in search mode `mode` takes for `frames` stored frames of
+// `cells` cells, bytes, as measured (docs/performance.md, resident bytes per
+// frame): each frame's descriptor in `options`' storage; the index's graph
+// key (16 bytes a cell) and bottom-layer links (2 M of 4 bytes) and
+// hnswlib's bookkeeping; exhaustive search's score rows (up to 8 bytes a
+// frame for each of the last long_frames queries).
+std::int64_t map_bytes(const std::string& mode, std::int64_t frames, int cells,
+                       const DetectorOptions& options);
+
+// MemAvailable of a /proc/meminfo text, bytes; -1 when it has none.
+std::int64_t mem_available_bytes(std::istream& meminfo);
+// What a cgroup v2 still lets this process take: memory.max less
+// memory.current, bytes; -1 when unlimited or unreadable.
+std::int64_t cgroup_room_bytes(std::istream& max, std::istream& current);
+// The memory this process can still take on this machine: the smaller of
+// MemAvailable and its cgroup's room; -1 when neither is known.
+std::int64_t available_memory_bytes();
 
 }  // namespace lsgd::cli::bench

@@ -229,6 +229,21 @@ TEST(BenchCli, DistractorsCompareTheModesOnOneMap) {
         << huge.err;
     EXPECT_NE(huge.err.find("use --option descriptor.storage=compact"), std::string::npos) << huge.err;
     EXPECT_EQ(huge.out.find("exhaustive ..."), std::string::npos) << huge.out;
+    // The same for a plain bench of too many frames, in every storage and
+    // mode, before the first frame is rendered.
+    for (const char* extra : {"", " --mode index", " --mode nodes --option descriptor.storage=compact"}) {
+      const auto frames = lsgd(std::string("bench --frames 1000000000 --width 160 --height 120") + extra);
+      EXPECT_EQ(frames.code, 1) << extra;
+      EXPECT_NE(frames.err.find("--frames 1000000000: a map of 1000000000 frames of 6 cells"),
+                std::string::npos) << extra << ": " << frames.err;
+      // Exact storage names the compact storage's size; compact only fewer frames.
+      const bool compact = std::string(extra).find("compact") != std::string::npos;
+      const std::string advice = compact ? "; use fewer frames"
+                                         : "; use --option descriptor.storage=compact (768 descriptor "
+                                           "bytes a frame instead of 3096) or fewer frames";
+      EXPECT_NE(frames.err.find(advice), std::string::npos) << extra << ": " << frames.err;
+      EXPECT_TRUE(frames.out.empty()) << frames.out;
+    }
   }
   const auto street_gt = lsgd("bench --distractors 5 --frames 30 --gt x");
   EXPECT_EQ(street_gt.code, 1);

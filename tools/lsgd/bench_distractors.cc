@@ -275,25 +275,8 @@ void check_memory(const DistractorSetup& a, const DetectorOptions& options, cons
   for (std::size_t i = 0; i < f.gray.size(); ++i) {
     held += static_cast<std::int64_t>(f.gray[i].total() + f.exact[i].hist.size() * sizeof(Bin));
   }
-  const std::int64_t available = available_memory_bytes();
-  if (available < 0 || map + held <= available) return;
-  const auto gb = [](std::int64_t bytes) {
-    std::ostringstream out;
-    out << std::fixed << std::setprecision(1) << static_cast<double>(bytes) / 1e9 << " GB";
-    return out.str();
-  };
-  std::string advice = "fewer distractors";
-  if (options.descriptor.storage == HistogramStorage::kExact) {
-    advice = "--option descriptor.storage=compact (" +
-             std::to_string(Descriptor::bytes_per_frame(HistogramStorage::kCompact, cells)) +
-             " descriptor bytes a frame instead of " +
-             std::to_string(Descriptor::bytes_per_frame(HistogramStorage::kExact, cells)) + ") or " + advice;
-  }
-  throw InvalidArgument("--distractors " + std::to_string(a.distractors) + ": a map of " +
-                        std::to_string(frames) + " frames of " + std::to_string(cells) + " cells in " +
-                        to_string(options.descriptor.storage) + " storage needs about " + gb(map + held) +
-                        " of memory and " + gb(available) +
-                        " is available (MemAvailable, and the cgroup's limit); use " + advice);
+  require_memory("--distractors " + std::to_string(a.distractors), frames, cells, options, map + held,
+                 available_memory_bytes(), "fewer distractors");
 }
 
 }  // namespace

@@ -18,6 +18,7 @@
 #include "bench_report.h"
 #include "bench_support.h"
 #include "commands.h"
+#include "distractor.h"
 #include "common.h"
 #include "files.h"
 #include "lsgd/descriptor.h"
@@ -208,6 +209,18 @@ void distractors_command(const BenchArgs& args) {
   bench::run_distractors(d, options);
 }
 
+// Fails before the first frame when the map of --frames frames and the
+// bench's per-frame timings (10 samples of 8 bytes, up to twice that while
+// their vectors grow) would not fit in the memory this process can take,
+// instead of the run being killed hours in (bench::require_memory).
+void check_memory(const bench::Setup& a, const DetectorOptions& options) {
+  const int cells = grid_size(a.width, a.height, options.segmentation.superpixel_size).cells();
+  const std::int64_t samples = 2 * 10 * static_cast<std::int64_t>(sizeof(double));
+  const std::int64_t need = bench::map_bytes(options.search.mode, a.frames, cells, options) + a.frames * samples;
+  bench::require_memory("--frames " + std::to_string(a.frames), a.frames, cells, options, need,
+                        bench::available_memory_bytes(), "fewer frames");
+}
+
 void bench_command(const BenchArgs& args) {
   if (args.distractors > 0) return distractors_command(args);
   if (!args.sequence.empty() || !args.gt.empty() || args.command->count("--distractor-run") > 0) {
@@ -225,6 +238,7 @@ void bench_command(const BenchArgs& args) {
   files.input(args.detector.config, "--config");
   files.output(args.json, "--json");
   files.check();
+  check_memory(a, options);
   cv::setNumThreads(0);  // sequential, like the detector
   bench::RunData d;
   d.machine = bench::describe_machine();

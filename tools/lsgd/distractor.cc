@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <fstream>
+#include <iomanip>
 #include <sstream>
 #include <cstddef>
 #include <string>
@@ -103,6 +104,28 @@ std::int64_t available_memory_bytes() {
     if (cgroup >= 0) room = room < 0 ? cgroup : std::min(room, cgroup);
   }
   return room;
+}
+
+void require_memory(const std::string& what, std::int64_t frames, int cells,
+                    const DetectorOptions& options, std::int64_t need, std::int64_t available,
+                    const std::string& fewer) {
+  if (available < 0 || need <= available) return;
+  const auto gb = [](std::int64_t bytes) {
+    std::ostringstream out;
+    out << std::fixed << std::setprecision(1) << static_cast<double>(bytes) / 1e9 << " GB";
+    return out.str();
+  };
+  std::string advice = fewer;
+  if (options.descriptor.storage == HistogramStorage::kExact) {
+    advice = "--option descriptor.storage=compact (" +
+             std::to_string(Descriptor::bytes_per_frame(HistogramStorage::kCompact, cells)) +
+             " descriptor bytes a frame instead of " +
+             std::to_string(Descriptor::bytes_per_frame(HistogramStorage::kExact, cells)) + ") or " + advice;
+  }
+  throw InvalidArgument(what + ": a map of " + std::to_string(frames) + " frames of " +
+                        std::to_string(cells) + " cells in " + to_string(options.descriptor.storage) +
+                        " storage needs about " + gb(need) + " of memory and " + gb(available) +
+                        " is available (MemAvailable, and the cgroup's limit); use " + advice);
 }
 
 }  // namespace lsgd::cli::bench

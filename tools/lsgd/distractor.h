@@ -41,4 +41,14 @@ std::int64_t cgroup_room_bytes(std::istream& max, std::istream& current);
 // MemAvailable and its cgroup's room; -1 when neither is known.
 std::int64_t available_memory_bytes();
 
+// Throws InvalidArgument when `need` bytes (a map of `frames` frames of
+// `cells` cells in `options`' storage, and what the bench holds besides) are
+// more than `available` (available_memory_bytes(); -1: unknown, no check),
+// so a run too large for the machine is told at once instead of being killed
+// at its end. `what` names the flag and value ("--frames 1000000000"); the
+// message gives both sizes and, in exact storage, the compact storage's size.
+void require_memory(const std::string& what, std::int64_t frames, int cells,
+                    const DetectorOptions& options, std::int64_t need, std::int64_t available,
+                    const std::string& fewer);
+
 }  // namespace lsgd::cli::bench

@@ -202,42 +202,48 @@ double AppearanceEvidence::single_frame(double similarity) const {
 
 template <typename V>
 const V* AppearanceEvidence::Table<V>::find(std::int64_t b) const {
-  if (keys_.empty()) return nullptr;
-  const std::size_t mask = keys_.size() - 1;
+  if (entries_.empty()) return nullptr;
+  const std::size_t mask = entries_.size() - 1;
   for (std::size_t at = static_cast<std::size_t>(b) & mask;; at = (at + 1) & mask) {
-    if (keys_[at] == b) return &values_[at];
-    if (keys_[at] < 0) return nullptr;
+    if (entries_[at].key == b) return &entries_[at].value;
+    if (entries_[at].key < 0) return nullptr;
   }
 }
 
 template <typename V>
-void AppearanceEvidence::Table<V>::insert(std::int64_t b, const V& value) {
-  if (2 * (size_ + 1) > keys_.size()) {  // at most half full
-    std::vector<std::int64_t> keys(std::max<std::size_t>(64, 2 * keys_.size()), -1);
-    std::vector<V> values(keys.size());
-    const std::size_t mask = keys.size() - 1;
-    for (std::size_t k = 0; k < keys_.size(); ++k) {
-      if (keys_[k] < 0) continue;
-      std::size_t at = static_cast<std::size_t>(keys_[k]) & mask;
-      while (keys[at] >= 0) at = (at + 1) & mask;
-      keys[at] = keys_[k];
-      values[at] = values_[k];
+V& AppearanceEvidence::Table<V>::find_or_add(std::int64_t b, bool& added) {
+  if (2 * (size_ + 1) > entries_.size()) {  // at most half full
+    std::vector<Entry> entries(std::max<std::size_t>(64, 2 * entries_.size()));
+    const std::size_t mask = entries.size() - 1;
+    for (const Entry& e : entries_) {
+      if (e.key < 0) continue;
+      std::size_t at = static_cast<std::size_t>(e.key) & mask;
+      while (entries[at].key >= 0) at = (at + 1) & mask;
+      entries[at] = e;
     }
-    keys_.swap(keys);
-    values_.swap(values);
+    entries_.swap(entries);
   }
-  const std::size_t mask = keys_.size() - 1;
+  const std::size_t mask = entries_.size() - 1;
   std::size_t at = static_cast<std::size_t>(b) & mask;
-  while (keys_[at] >= 0 && keys_[at] != b) at = (at + 1) & mask;
-  if (keys_[at] < 0) ++size_;
-  keys_[at] = b;
-  values_[at] = value;
+  while (entries_[at].key >= 0 && entries_[at].key != b) at = (at + 1) & mask;
+  added = entries_[at].key < 0;
+  if (added) {
+    ++size_;
+    entries_[at] = Entry{b, V{}};
+  }
+  return entries_[at].value;
+}
+
+template <typename V>
+void AppearanceEvidence::Table<V>::insert(std::int64_t b, const V& value) {
+  bool added = false;
+  find_or_add(b, added) = value;
 }
 
 template <typename V>
 void AppearanceEvidence::Table<V>::clear() {
   if (size_ == 0) return;
-  std::fill(keys_.begin(), keys_.end(), -1);
+  std::fill(entries_.begin(), entries_.end(), Entry{});
   size_ = 0;
 }
 
@@ -245,9 +251,9 @@ std::int32_t AppearanceEvidence::stored_z(const FrameStore& store, std::int64_t 
                                           SimilarityMetric metric) {
   Row* r = ring_row(a);
   if (r == nullptr || b < 0 || !r->stats.valid()) return 0;
-  if (const double* cached = r->pairs.find(b)) return quantise(r->stats, *cached);
-  const double s = similarity(store.view(a), store.view(b), metric);
-  r->pairs.insert(b, s);
+  bool added = false;
+  double& s = r->pairs.find_or_add(b, added);
+  if (added) s = similarity(store.view(a), store.view(b), metric);
   return quantise(r->stats, s);
 }
 
@@ -255,7 +261,7 @@ double AppearanceEvidence::sequence(const FrameStore& store, const DescriptorVie
                                     std::int64_t frame, SimilarityMetric metric) {
   if (!options_.enabled) internal::throw_invalid("AppearanceEvidence: sequences are off");
   if (!level2_.valid() || level2_.sd <= 0) return kNaN;
-  if (const auto it = scored_.find(frame); it != scored_.end()) return level2_.standardise(it->second);
+  if (const double* a = scored_.find(frame)) return level2_.standardise(*a);
   const std::int64_t i = last_query_;
   // On a kept diagonal the sums are already there.
   const std::int64_t d = i - frame, s = stride(i);
@@ -263,16 +269,22 @@ double AppearanceEvidence::sequence(const FrameStore& store, const DescriptorVie
     const std::int64_t k = (d - min_gap_ - 1) / s;
     if (k >= 0 && k < static_cast<std::int64_t>(sequence_.size())) {
       const double a = sequence_[static_cast<std::size_t>(k)];
-      scored_.emplace(frame, a);
+      scored_.insert(frame, a);
       return level2_.standardise(a);
     }
   }
   // s(i, frame) joins the query's row: the next queries' sequences on this
   // diagonal read it there.
   Row* row = ring_row(i);
-  const double* cached = row != nullptr ? row->pairs.find(frame) : nullptr;
-  const double s0 = cached != nullptr ? *cached : similarity(descriptor, store.view(frame), metric);
-  if (row != nullptr && cached == nullptr) row->pairs.insert(frame, s0);
+  double s0 = 0;
+  if (row != nullptr) {
+    bool added = false;
+    double& cached = row->pairs.find_or_add(frame, added);
+    if (added) cached = similarity(descriptor, store.view(frame), metric);
+    s0 = cached;
+  } else {
+    s0 = similarity(descriptor, store.view(frame), metric);
+  }
   const std::int32_t z0 = quantise(level1_, s0);
   std::int64_t short_sum = z0;
   std::int64_t long_sum = z0;
@@ -295,7 +307,7 @@ double AppearanceEvidence::sequence(const FrameStore& store, const DescriptorVie
   carrying_.insert(d, Carry{short_sum - stored_z(store, i - s_last, frame - s_last, metric),
                             long_sum - stored_z(store, i - l_last, frame - l_last, metric)});
   const double a = sequence_mean(short_sum, long_sum);
-  scored_.emplace(frame, a);
+  scored_.insert(frame, a);
   return level2_.standardise(a);
 }
 

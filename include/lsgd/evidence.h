@@ -41,7 +41,6 @@
 #include <cstddef>
 #include <cstdint>
 #include <deque>
-#include <unordered_map>
 #include <utility>
 #include <vector>
 
@@ -158,13 +157,19 @@ class AppearanceEvidence {
    public:
     // The value of b, nullptr when there is none.
     const V* find(std::int64_t b) const;
-    // Adds the value of a b not in the table yet.
+    // Sets the value of b.
     void insert(std::int64_t b, const V& value);
+    // The value of b, added as V{} (`added` true) when there is none: one
+    // probe where find() then insert() take two. Valid until the next add.
+    V& find_or_add(std::int64_t b, bool& added);
     void clear();
 
    private:
-    std::vector<std::int64_t> keys_;  // -1: empty
-    std::vector<V> values_;
+    struct Entry {
+      std::int64_t key = -1;  // -1: empty
+      V value{};
+    };
+    std::vector<Entry> entries_;  // key and value in one line: one miss a probe
     std::size_t size_ = 0;
   };
   // s(a, b) of one query a by frame b (a sequence reads up to long_frames of
@@ -216,7 +221,7 @@ class AppearanceEvidence {
   ScoreStatistics level1_, level2_;
   std::vector<double> scratch_;
   std::vector<double> subset_;     // kept_statistics()
-  std::unordered_map<std::int64_t, double> scored_;  // A of the frames scored for the last query
+  Table<double> scored_;  // A of the frames scored for the last query
   // By diagonal (offset query - frame): the carries of the sequences the
   // previous query scored off the kept diagonals (read by this query's
   // sequence()), and those this query scored (for the next one).

@@ -13,6 +13,8 @@ namespace {
 constexpr double kZScale = 1024.0;   // fixed point: 1/1024 sigma
 constexpr double kZLimit = 64.0;     // |z| is clamped to 64 sigma
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+// A term not computed yet (quantise() stays within +-kZLimit * kZScale).
+constexpr std::int32_t kUnknownTerm = std::numeric_limits<std::int32_t>::min();
 
 // Offsets d of the candidates of `query`: min_gap + 1 .. query.
 std::int64_t offsets(std::int64_t query, std::int64_t min_gap) {
@@ -57,6 +59,7 @@ AppearanceEvidence::AppearanceEvidence(const SequenceOptions& sequence, std::int
     }
     span_ = std::max(options_.frames, options_.long_frames);
   }
+  while (term_ring_ < span_) term_ring_ *= 2;
 }
 
 std::int64_t AppearanceEvidence::stride(std::int64_t query) const {
@@ -171,6 +174,7 @@ void AppearanceEvidence::add_query(const FrameStore& store, const DescriptorView
   carrying_.clear();
   last_query_ = query;
   if (!options_.enabled) return;
+  prune_terms();
 
   // The stride doubled: keep every other diagonal in the ring and the sums.
   const std::int64_t s = stride(query);
@@ -241,20 +245,71 @@ void AppearanceEvidence::Table<V>::insert(std::int64_t b, const V& value) {
 }
 
 template <typename V>
+template <typename F>
+void AppearanceEvidence::Table<V>::for_each(F&& f) const {
+  for (const Entry& e : entries_) {
+    if (e.key >= 0) f(e.key, e.value);
+  }
+}
+
+template <typename V>
 void AppearanceEvidence::Table<V>::clear() {
   if (size_ == 0) return;
   std::fill(entries_.begin(), entries_.end(), Entry{});
   size_ = 0;
 }
 
-std::int32_t AppearanceEvidence::stored_z(const FrameStore& store, std::int64_t a, std::int64_t b,
-                                          SimilarityMetric metric) {
-  Row* r = ring_row(a);
-  if (r == nullptr || b < 0 || !r->stats.valid()) return 0;
+std::size_t AppearanceEvidence::terms(std::int64_t d) {
   bool added = false;
-  double& s = r->pairs.find_or_add(b, added);
-  if (added) s = similarity(store.view(a), store.view(b), metric);
-  return quantise(r->stats, s);
+  std::int64_t& r = term_records_.find_or_add(d, added);
+  if (added) {
+    r = static_cast<std::int64_t>(term_newest_.size());
+    term_newest_.push_back(-1);
+    term_z_.resize(term_z_.size() + static_cast<std::size_t>(term_ring_), kUnknownTerm);
+  }
+  return static_cast<std::size_t>(r);
+}
+
+std::int32_t AppearanceEvidence::term(std::size_t r, const FrameStore& store,
+                                      const DescriptorView& view, std::int64_t a, std::int64_t d,
+                                      const ScoreStatistics& stats, SimilarityMetric metric) {
+  const std::int64_t b = a - d;
+  if (b < 0 || !stats.valid()) return 0;
+  std::int32_t* z = term_z_.data() + r * static_cast<std::size_t>(term_ring_);
+  const std::int64_t mask = term_ring_ - 1;
+  std::int64_t& newest = term_newest_[r];
+  if (a > newest) {
+    // The slots of queries newest + 1 .. a held queries a ring earlier, out
+    // of the ring now. (a is never a ring or more below newest: a is in the
+    // ring, newest at most the last query.)
+    for (std::int64_t q = std::max(newest + 1, a - mask); q <= a; ++q) z[q & mask] = kUnknownTerm;
+    newest = a;
+  }
+  std::int32_t& v = z[a & mask];
+  if (v == kUnknownTerm) v = quantise(stats, similarity(view, store.view(b), metric));
+  return v;
+}
+
+void AppearanceEvidence::prune_terms() {
+  if (term_newest_.size() <= term_limit_) return;
+  const std::int64_t oldest = last_query_ - span_ + 1;  // the oldest query in the ring
+  // Record -> diagonal, then keep the records that hold a query of the ring.
+  std::vector<std::int64_t> diagonal(term_newest_.size(), -1);
+  term_records_.for_each([&](std::int64_t d, std::int64_t r) { diagonal[static_cast<std::size_t>(r)] = d; });
+  term_records_.clear();
+  std::size_t kept = 0;
+  const auto ring = static_cast<std::size_t>(term_ring_);
+  for (std::size_t r = 0; r < term_newest_.size(); ++r) {
+    if (term_newest_[r] < oldest) continue;
+    term_newest_[kept] = term_newest_[r];
+    std::copy_n(term_z_.begin() + static_cast<std::ptrdiff_t>(r * ring), ring,
+                term_z_.begin() + static_cast<std::ptrdiff_t>(kept * ring));
+    term_records_.insert(diagonal[r], static_cast<std::int64_t>(kept));
+    ++kept;
+  }
+  term_newest_.resize(kept);
+  term_z_.resize(kept * ring);
+  term_limit_ = std::max<std::size_t>(4096, 2 * kept);
 }
 
 double AppearanceEvidence::sequence(const FrameStore& store, const DescriptorView& descriptor,
@@ -273,19 +328,16 @@ double AppearanceEvidence::sequence(const FrameStore& store, const DescriptorVie
       return level2_.standardise(a);
     }
   }
-  // s(i, frame) joins the query's row: the next queries' sequences on this
-  // diagonal read it there.
-  Row* row = ring_row(i);
-  double s0 = 0;
-  if (row != nullptr) {
-    bool added = false;
-    double& cached = row->pairs.find_or_add(frame, added);
-    if (added) cached = similarity(descriptor, store.view(frame), metric);
-    s0 = cached;
-  } else {
-    s0 = similarity(descriptor, store.view(frame), metric);
-  }
-  const std::int32_t z0 = quantise(level1_, s0);
+  // Term t of the sequence, z(i - t, frame - t): the query's own (t = 0,
+  // kept for the next queries' sequences on this diagonal) or a stored
+  // query's (0 when it left the ring or was never calibrated).
+  const std::size_t r = terms(d);
+  const auto z = [&](int t) -> std::int32_t {
+    if (t == 0) return term(r, store, descriptor, i, d, level1_, metric);
+    const Row* row = ring_row(i - t);
+    return row == nullptr ? 0 : term(r, store, store.view(i - t), i - t, d, row->stats, metric);
+  };
+  const std::int32_t z0 = z(0);
   std::int64_t short_sum = z0;
   std::int64_t long_sum = z0;
   const int steps = std::max(options_.frames, options_.long_frames);
@@ -296,16 +348,15 @@ double AppearanceEvidence::sequence(const FrameStore& store, const DescriptorVie
     long_sum += c->long_sum;
   } else {
     for (int t = 1; t < steps && frame - t >= 0; ++t) {
-      const std::int32_t z = stored_z(store, i - t, frame - t, metric);
-      if (t < options_.frames) short_sum += z;
-      long_sum += z;
+      const std::int32_t zt = z(t);
+      if (t < options_.frames) short_sum += zt;
+      long_sum += zt;
     }
   }
   // For the next query on this diagonal: both sums without their oldest term
   // (0 when it does not exist: a frame before the map or a query before the ring).
   const int s_last = options_.frames - 1, l_last = steps - 1;
-  carrying_.insert(d, Carry{short_sum - stored_z(store, i - s_last, frame - s_last, metric),
-                            long_sum - stored_z(store, i - l_last, frame - l_last, metric)});
+  carrying_.insert(d, Carry{short_sum - z(s_last), long_sum - z(l_last)});
   const double a = sequence_mean(short_sum, long_sum);
   scored_.insert(frame, a);
   return level2_.standardise(a);
@@ -480,6 +531,10 @@ void AppearanceEvidence::rebuild(const FrameStore& store, SimilarityMetric metri
   scored_.clear();
   carried_.clear();
   carrying_.clear();
+  term_records_.clear();
+  term_newest_.clear();
+  term_z_.clear();
+  term_limit_ = 4096;
   level1_ = level2_ = ScoreStatistics{};
   last_query_ = store.size() - 1;
   if (!options_.enabled || store.empty()) return;

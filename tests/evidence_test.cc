@@ -11,6 +11,7 @@
 #include <cmath>
 #include <limits>
 #include <map>
+#include <set>
 #include <utility>
 
 #include "lsgd/error.h"
@@ -105,12 +106,17 @@ struct Reference {
   // Sequence evidence R(q, j), NaN when not calibrated.
   double evidence(std::int64_t q, std::int64_t j) const {
     if (!level1(q).valid()) return std::numeric_limits<double>::quiet_NaN();
-    std::vector<double> all;
-    for (std::int64_t f : sampled(q)) all.push_back(sequence_mean(q, f));
-    const ScoreStatistics s = statistics(all.data(), all.size());
+    auto it = level2_of.find(q);
+    if (it == level2_of.end()) {
+      std::vector<double> all;
+      for (std::int64_t f : sampled(q)) all.push_back(sequence_mean(q, f));
+      it = level2_of.emplace(q, statistics(all.data(), all.size())).first;
+    }
+    const ScoreStatistics& s = it->second;
     if (!s.valid()) return std::numeric_limits<double>::quiet_NaN();
     return s.standardise(sequence_mean(q, j));
   }
+  mutable std::map<std::int64_t, ScoreStatistics> level2_of;  // evidence(), computed once
 };
 
 struct EvidenceRun {
@@ -254,6 +260,49 @@ TEST(AppearanceEvidence, SequencesFollowedAlongADiagonalMatchTheDefinition) {
     }
     run.store.add(frames[q]);
   }
+}
+
+// The terms a sequence reads are kept by diagonal, a ring of the last
+// queries each, and once there are more than 4,096 diagonals the records no
+// query of the ring holds any more are dropped: diagonals scored again after
+// gaps shorter and longer than the ring (128 slots for long_frames 70), new
+// ones every query (more than 4,096 in all, so records were dropped), and one
+// scored every query (its carry) all match the definition.
+TEST(AppearanceEvidence, SequencesOnDiagonalsScoredAfterGapsMatchTheDefinition) {
+  SequenceOptions o;
+  o.frames = 5;
+  o.long_frames = 70;
+  const std::int64_t w = 3;
+  const int n = 6000;
+  std::vector<Descriptor> frames;
+  for (int i = 0; i < n; ++i) frames.push_back(frame(i, 41));
+  const Reference ref(frames, w, o, true);
+  EvidenceRun run(o, w, true);
+  std::set<std::int64_t> scored;  // offsets
+  for (std::int64_t q = 0; q < n; ++q) {
+    run.add(frames[q], w, false);
+    if (q >= 200) {
+      SCOPED_TRACE(q);
+      std::vector<std::int64_t> offsets = {150};  // every query
+      std::uint64_t state = static_cast<std::uint64_t>(q);
+      for (int k = 0; k < 40; ++k) {
+        offsets.push_back(60 + static_cast<std::int64_t>(test::splitmix64(state) % static_cast<std::uint64_t>(q - 60)));
+      }
+      if (q % 150 < 3) offsets.push_back(133);  // gaps of 148 queries, longer than the ring
+      for (const std::int64_t d : offsets) {
+        const std::int64_t j = q - d;
+        if (j < 0 || j >= q - w) continue;
+        scored.insert(d);
+        const double got = run.evidence.sequence(run.store, frames[q].view(), j,
+                                                 SimilarityMetric::kReference);
+        if (q % 16 == 0 || d == 133) {
+          ASSERT_NEAR(got, ref.evidence(q, j), 1e-9) << "frame " << j << " offset " << d;
+        }
+      }
+    }
+    run.store.add(frames[q]);
+  }
+  ASSERT_GT(scored.size(), 4096u);
 }
 
 // Beyond exact_statistics candidates, exhaustive search standardises with the

@@ -162,6 +162,9 @@ class AppearanceEvidence {
     // The value of b, added as V{} (`added` true) when there is none: one
     // probe where find() then insert() take two. Valid until the next add.
     V& find_or_add(std::int64_t b, bool& added);
+    // Calls f(b, value) for every value.
+    template <typename F>
+    void for_each(F&& f) const;
     void clear();
 
    private:
@@ -172,9 +175,6 @@ class AppearanceEvidence {
     std::vector<Entry> entries_;  // key and value in one line: one miss a probe
     std::size_t size_ = 0;
   };
-  // s(a, b) of one query a by frame b (a sequence reads up to long_frames of
-  // them per candidate frame).
-  using PairCache = Table<double>;
   // A sequence's sums (fixed point) without its oldest term: what the next
   // query's sequence on the same diagonal adds its own term to.
   struct Carry {
@@ -185,12 +185,6 @@ class AppearanceEvidence {
     std::int64_t query = -1;
     ScoreStatistics stats;
     std::vector<std::int32_t> z;  // fixed point, one per kept diagonal (slot order)
-    // Similarities s(query, b) of frames b off the kept diagonals that a
-    // sequence() read, this query's own (t = 0) or a later query's; a later
-    // query's sequence on the same diagonal reads them here instead of
-    // computing them again. They leave with the row, when no later sequence
-    // reaches them.
-    PairCache pairs;
   };
   std::int32_t quantise(const ScoreStatistics& stats, double similarity) const;
   void push_row(Row row);
@@ -202,9 +196,16 @@ class AppearanceEvidence {
                              std::int64_t query, SimilarityMetric metric,
                              const std::vector<double>* row, std::vector<double>& out) const;
   double sequence_mean(std::int64_t short_sum, std::int64_t long_sum) const;
-  // z(a, b) for a stored query a (in the ring) and frame b, fixed point.
-  std::int32_t stored_z(const FrameStore& store, std::int64_t a, std::int64_t b,
-                        SimilarityMetric metric);
+  // The terms of diagonal d (its record, added when there is none).
+  std::size_t terms(std::int64_t d);
+  // z(a, a - d) in fixed point (0 when a - d < 0 or the stats are not
+  // valid), from record r of diagonal d or computed into it; `view` is query
+  // a's descriptor, `stats` its row's statistics.
+  std::int32_t term(std::size_t r, const FrameStore& store, const DescriptorView& view,
+                    std::int64_t a, std::int64_t d, const ScoreStatistics& stats,
+                    SimilarityMetric metric);
+  // Drops the records that hold no query of the ring any more (add_query).
+  void prune_terms();
   const Row* ring_row(std::int64_t query) const;
   Row* ring_row(std::int64_t query);
 
@@ -226,6 +227,17 @@ class AppearanceEvidence {
   // previous query scored off the kept diagonals (read by this query's
   // sequence()), and those this query scored (for the next one).
   Table<Carry> carried_, carrying_;
+  // z(a, a - d) of the queries a in the ring by diagonal d, computed once:
+  // what a sequence on d reads for its terms t >= 1 (earlier queries' pairs
+  // on d; the query's own, t = 0, for the next queries). One record a
+  // diagonal, a ring of term_ring_ values indexed by a, so a sequence's
+  // terms lie together and one probe finds them (they were kept by query,
+  // one probe each, in tables that outgrew the cache).
+  Table<std::int64_t> term_records_;       // d -> record
+  std::vector<std::int64_t> term_newest_;  // per record: the newest query a it holds
+  std::vector<std::int32_t> term_z_;       // per record: term_ring_ values, kUnknownTerm: not computed
+  std::int64_t term_ring_ = 1;             // a power of two >= span_
+  std::size_t term_limit_ = 4096;          // records before prune_terms() drops the stale ones
   std::vector<Candidate> raw_all_;    // realign(): the candidates and the followed frames promoted
   std::vector<Candidate> extra_;      // ... the followed frames' sequences
   std::vector<std::pair<std::int64_t, std::int64_t>> windows_;  // realign(): frames to score ...

@@ -739,11 +739,12 @@ std::unique_ptr<V5Source> open_v5_matrix(const std::string& path, const Containe
   return src;
 }
 
-// matio sizes its allocations from a compressed variable's header before it
-// looks at the data: every header is read here first (read_v5_header).
-void check_compressed_headers(const std::string& path, const Container& c) {
+// matio sizes its allocations from a variable's header (array flags,
+// dimensions, name) before it looks at the data, compressed or not (array
+// flags of 9 bytes made it read the rank from the wrong place and ask for
+// 8 GB): every matrix's header is read here first (read_v5_header).
+void check_matrix_headers(const std::string& path, const Container& c) {
   for (const V5Element& e : c.elements) {
-    if (e.type != kMiCompressed) continue;
     if (const auto src = open_v5_matrix(path, c, e)) read_v5_header(*src);
   }
 }
@@ -1030,7 +1031,7 @@ GroundTruth read_mat(const std::string& path, std::int64_t frames, const std::st
   }
   const mat_ft version = Mat_GetVersion(mat.get());
   const Container container = check_container(path, version);
-  if (version == MAT_FT_MAT5) check_compressed_headers(path, container);
+  if (version == MAT_FT_MAT5) check_matrix_headers(path, container);
   std::string name = variable;
   if (name.empty()) {
     name = choose_variable(mat.get(), path);

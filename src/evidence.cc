@@ -245,14 +245,6 @@ void AppearanceEvidence::Table<V>::insert(std::int64_t b, const V& value) {
 }
 
 template <typename V>
-template <typename F>
-void AppearanceEvidence::Table<V>::for_each(F&& f) const {
-  for (const Entry& e : entries_) {
-    if (e.key >= 0) f(e.key, e.value);
-  }
-}
-
-template <typename V>
 void AppearanceEvidence::Table<V>::clear() {
   if (size_ == 0) return;
   std::fill(entries_.begin(), entries_.end(), Entry{});
@@ -261,10 +253,10 @@ void AppearanceEvidence::Table<V>::clear() {
 
 std::size_t AppearanceEvidence::terms(std::int64_t d) {
   bool added = false;
-  std::int64_t& r = term_records_.find_or_add(d, added);
+  std::int64_t& r = term_index_.find_or_add(d, added);
   if (added) {
-    r = static_cast<std::int64_t>(term_newest_.size());
-    term_newest_.push_back(-1);
+    r = static_cast<std::int64_t>(term_records_.size());
+    term_records_.push_back({d, -1});
     term_z_.resize(term_z_.size() + static_cast<std::size_t>(term_ring_), kUnknownTerm);
   }
   return static_cast<std::size_t>(r);
@@ -277,7 +269,7 @@ std::int32_t AppearanceEvidence::term(std::size_t r, const FrameStore& store,
   if (b < 0 || !stats.valid()) return 0;
   std::int32_t* z = term_z_.data() + r * static_cast<std::size_t>(term_ring_);
   const std::int64_t mask = term_ring_ - 1;
-  std::int64_t& newest = term_newest_[r];
+  std::int64_t& newest = term_records_[r].newest;
   if (a > newest) {
     // The slots of queries newest + 1 .. a held queries a ring earlier, out
     // of the ring now. (a is never a ring or more below newest: a is in the
@@ -291,25 +283,22 @@ std::int32_t AppearanceEvidence::term(std::size_t r, const FrameStore& store,
 }
 
 void AppearanceEvidence::prune_terms() {
-  if (term_newest_.size() <= term_limit_) return;
+  if (term_records_.size() <= term_limit_) return;
   const std::int64_t oldest = last_query_ - span_ + 1;  // the oldest query in the ring
-  // Record -> diagonal, then keep the records that hold a query of the ring.
-  std::vector<std::int64_t> diagonal(term_newest_.size(), -1);
-  term_records_.for_each([&](std::int64_t d, std::int64_t r) { diagonal[static_cast<std::size_t>(r)] = d; });
-  term_records_.clear();
+  term_index_.clear();
   std::size_t kept = 0;
   const auto ring = static_cast<std::size_t>(term_ring_);
-  for (std::size_t r = 0; r < term_newest_.size(); ++r) {
-    if (term_newest_[r] < oldest) continue;
-    term_newest_[kept] = term_newest_[r];
+  for (std::size_t r = 0; r < term_records_.size(); ++r) {
+    if (term_records_[r].newest < oldest) continue;
+    term_records_[kept] = term_records_[r];
     std::copy_n(term_z_.begin() + static_cast<std::ptrdiff_t>(r * ring), ring,
                 term_z_.begin() + static_cast<std::ptrdiff_t>(kept * ring));
-    term_records_.insert(diagonal[r], static_cast<std::int64_t>(kept));
+    term_index_.insert(term_records_[kept].diagonal, static_cast<std::int64_t>(kept));
     ++kept;
   }
-  term_newest_.resize(kept);
+  term_records_.resize(kept);
   term_z_.resize(kept * ring);
-  term_limit_ = std::max<std::size_t>(4096, 2 * kept);
+  term_limit_ = std::max(kTermRecords, 2 * kept);
 }
 
 double AppearanceEvidence::sequence(const FrameStore& store, const DescriptorView& descriptor,
@@ -531,10 +520,10 @@ void AppearanceEvidence::rebuild(const FrameStore& store, SimilarityMetric metri
   scored_.clear();
   carried_.clear();
   carrying_.clear();
+  term_index_.clear();
   term_records_.clear();
-  term_newest_.clear();
   term_z_.clear();
-  term_limit_ = 4096;
+  term_limit_ = kTermRecords;
   level1_ = level2_ = ScoreStatistics{};
   last_query_ = store.size() - 1;
   if (!options_.enabled || store.empty()) return;

@@ -162,9 +162,6 @@ class AppearanceEvidence {
     // The value of b, added as V{} (`added` true) when there is none: one
     // probe where find() then insert() take two. Valid until the next add.
     V& find_or_add(std::int64_t b, bool& added);
-    // Calls f(b, value) for every value.
-    template <typename F>
-    void for_each(F&& f) const;
     void clear();
 
    private:
@@ -233,11 +230,18 @@ class AppearanceEvidence {
   // diagonal, a ring of term_ring_ values indexed by a, so a sequence's
   // terms lie together and one probe finds them (they were kept by query,
   // one probe each, in tables that outgrew the cache).
-  Table<std::int64_t> term_records_;       // d -> record
-  std::vector<std::int64_t> term_newest_;  // per record: the newest query a it holds
+  struct TermRecord {
+    std::int64_t diagonal = 0;
+    std::int64_t newest = -1;  // the newest query a it holds
+  };
+  Table<std::int64_t> term_index_;         // d -> record
+  std::vector<TermRecord> term_records_;
   std::vector<std::int32_t> term_z_;       // per record: term_ring_ values, kUnknownTerm: not computed
   std::int64_t term_ring_ = 1;             // a power of two >= span_
-  std::size_t term_limit_ = 4096;          // records before prune_terms() drops the stale ones
+  // Records before prune_terms() drops the stale ones: at least
+  // kTermRecords, else twice those it kept last.
+  static constexpr std::size_t kTermRecords = 4096;
+  std::size_t term_limit_ = kTermRecords;
   std::vector<Candidate> raw_all_;    // realign(): the candidates and the followed frames promoted
   std::vector<Candidate> extra_;      // ... the followed frames' sequences
   std::vector<std::pair<std::int64_t, std::int64_t>> windows_;  // realign(): frames to score ...

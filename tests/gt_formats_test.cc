@@ -388,8 +388,12 @@ struct V5Writer {
   // (the sub-elements after the name).
   std::string matrix(std::uint32_t cls, const std::vector<std::uint32_t>& dims,
                      const std::string& data) const {
-    const std::string body = element(6, words({cls, 0})) + element(5, words(dims)) +
-                             element(1, "GT") + data;
+    return matrix_of(element(6, words({cls, 0})), element(5, words(dims)), data);
+  }
+  // The same from its array flags and dimensions sub-elements as given.
+  std::string matrix_of(const std::string& flags, const std::string& dims,
+                        const std::string& data) const {
+    const std::string body = flags + dims + element(1, "GT") + data;
     return word(14) + word(static_cast<std::uint32_t>(body.size())) + body;
   }
   std::string file(const std::string& element, bool compressed) const {
@@ -436,9 +440,6 @@ TEST(ReadMatV5, BothByteOrdersCompressedOrNotAreReadByLsgd) {
   }
 }
 
-// Found by the issue 15 audit: matio sized its read from the dimensions and
-// left the rest of the matrix uninitialised (valgrind), so loops came from
-// whatever the heap held. The data must hold exactly the declared values.
 // A fuzzer find: an uncompressed variable whose array flags claim 9 bytes
 // made matio read its rank from the wrong place and ask for 8 GB; like a
 // compressed one's, its header is checked before matio reads it.
@@ -448,22 +449,21 @@ TEST(ReadMatV5, CorruptUncompressedHeaderIsFormatErrorBeforeMatioAllocates) {
     V5Writer w;
     w.big_endian = big;
     const std::string data = w.element(9, w.doubles(four_by_four()));
-    const auto variable = [&](const std::string& flags, const std::string& dims) {
-      const std::string body = flags + dims + w.element(1, "GT") + data;
-      return w.word(14) + w.word(static_cast<std::uint32_t>(body.size())) + body;
-    };
     const std::string flags9 = w.element(6, w.words({6, 0}) + std::string(1, '\xff'));
-    const fs::path p = write_file("flags9.mat", w.file(variable(flags9, w.element(5, w.words({4, 4}))), false));
+    const fs::path p = write_file("flags9.mat", w.file(w.matrix_of(flags9, w.element(5, w.words({4, 4})), data), false));
     std::string e = message_of<lsgd::FormatError>([&] { lsgd::eval::read_mat(p.string(), 4); });
     EXPECT_TRUE(contains(e, p.string()) && contains(e, "array flags of 9 bytes")) << e;
     // Dimensions of 300 values (the element holds them): refused as well.
     const std::string flags = w.element(6, w.words({6, 0}));
-    const fs::path q = write_file("rank300.mat", w.file(variable(flags, w.element(5, w.words(std::vector<std::uint32_t>(300, 4)))), false));
+    const fs::path q = write_file("rank300.mat", w.file(w.matrix_of(flags, w.element(5, w.words(std::vector<std::uint32_t>(300, 4))), data), false));
     e = message_of<lsgd::FormatError>([&] { lsgd::eval::read_mat(q.string(), 4); });
     EXPECT_TRUE(contains(e, q.string()) && contains(e, "claims 1200 bytes of dimensions")) << e;
   }
 }
 
+// Found by the issue 15 audit: matio sized its read from the dimensions and
+// left the rest of the matrix uninitialised (valgrind), so loops came from
+// whatever the heap held. The data must hold exactly the declared values.
 TEST(ReadMatV5, DimensionsBeyondTheDataAreFormatErrors) {
   for (bool big : {false, true}) {
     for (bool z : {false, true}) {

@@ -91,7 +91,8 @@ Detector::Detector(const DetectorOptions& options)
       segmenter_((options.check(), options.segmentation)),
       search_(make_search(options.search)),
       evidence_(sequence_options(options.verification), options.search.min_gap,
-                !search_->scores_every_frame()),
+                !search_->scores_every_frame(), kExactStatisticsCandidates,
+                search_->scores_every_frame_up_to()),
       stages_(make_stages(options.verification)),
       decision_(options.decision) {
   for (const auto& stage : stages_) stage_list_.push_back(stage.get());
@@ -178,8 +179,9 @@ Result Detector::process_gray(double convert_ms, std::int64_t start_ns) {
   // After a restore the evidence is recomputed from the stored frames first.
   const std::int64_t evidence_start = now_ns();
   if (evidence_.last_query() != result.frame - 1) evidence_.rebuild(store_, metric);
-  evidence_.add_query(store_, descriptor_.view(), result.frame, metric,
-                      search_->scores_every_frame() ? &row_ : nullptr);
+  every_frame_ = search_->scores_every_frame_for(
+      std::max<std::int64_t>(0, result.frame - options_.search.min_gap));
+  evidence_.add_query(store_, descriptor_.view(), result.frame, metric, every_frame_ ? &row_ : nullptr);
   score_candidates(result);
   result.timings.evidence_ms = ms_since(evidence_start);
   result.timings.search_ms = ms_since(t);
@@ -205,7 +207,7 @@ void Detector::score_candidates(Result& result) {
   const SimilarityMetric metric = options_.similarity.metric;
   const int top_n = options_.search.top_n;
   if (options_.verification.has(kTemporalStage)) {
-    if (search_->scores_every_frame()) {
+    if (every_frame_) {
       evidence_.best_places(top_n, result.candidates);
       places_ = result.candidates;
     } else {

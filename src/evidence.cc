@@ -45,11 +45,19 @@ ScoreStatistics statistics(const double* values, std::size_t n) {
 }
 
 AppearanceEvidence::AppearanceEvidence(const SequenceOptions& sequence, std::int64_t min_gap,
-                                       bool sample, std::int64_t exact_statistics)
-    : options_(sequence), min_gap_(min_gap), sample_(sample), exact_statistics_(exact_statistics) {
+                                       bool sample, std::int64_t exact_statistics,
+                                       std::int64_t every_frame_up_to)
+    : options_(sequence),
+      min_gap_(min_gap),
+      sample_(sample),
+      exact_statistics_(exact_statistics),
+      every_frame_up_to_(every_frame_up_to) {
   if (min_gap < 0) internal::throw_invalid("AppearanceEvidence: min_gap ", min_gap, " < 0");
   if (exact_statistics < 0) {
     internal::throw_invalid("AppearanceEvidence: exact_statistics ", exact_statistics, " < 0");
+  }
+  if (every_frame_up_to < 0) {
+    internal::throw_invalid("AppearanceEvidence: every_frame_up_to ", every_frame_up_to, " < 0");
   }
   if (options_.enabled) {
     if (options_.frames < 1 || options_.long_frames < 0 || options_.tolerance < 0) {
@@ -62,13 +70,17 @@ AppearanceEvidence::AppearanceEvidence(const SequenceOptions& sequence, std::int
   while (term_ring_ < span_) term_ring_ *= 2;
 }
 
+bool AppearanceEvidence::sampled(std::int64_t query) const {
+  return sample_ && offsets(query, min_gap_) > every_frame_up_to_;
+}
+
 std::int64_t AppearanceEvidence::stride(std::int64_t query) const {
-  return sample_ ? sampled_stride(offsets(query, min_gap_)) : 1;
+  return sampled(query) ? sampled_stride(offsets(query, min_gap_)) : 1;
 }
 
 std::int64_t AppearanceEvidence::statistics_stride(std::int64_t query) const {
   const std::int64_t n = offsets(query, min_gap_);
-  return sample_ || n > exact_statistics_ ? sampled_stride(n) : 1;
+  return sampled(query) || n > exact_statistics_ ? sampled_stride(n) : 1;
 }
 
 ScoreStatistics AppearanceEvidence::kept_statistics(std::int64_t query,
@@ -101,7 +113,11 @@ void AppearanceEvidence::diagonal_similarities(const FrameStore& store,
   out.resize(static_cast<std::size_t>(n));
   const std::int64_t newest = query - min_gap_ - 1;  // frame of slot 0
   if (row != nullptr) {
-    if (static_cast<std::int64_t>(row->size()) != offsets(query, min_gap_) || s != 1) {
+    if (s != 1) {
+      internal::throw_invalid("AppearanceEvidence: a row of similarities for query ", query,
+                              ", whose diagonals are sampled (stride ", s, ")");
+    }
+    if (static_cast<std::int64_t>(row->size()) != offsets(query, min_gap_)) {
       internal::throw_invalid("AppearanceEvidence: a row of ", row->size(),
                               " similarities for query ", query, ", expected ",
                               offsets(query, min_gap_));
@@ -176,16 +192,19 @@ void AppearanceEvidence::add_query(const FrameStore& store, const DescriptorView
   if (!options_.enabled) return;
   prune_terms();
 
-  // The stride doubled: keep every other diagonal in the ring and the sums.
+  // The stride grew (it doubled, or the diagonals are sampled from this
+  // query on): keep the diagonals of the new stride in the ring and the sums.
   const std::int64_t s = stride(query);
   if (query > 0 && s != stride(query - 1)) {
-    const auto halve = [](auto& v) {
-      for (std::size_t k = 0; 2 * k < v.size(); ++k) v[k] = v[2 * k];
-      v.resize((v.size() + 1) / 2);
+    const auto every = static_cast<std::size_t>(s / stride(query - 1));
+    const auto keep = [every](auto& v) {
+      std::size_t n = 0;
+      for (std::size_t k = 0; k < v.size(); k += every) v[n++] = v[k];
+      v.resize(n);
     };
-    for (Row& r : ring_) halve(r.z);
-    halve(short_sum_);
-    halve(long_sum_);
+    for (Row& r : ring_) keep(r.z);
+    keep(short_sum_);
+    keep(long_sum_);
   }
   Row r;
   r.query = query;
@@ -353,7 +372,7 @@ double AppearanceEvidence::sequence(const FrameStore& store, const DescriptorVie
 
 void AppearanceEvidence::best_places(int top_n, std::vector<Candidate>& out) const {
   out.clear();
-  if (!options_.enabled || sample_ || !level2_.valid()) return;
+  if (!options_.enabled || sampled(last_query_) || !level2_.valid()) return;
   const std::int64_t n = static_cast<std::int64_t>(sequence_.size());
   const std::int64_t radius = 2 * static_cast<std::int64_t>(options_.tolerance) + 1;
   const std::int64_t newest = last_query_ - min_gap_ - 1;  // frame of slot 0

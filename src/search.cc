@@ -77,6 +77,10 @@ const OptionTable<IndexOptions>& IndexOptions::fields() {
                      "of them, the best by exact similarity the temporal stage realigns (at least top_n)"),
       integer_option("follow", &S::follow, 0, 1000, "places",
                      "places beyond top_n followed to the next query along their diagonals"),
+      integer_option<S, std::int64_t>(
+          "exhaustive_up_to", &S::exhaustive_up_to, 0, 1000000000, "frames",
+          "a query with at most this many candidates scores every frame (exhaustive search's "
+          "results and statistics); the graph beyond (0: always the graph)"),
   };
   return table;
 }

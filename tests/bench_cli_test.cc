@@ -149,8 +149,11 @@ TEST(BenchCli, NodesModeWithoutOpenCvWritesNull) {
 // but nodes compared with exhaustive search on the same map.
 TEST(BenchCli, DistractorsCompareTheModesOnOneMap) {
   const fs::path json = kTmp / "distractors.json";
+  // The graph from the first query (the default scores every frame of a map
+  // this small: below).
   const auto r = lsgd("bench --distractors 300 --frames 120 --width 160 --height 120 --min-gap 10 "
-                      "--verify temporal --mode index --json '" + json.string() + "'");
+                      "--verify temporal --mode index --option search.index.exhaustive_up_to=0 "
+                      "--json '" + json.string() + "'");
   ASSERT_EQ(r.code, 0) << r.err;
   const auto j = nlohmann::json::parse(slurp(json));
   EXPECT_EQ(j["mode"], "index");
@@ -190,6 +193,17 @@ TEST(BenchCli, DistractorsCompareTheModesOnOneMap) {
   EXPECT_EQ(j["modes"][0]["index_bytes_per_frame"], 0.0);
   EXPECT_GT(j["index_bytes_per_frame"].get<double>(), 0.0);
   EXPECT_GT(j["index_restore_s"].get<double>(), 0.0);
+  // With the defaults a map of 420 frames is searched exhaustively: the same
+  // candidate for every query and the same loops, the graph built all the same.
+  const fs::path small_json = kTmp / "distractors-default.json";
+  const auto small = lsgd("bench --distractors 300 --frames 120 --width 160 --height 120 --min-gap 10 "
+                          "--verify temporal --mode index --json '" + small_json.string() + "'");
+  ASSERT_EQ(small.code, 0) << small.err;
+  const auto d = nlohmann::json::parse(slurp(small_json));
+  EXPECT_EQ(d["recall_vs_exhaustive"], 1.0);
+  EXPECT_EQ(d["modes"][1]["declared_vs_exhaustive"], 1.0);
+  EXPECT_EQ(d["modes"][1]["declared"], d["modes"][0]["declared"]);
+  EXPECT_GT(d["index_bytes_per_frame"].get<double>(), 0.0);
   const auto nodes = lsgd("bench --distractors 10 --frames 20 --width 160 --height 120 --mode nodes");
   EXPECT_EQ(nodes.code, 1);
   EXPECT_NE(nodes.err.find("nodes cannot take distractors"), std::string::npos) << nodes.err;

@@ -153,19 +153,23 @@ struct ResumeCase {
   // Index mode: Database::save_index() after this many frames (the frames
   // after it up to the split are stored without saving it again); -1: never.
   std::int64_t saved_at = -1;
+  // Index mode: search.index.exhaustive_up_to (0: the graph from the start).
+  std::int64_t exhaustive_up_to = 0;
 };
 
 void PrintTo(const ResumeCase& c, std::ostream* out) {
   *out << c.mode << " " << c.stages << ", frames " << c.frames << ", split at "
        << c.split << (c.append_all ? ", append_all" : "") << ", " << to_string(c.storage)
-       << (c.saved_at >= 0 ? ", index saved at " + std::to_string(c.saved_at) : "");
+       << (c.saved_at >= 0 ? ", index saved at " + std::to_string(c.saved_at) : "")
+       << (c.exhaustive_up_to > 0 ? ", exhaustive up to " + std::to_string(c.exhaustive_up_to) : "");
 }
 
 class Resume : public ::testing::TestWithParam<ResumeCase> {};
 
 TEST_P(Resume, EqualsUninterruptedRun) {
   const ResumeCase c = GetParam();
-  const DetectorOptions o = options(c.mode, c.stages, c.storage);
+  DetectorOptions o = options(c.mode, c.stages, c.storage);
+  o.search.index.exhaustive_up_to = c.exhaustive_up_to;
   Detector reference(o);
   const std::vector<Result> expected = run(reference, 0, c.frames);
 
@@ -173,7 +177,8 @@ TEST_P(Resume, EqualsUninterruptedRun) {
   std::replace(stages.begin(), stages.end(), ',', '_');
   const std::string path = temp_path("resume_" + c.mode + "_" + stages +
                                      (c.append_all ? "_all" : "") + "_" + to_string(c.storage) +
-                                     (c.saved_at >= 0 ? "_saved" : ""));
+                                     (c.saved_at >= 0 ? "_saved" : "") +
+                                     (c.exhaustive_up_to > 0 ? "_up_to" : ""));
   std::int64_t saved_frames = 0;
   {
     Database db = Database::create(path, o);
@@ -246,12 +251,21 @@ INSTANTIATE_TEST_SUITE_P(
                       ResumeCase{kIndexSearch, "temporal", 260, 130, false,
                                  HistogramStorage::kExact, 130},
                       ResumeCase{kIndexSearch, "temporal,geometric", 190, 155, false,
-                                 HistogramStorage::kCompact, 120}),
+                                 HistogramStorage::kCompact, 120},
+                      // Every frame scored while a query has at most 60
+                      // candidates (queries up to 80), the graph after: split
+                      // after the switch; and with 140 (queries up to 160),
+                      // before it.
+                      ResumeCase{kIndexSearch, "temporal", 260, 130, false,
+                                 HistogramStorage::kExact, 100, 60},
+                      ResumeCase{kIndexSearch, "temporal,geometric", 190, 150, false,
+                                 HistogramStorage::kExact, -1, 140}),
     [](const ::testing::TestParamInfo<ResumeCase>& param) {
       std::string name = param.param.mode + "_" + param.param.stages +
                          (param.param.append_all ? "_append_all" : "") +
                          (param.param.storage == HistogramStorage::kCompact ? "_compact" : "") +
-                         (param.param.saved_at >= 0 ? "_saved_index" : "");
+                         (param.param.saved_at >= 0 ? "_saved_index" : "") +
+                         (param.param.exhaustive_up_to > 0 ? "_exhaustive_first" : "");
       std::replace(name.begin(), name.end(), ',', '_');
       return name;
     });
@@ -262,7 +276,8 @@ INSTANTIATE_TEST_SUITE_P(
 // graph, cut short) are refused by Detector::restore_index, which leaves a
 // detector that rebuilds the graph and continues exactly.
 TEST(DatabaseIndex, DamagedSavedIndexIsRefusedAndRebuildIgnoresIt) {
-  const DetectorOptions o = options(kIndexSearch, "temporal");
+  DetectorOptions o = options(kIndexSearch, "temporal");
+  o.search.index.exhaustive_up_to = 0;  // the graph answers every query
   constexpr std::int64_t kSplit = 140, kFrames = 220;
   Detector reference(o);
   const std::vector<Result> expected = run(reference, 0, kFrames);
@@ -1231,7 +1246,7 @@ TEST(DatabaseCli, RunResumesAndDbInfo) {
 // to the uninterrupted run.
 TEST(DatabaseCli, IndexModeSavesItsGraph) {
   const std::string dir = write_split_sequence("cli_index_frames");
-  const std::string flags = " --min-gap 20 --mode index";
+  const std::string flags = " --min-gap 20 --mode index --option search.index.exhaustive_up_to=0";
   ASSERT_EQ(run_cli("run --sequence " + dir + "/all.txt --layout list" + flags + " --output " +
                     dir + "/all.csv"),
             0);

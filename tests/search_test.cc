@@ -309,6 +309,7 @@ TEST(SearchIndex, AShortlistAsLargeAsTheMapIsExhaustive) {
   for (SimilarityMetric metric : {SimilarityMetric::kReference, SimilarityMetric::kNormalizedL1}) {
     SearchOptions o;
     o.mode = kIndexSearch;
+    o.index.exhaustive_up_to = 0;  // the graph from the first query
     o.min_gap = 5;
     o.top_n = 4;
     o.index.shortlist = 200;
@@ -339,6 +340,7 @@ TEST(SearchIndex, TheShortlistIsTheMostSimilarOfTheRescoredFramesAndTheNewest) {
   for (int i = 0; i < 150; ++i) frames.push_back(random_descriptor(6, 900 + i % 41));  // revisits
   SearchOptions o;
   o.mode = kIndexSearch;
+  o.index.exhaustive_up_to = 0;  // the graph from the first query
   o.min_gap = 5;
   o.top_n = 3;
   o.index.shortlist = 3;
@@ -367,6 +369,7 @@ TEST(SearchIndex, ASmallShortlistFindsTheNearestFrame) {
   for (int i = 0; i < 1500; ++i) frames.push_back(random_descriptor(6, 5000 + i % 500));
   SearchOptions o;
   o.mode = kIndexSearch;
+  o.index.exhaustive_up_to = 0;  // the graph from the first query
   o.min_gap = 10;
   o.index.shortlist = 8;
   const auto all = run_index(frames, o, SimilarityMetric::kReference);
@@ -421,6 +424,7 @@ TEST(SearchIndex, FollowsThePreviousFramesPlacesAndKeepsThemAsState) {
   for (int i = 0; i < 40; ++i) frames.push_back(random_descriptor(6, 100 + i));
   SearchOptions o;
   o.mode = kIndexSearch;
+  o.index.exhaustive_up_to = 0;  // the graph from the first query
   o.min_gap = 2;
   o.index.shortlist = 1;
   o.top_n = 2;

@@ -171,6 +171,7 @@ class Detector {
   std::vector<Candidate> raw_;  // the search's candidates, by similarity
   std::vector<Candidate> places_;  // the ranked places, top_n and those the search follows
   std::vector<double> row_;     // exhaustive: the query's similarity to every candidate
+  bool every_frame_ = false;    // the search scored every frame for this query (row_ written)
   // Set while process() or restore_frame() runs: a second, overlapping
   // call throws (class Exclusive in detector.cc).
   std::atomic<bool> busy_{false};

@@ -29,6 +29,9 @@
 // exhaustive search takes them from the same sample too, so in a large map
 // every mode standardises with the same statistics and scores any candidate
 // bit for bit alike: the modes differ only in which candidates they look at.
+// Index mode scores every frame up to kExactStatisticsCandidates
+// (CandidateSearch::scores_every_frame_up_to()), as exhaustive search, and
+// samples beyond: its statistics are exhaustive search's at every size.
 // (A 512-value sample puts the mean within 0.05 sigma, the standard deviation
 // within 3 %.) Along a diagonal the offset is constant, so each diagonal's
 // running sums carry from query to query in every mode.
@@ -83,17 +86,22 @@ struct SequenceOptions {
 class AppearanceEvidence {
  public:
   // sample: the search does not score every frame (sampled diagonals);
-  // exact_statistics: without sample, the most candidates the statistics
-  // are computed over (kExactStatisticsCandidates; tests use a smaller one).
+  // exact_statistics: when every frame is scored, the most candidates the
+  // statistics are computed over (kExactStatisticsCandidates; tests use a
+  // smaller one); every_frame_up_to: with sample, the search still scores
+  // every frame of a query with at most this many candidates (0: never;
+  // CandidateSearch::scores_every_frame_up_to()), and its diagonals are
+  // sampled beyond.
   AppearanceEvidence(const SequenceOptions& sequence, std::int64_t min_gap, bool sample,
-                     std::int64_t exact_statistics = kExactStatisticsCandidates);
+                     std::int64_t exact_statistics = kExactStatisticsCandidates,
+                     std::int64_t every_frame_up_to = 0);
 
   // Adds query `query` (== store.size(): the frame is not stored yet, its
   // descriptor is `descriptor`). `row`, when given, holds s(query, j) for
-  // every j < query - min_gap in frame order (exhaustive search already
-  // computed it); otherwise the kept diagonals are scored here. Queries must
-  // come in order; a detector restored from storage is brought up to date
-  // first (rebuild()).
+  // every j < query - min_gap in frame order (the search already computed
+  // it; only for a query whose diagonals are not sampled); otherwise the
+  // kept diagonals are scored here. Queries must come in order; a detector
+  // restored from storage is brought up to date first (rebuild()).
   void add_query(const FrameStore& store, const DescriptorView& descriptor, std::int64_t query,
                  SimilarityMetric metric, const std::vector<double>* row);
 
@@ -111,9 +119,10 @@ class AppearanceEvidence {
   double sequence(const FrameStore& store, const DescriptorView& descriptor, std::int64_t frame,
                   SimilarityMetric metric);
 
-  // Exhaustive only: the best `top_n` distinct places of the last query by
-  // sequence evidence (local maxima of A at least 2 * tolerance + 2 frames
-  // apart), best first, scores R. Empty when not calibrated.
+  // A query whose every frame was scored (not sampled(last_query())): the
+  // best `top_n` distinct places of the last query by sequence evidence
+  // (local maxima of A at least 2 * tolerance + 2 frames apart), best first,
+  // scores R. Empty when not calibrated or sampled.
   void best_places(int top_n, std::vector<Candidate>& out) const;
 
   // Re-aligns each raw candidate within +-tolerance frames to its best
@@ -143,6 +152,9 @@ class AppearanceEvidence {
 
   // The last query added (-1: none).
   std::int64_t last_query() const { return last_query_; }
+  // Whether the diagonals of `query` are sampled (stride() may exceed 1, no
+  // row of every frame): with sample, beyond every_frame_up_to candidates.
+  bool sampled(std::int64_t query) const;
   // Diagonals kept for `query`: offsets min_gap + 1 + k * stride(query), k < count.
   std::int64_t stride(std::int64_t query) const;
   std::int64_t diagonals(std::int64_t query) const;
@@ -210,9 +222,9 @@ class AppearanceEvidence {
   std::int64_t min_gap_ = 0;
   bool sample_ = false;
   std::int64_t exact_statistics_ = kExactStatisticsCandidates;
+  std::int64_t every_frame_up_to_ = 0;
   int span_ = 1;                   // rows kept: max(frames, long_frames) with sequences, else 1
   std::int64_t last_query_ = -1;
-  std::int64_t stride_ = 1;        // current stride (sampled mode)
   std::deque<Row> ring_;           // the last span_ queries, oldest first
   std::vector<std::int32_t> short_sum_, long_sum_;  // per kept diagonal
   std::vector<double> sequence_;   // A per kept diagonal of the last query

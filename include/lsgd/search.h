@@ -64,6 +64,15 @@ struct IndexOptions {
   // view (a query that revisits nothing: its best place is the highest of
   // the map's sequences of noise, no single frame of which stands out).
   int follow = 22;
+  // A query with at most this many candidates (frames outside the temporal
+  // window) scores every frame, as exhaustive search, and gets exhaustive
+  // search's candidates, statistics and loops; the graph answers beyond (it
+  // takes the frames all along), [0, 1e9], 0: the graph from the start. The
+  // default is kExactStatisticsCandidates (evidence.h), where exhaustive
+  // search's statistics start to be sampled as the index's are: on a map up
+  // to that size a sample of 512 diagonals among a few thousand weighs a
+  // revisit's own diagonal differently, and declares other loops.
+  std::int64_t exhaustive_up_to = 8192;
   void check() const;
   static const OptionTable<IndexOptions>& fields();  // lsgd/options.h
 };
@@ -123,6 +132,16 @@ class CandidateSearch : public Stateful {
   // (evidence.h). False for a shortlist: row is left alone, the statistics
   // come from sampled diagonals and the candidates are realigned.
   virtual bool scores_every_frame() const = 0;
+  // A shortlist mode (scores_every_frame() false) that still scores every
+  // frame, and writes `row`, for a query with at most this many candidates
+  // (frames j < id - min_gap); 0, the default: never. Index mode:
+  // search.index.exhaustive_up_to.
+  virtual std::int64_t scores_every_frame_up_to() const { return 0; }
+  // Whether search() scores every frame and writes `row` for a query with
+  // `candidates` candidates (either of the two above).
+  bool scores_every_frame_for(std::int64_t candidates) const {
+    return scores_every_frame() || (candidates > 0 && candidates <= scores_every_frame_up_to());
+  }
   // Writes candidates j < id - min_gap, best first (better()) by raw
   // similarity: top_n, or a longer shortlist that the temporal stage
   // realigns as a whole (the detector keeps top_n); `row` as above.

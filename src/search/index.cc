@@ -18,12 +18,17 @@
 
 #include "internal/check.h"
 #include "internal/clock.h"
+#include "lsgd/evidence.h"
+#include "lsgd/search/exhaustive.h"
 #include "lsgd/state.h"
 #include "search/index_key.h"
 #include "search/scoring.h"
 
 namespace lsgd {
 namespace {
+
+static_assert(IndexOptions{}.exhaustive_up_to == kExactStatisticsCandidates,
+              "the index's statistics are exhaustive search's up to its exact ones");
 
 using internal::KeySpaceParam;
 using internal::key_distance;
@@ -71,6 +76,10 @@ class IndexSearch final : public CandidateSearch {
   explicit IndexSearch(const SearchOptions& options) : options_(options) {}
   const char* name() const override { return kIndexSearch; }
   bool scores_every_frame() const override { return false; }
+  // search.index.exhaustive_up_to (corridor + 4,000 distractors: 96 loops
+  // declared with the graph from the start against exhaustive search's 102;
+  // docs/performance.md).
+  std::int64_t scores_every_frame_up_to() const override { return options_.index.exhaustive_up_to; }
   // A shortlist by single frames: the best aligned sequence of a revisit may
   // sit a few frames off its best single frame (lip6-outdoor: 979 of 981
   // reported candidates as exhaustive search's with 16, 972 without;
@@ -79,7 +88,7 @@ class IndexSearch final : public CandidateSearch {
   int follow() const override { return options_.index.follow; }
   const std::vector<std::int64_t>& followed() const override { return followed_; }
 
-  Outcome search(const Query& q, std::vector<Candidate>& out, std::vector<double>&) override {
+  Outcome search(const Query& q, std::vector<Candidate>& out, std::vector<double>& row) override {
     out.clear();
     followed_.clear();
     // Frames that left the temporal window join the graph.
@@ -92,6 +101,10 @@ class IndexSearch final : public CandidateSearch {
         // Counted only once in the graph: a failed insertion is retried.
         for (; inserted_ < limit; ++inserted_) insert(q.store, q.metric, inserted_);
         outcome.insert_ms = internal::ms_since(start);
+      }
+      if (scores_every_frame_for(limit)) {
+        search_exhaustive(q.store, q.descriptor, q.id, options_, q.metric, scratch_, out, &row);
+        return outcome;
       }
       if (inserted_ == 0) return outcome;
       // The graph's `rescore` nearest keys, re-scored exactly; the best

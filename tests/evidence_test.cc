@@ -336,7 +336,8 @@ TEST(AppearanceEvidence, BeyondTheExactLimitExhaustiveScoresAsTheSampledModes) {
       EXPECT_EQ(all.evidence.sequence_statistics().sd, sampled.evidence.sequence_statistics().sd);
       if (q % 97 == 0 || q == n - 1) {
         for (const std::int64_t j : {q - w - 1, q - w - 2, q - w - 3, std::int64_t{5}, q / 3}) {
-          const double x = all.evidence.sequence(all.store, frames[q].view(), j, SimilarityMetric::kReference);
+          const double x =
+              all.evidence.sequence(all.store, frames[q].view(), j, SimilarityMetric::kReference);
           const double y = sampled.evidence.sequence(sampled.store, frames[q].view(), j,
                                                      SimilarityMetric::kReference);
           EXPECT_EQ(x, y) << "frame " << j;
@@ -357,79 +358,85 @@ TEST(AppearanceEvidence, BeyondTheExactLimitExhaustiveScoresAsTheSampledModes) {
 // diagonal, and ranks every place; after, with the diagonals of the stride
 // that exhaustive search's statistics sample there (here it jumps from 1 to
 // 4 at once). A rebuild right after the switch (a ring of two strides)
-// continues bit for bit.
+// continues bit for bit. The limit may also lie beyond exhaustive search's
+// exact statistics (the statistics are then sampled before the rows are).
 TEST(AppearanceEvidence, EveryFrameUpToALimitThenSampledScoresAsExhaustive) {
-  SequenceOptions o;
-  o.frames = 3;
-  o.long_frames = 8;
-  const std::int64_t w = 2, limit = 1100;
-  const int n = 1200;
-  std::vector<Descriptor> frames;
-  for (int i = 0; i < n; ++i) frames.push_back(frame(i, 200));
-  const Reference ref(frames, w, o, false, limit);
-  EvidenceRun all(o, w, false, limit), hybrid(o, w, true, limit), resumed(o, w, true, limit);
-  hybrid.evidence = AppearanceEvidence(o, w, true, limit, limit);
-  resumed.evidence = AppearanceEvidence(o, w, true, limit, limit);
-  const std::int64_t stop = limit + w + 3;  // three queries after the switch
-  for (std::int64_t q = 0; q < n; ++q) {
-    SCOPED_TRACE(q);
-    const bool every = q - w <= limit;
-    EXPECT_EQ(hybrid.evidence.sampled(q), !every);
-    EXPECT_EQ(hybrid.evidence.stride(q), every ? 1 : 4);
-    all.add(frames[q], w, true);
-    hybrid.add(frames[q], w, every);  // the search's row while it scores every frame
-    if (q == stop) resumed.evidence.rebuild(resumed.store, SimilarityMetric::kReference);
-    if (q >= stop) resumed.add(frames[q], w, false);
-    for (EvidenceRun* run : {&hybrid, &resumed}) {
-      if (run == &resumed && q < stop) continue;
-      const AppearanceEvidence& e = run->evidence;
-      EXPECT_EQ(e.similarity_statistics().count, all.evidence.similarity_statistics().count);
-      EXPECT_EQ(e.similarity_statistics().mean, all.evidence.similarity_statistics().mean);
-      EXPECT_EQ(e.similarity_statistics().sd, all.evidence.similarity_statistics().sd);
-      EXPECT_EQ(e.sequence_statistics().mean, all.evidence.sequence_statistics().mean);
-      EXPECT_EQ(e.sequence_statistics().sd, all.evidence.sequence_statistics().sd);
-    }
-    std::vector<Candidate> a, b;
-    all.evidence.best_places(10, a);
-    hybrid.evidence.best_places(10, b);
-    if (every) {
-      ASSERT_EQ(a.size(), b.size());
-      for (std::size_t k = 0; k < a.size(); ++k) {
-        EXPECT_EQ(a[k].frame, b[k].frame);
-        EXPECT_EQ(a[k].score, b[k].score);
+  for (const std::int64_t exact : {std::int64_t{1100}, std::int64_t{600}}) {
+    SCOPED_TRACE(testing::Message() << "exact statistics up to " << exact);
+    SequenceOptions o;
+    o.frames = 3;
+    o.long_frames = 8;
+    const std::int64_t w = 2, limit = 1100;
+    const int n = 1200;
+    std::vector<Descriptor> frames;
+    for (int i = 0; i < n; ++i) frames.push_back(frame(i, 200));
+    const Reference ref(frames, w, o, false, exact);
+    EvidenceRun all(o, w, false, exact), hybrid(o, w, true, exact), resumed(o, w, true, exact);
+    hybrid.evidence = AppearanceEvidence(o, w, true, exact, limit);
+    resumed.evidence = AppearanceEvidence(o, w, true, exact, limit);
+    const std::int64_t stop = limit + w + 3;  // three queries after the switch
+    for (std::int64_t q = 0; q < n; ++q) {
+      SCOPED_TRACE(q);
+      const bool every = q - w <= limit;
+      EXPECT_EQ(hybrid.evidence.sampled(q), !every);
+      EXPECT_EQ(hybrid.evidence.stride(q), every ? 1 : 4);
+      all.add(frames[q], w, true);
+      hybrid.add(frames[q], w, every);  // the search's row while it scores every frame
+      if (q == stop) resumed.evidence.rebuild(resumed.store, SimilarityMetric::kReference);
+      if (q >= stop) resumed.add(frames[q], w, false);
+      for (EvidenceRun* run : {&hybrid, &resumed}) {
+        if (run == &resumed && q < stop) continue;
+        const AppearanceEvidence& e = run->evidence;
+        EXPECT_EQ(e.similarity_statistics().count, all.evidence.similarity_statistics().count);
+        EXPECT_EQ(e.similarity_statistics().mean, all.evidence.similarity_statistics().mean);
+        EXPECT_EQ(e.similarity_statistics().sd, all.evidence.similarity_statistics().sd);
+        EXPECT_EQ(e.sequence_statistics().mean, all.evidence.sequence_statistics().mean);
+        EXPECT_EQ(e.sequence_statistics().sd, all.evidence.sequence_statistics().sd);
       }
-    } else {
-      EXPECT_TRUE(b.empty());  // sampled: the search's shortlist is realigned instead
-    }
-    if (q % 50 == 0 || (q >= limit + w - 2 && q <= stop + 2) || q == n - 1) {
-      for (const std::int64_t j : {q - w - 1, q - w - 2, q - w - 7, std::int64_t{5}, q / 3}) {
-        if (j < 0) continue;
-        const double x = all.evidence.sequence(all.store, frames[q].view(), j, SimilarityMetric::kReference);
-        const double y = hybrid.evidence.sequence(hybrid.store, frames[q].view(), j,
-                                                  SimilarityMetric::kReference);
-        if (std::isnan(x)) {
-          EXPECT_TRUE(std::isnan(y)) << "frame " << j;
-          continue;
+      std::vector<Candidate> a, b;
+      all.evidence.best_places(10, a);
+      hybrid.evidence.best_places(10, b);
+      if (every) {
+        ASSERT_EQ(a.size(), b.size());
+        for (std::size_t k = 0; k < a.size(); ++k) {
+          EXPECT_EQ(a[k].frame, b[k].frame);
+          EXPECT_EQ(a[k].score, b[k].score);
         }
-        EXPECT_EQ(x, y) << "frame " << j;
-        EXPECT_NEAR(x, ref.evidence(q, j), 1e-9) << "frame " << j;
-        if (q >= stop) {
-          EXPECT_EQ(resumed.evidence.sequence(resumed.store, frames[q].view(), j,
-                                              SimilarityMetric::kReference), x)
-              << "frame " << j;
+      } else {
+        EXPECT_TRUE(b.empty());  // sampled: the search's shortlist is realigned instead
+      }
+      if (q % 50 == 0 || (q >= limit + w - 2 && q <= stop + 2) || q == n - 1) {
+        for (const std::int64_t j : {q - w - 1, q - w - 2, q - w - 7, std::int64_t{5}, q / 3}) {
+          if (j < 0) continue;
+          const double x =
+              all.evidence.sequence(all.store, frames[q].view(), j, SimilarityMetric::kReference);
+          const double y = hybrid.evidence.sequence(hybrid.store, frames[q].view(), j,
+                                                    SimilarityMetric::kReference);
+          if (std::isnan(x)) {
+            EXPECT_TRUE(std::isnan(y)) << "frame " << j;
+            continue;
+          }
+          EXPECT_EQ(x, y) << "frame " << j;
+          EXPECT_NEAR(x, ref.evidence(q, j), 1e-9) << "frame " << j;
+          if (q >= stop) {
+            EXPECT_EQ(resumed.evidence.sequence(resumed.store, frames[q].view(), j,
+                                                SimilarityMetric::kReference), x)
+                << "frame " << j;
+          }
         }
       }
+      all.store.add(frames[q]);
+      hybrid.store.add(frames[q]);
+      resumed.store.add(frames[q]);
     }
-    all.store.add(frames[q]);
-    hybrid.store.add(frames[q]);
-    resumed.store.add(frames[q]);
+    // A row for a query whose diagonals are sampled is an error, as is a
+    // negative limit.
+    std::vector<double> row(static_cast<std::size_t>(n - w), 0.5);
+    EXPECT_THROW(hybrid.evidence.add_query(hybrid.store, frames[0].view(), n,
+                                           SimilarityMetric::kReference, &row),
+                 InvalidArgument);
+    EXPECT_THROW(AppearanceEvidence(o, w, true, limit, -1), InvalidArgument);
   }
-  // A row for a query whose diagonals are sampled is an error, as is a
-  // negative limit.
-  std::vector<double> row(static_cast<std::size_t>(n - w), 0.5);
-  EXPECT_THROW(hybrid.evidence.add_query(hybrid.store, frames[0].view(), n, SimilarityMetric::kReference, &row),
-               InvalidArgument);
-  EXPECT_THROW(AppearanceEvidence(o, w, true, limit, -1), InvalidArgument);
 }
 
 // A shortlist realigned with a reach reports the places exhaustive search

@@ -179,10 +179,10 @@ Result Detector::process_gray(double convert_ms, std::int64_t start_ns) {
   // After a restore the evidence is recomputed from the stored frames first.
   const std::int64_t evidence_start = now_ns();
   if (evidence_.last_query() != result.frame - 1) evidence_.rebuild(store_, metric);
-  every_frame_ = search_->scores_every_frame_for(
+  const bool every_frame = search_->scores_every_frame_for(
       std::max<std::int64_t>(0, result.frame - options_.search.min_gap));
-  evidence_.add_query(store_, descriptor_.view(), result.frame, metric, every_frame_ ? &row_ : nullptr);
-  score_candidates(result);
+  evidence_.add_query(store_, descriptor_.view(), result.frame, metric, every_frame ? &row_ : nullptr);
+  score_candidates(every_frame, result);
   result.timings.evidence_ms = ms_since(evidence_start);
   result.timings.search_ms = ms_since(t);
 
@@ -203,11 +203,11 @@ Result Detector::process_gray(double convert_ms, std::int64_t start_ns) {
 
 // Appearance scores in sigma (evidence.h): the temporal stage's sequence
 // evidence, else the standardised similarity of the search's candidates.
-void Detector::score_candidates(Result& result) {
+void Detector::score_candidates(bool every_frame, Result& result) {
   const SimilarityMetric metric = options_.similarity.metric;
   const int top_n = options_.search.top_n;
   if (options_.verification.has(kTemporalStage)) {
-    if (every_frame_) {
+    if (every_frame) {
       evidence_.best_places(top_n, result.candidates);
       places_ = result.candidates;
     } else {

@@ -147,7 +147,9 @@ class Detector {
 
  private:
   Result process_gray(double convert_ms, std::int64_t start_ns);
-  void score_candidates(Result& result);
+  // every_frame: the search scored every frame for this query (row_ written),
+  // so its places are ranked over every diagonal; else its shortlist is realigned.
+  void score_candidates(bool every_frame, Result& result);
   void verify(Result& result);
   // The components with per-frame state, in the order their records are saved.
   std::vector<Stateful*> stateful() const;
@@ -171,7 +173,6 @@ class Detector {
   std::vector<Candidate> raw_;  // the search's candidates, by similarity
   std::vector<Candidate> places_;  // the ranked places, top_n and those the search follows
   std::vector<double> row_;     // exhaustive: the query's similarity to every candidate
-  bool every_frame_ = false;    // the search scored every frame for this query (row_ written)
   // Set while process() or restore_frame() runs: a second, overlapping
   // call throws (class Exclusive in detector.cc).
   std::atomic<bool> busy_{false};

@@ -29,9 +29,10 @@
 // exhaustive search takes them from the same sample too, so in a large map
 // every mode standardises with the same statistics and scores any candidate
 // bit for bit alike: the modes differ only in which candidates they look at.
-// Index mode scores every frame up to kExactStatisticsCandidates
-// (CandidateSearch::scores_every_frame_up_to()), as exhaustive search, and
-// samples beyond: its statistics are exhaustive search's at every size.
+// Index mode scores every frame up to search.index.exhaustive_up_to
+// candidates (CandidateSearch::scores_every_frame_up_to(); by default
+// kExactStatisticsCandidates), as exhaustive search, and samples beyond: by
+// default its statistics are exhaustive search's at every size.
 // (A 512-value sample puts the mean within 0.05 sigma, the standard deviation
 // within 3 %.) Along a diagonal the offset is constant, so each diagonal's
 // running sums carry from query to query in every mode.

@@ -1,0 +1,248 @@
+#!/usr/bin/python3
+# The sequences every change of the loop decision is measured on, with the
+# shipped defaults (or the --option values given): the real sequences of
+# ../shared/datasets, the synthetic worlds of `lsgd demo`, the real ones at
+# other sizes and exposures, short sequences whose revisits come before the
+# statistics fill, and maps of two and three places (scripts/mixed_map.py).
+# One `lsgd eval` a sequence; a markdown table (declared TP / FP, recall at
+# decision, R@100P, R@1, and for a mixed map each part's true loops against
+# the part alone), and the whole as JSON. docs/results.md runs it.
+#
+#   scripts/eval_suite.py [--lsgd PATH] [--work DIR] [--shared DIR] [--only NAME,...]
+#                         [--option KEY=VALUE ...] [--json OUT] [--baseline OLD.json] [--jobs N]
+#
+# --baseline lists every sequence on which R@1 or the declared-loop recall is
+# lower than in OLD.json, or a false loop was added, and exits 1 when there is
+# one. Built sequences are kept in --work (default /tmp/lsgd-suite) and reused.
+# Needs Pillow (python3-pil, brought by scripts/install-deps.sh).
+import argparse, concurrent.futures, csv, json, os, subprocess, sys
+
+from PIL import Image
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+ROOT = os.path.dirname(HERE)
+ap = argparse.ArgumentParser(description=__doc__)
+ap.add_argument('--lsgd', default=os.path.join(ROOT, 'build/tools/lsgd/lsgd'))
+ap.add_argument('--work', default='/tmp/lsgd-suite')
+ap.add_argument('--shared', default=os.path.join(ROOT, '../shared/datasets'))
+ap.add_argument('--only', default='')
+ap.add_argument('--option', action='append', default=[])
+ap.add_argument('--json')
+ap.add_argument('--baseline')
+ap.add_argument('--jobs', type=int, default=1)
+args = ap.parse_args()
+D = os.path.abspath(args.shared)
+W = os.path.abspath(args.work)
+if not os.path.isdir(os.path.join(D, 'corridor')):
+    sys.exit(f'{D}: no real sequences there (--shared)')
+
+
+def frames(dataset):
+    with open(os.path.join(dataset, 'sequence.txt')) as f:
+        return [os.path.abspath(os.path.join(dataset, line.strip())) for line in f if line.strip()]
+
+
+def pairs(path):
+    with open(path) as f:
+        return [tuple(map(int, line.split()[:2])) for line in f if line.strip() and not line.startswith('#')]
+
+
+def write_dataset(out, images, gt):
+    os.makedirs(out, exist_ok=True)
+    with open(os.path.join(out, 'sequence.txt'), 'w') as f:
+        f.write('\n'.join(images) + '\n')
+    with open(os.path.join(out, 'groundtruth.txt'), 'w') as f:
+        f.writelines(f'{q} {m}\n' for q, m in gt)
+
+
+def variant(name, dataset, gt, size=None, gamma=None, n=None):
+    """dataset's first n frames (all), gray, resized to size and/or with a gamma."""
+    out = os.path.join(W, name)
+    if not os.path.isfile(os.path.join(out, 'groundtruth.txt')):
+        images = frames(dataset)[:n]
+        os.makedirs(os.path.join(out, 'images'), exist_ok=True)
+        listed = []
+        lut = [round(255 * (v / 255) ** gamma) for v in range(256)] if gamma else None
+        for k, path in enumerate(images):
+            target = os.path.join(out, 'images', f'{k:06d}.png')
+            im = Image.open(path).convert('L')
+            if size:
+                im = im.resize(size, Image.BICUBIC if n is None else Image.BOX)
+            if lut:
+                im = im.point(lut)
+            im.save(target)
+            listed.append(target)
+        write_dataset(out, listed, [(q, m) for q, m in pairs(gt) if q < len(images) and m < len(images)])
+    return out
+
+
+def splice(name, dataset, gt, ranges):
+    """The frames of `ranges` ([first, last) each) one after the other, ground truth carried over."""
+    out = os.path.join(W, name)
+    images = frames(dataset)
+    kept = [k for a, b in ranges for k in range(a, b)]
+    index = {k: i for i, k in enumerate(kept)}
+    write_dataset(out, [images[k] for k in kept],
+                  sorted((index[q], index[m]) for q, m in pairs(gt) if q in index and m in index
+                         and index[q] > index[m]))
+    return out
+
+
+def mixed(name, parts):
+    """scripts/mixed_map.py over parts [(dataset, gt, n), ..., (last, gt)]."""
+    out = os.path.join(W, name)
+    if not os.path.isfile(os.path.join(out, 'parts.txt')):
+        argv = [a for p in parts for a in map(str, p)] + [out]
+        subprocess.run([sys.executable, os.path.join(HERE, 'mixed_map.py')] + argv, check=True,
+                       stdout=subprocess.DEVNULL)
+    return out
+
+
+corridor = (os.path.join(D, 'corridor'), os.path.join(D, 'corridor/groundtruth.txt'))
+lip6 = (os.path.join(D, 'lip6-outdoor'), os.path.join(D, 'lip6-outdoor/groundtruth-wide.txt'))
+lip6_strict = (lip6[0], os.path.join(D, 'lip6-outdoor/groundtruth.txt'))
+nordland = (os.path.join(D, 'nordland-trimmed'), os.path.join(D, 'nordland-trimmed/groundtruth.txt'))
+
+# name -> (dataset folder, ground truth, min gap, kind, parts of a mixed map)
+suite = {}
+
+
+def add(name, dataset, gt, w, kind, parts=None):
+    suite[name] = dict(dataset=dataset, gt=gt, w=w, kind=kind, parts=parts)
+
+
+wanted = set(filter(None, args.only.split(',')))
+def want(name):
+    return not wanted or name in wanted
+
+os.makedirs(W, exist_ok=True)
+add('corridor', *corridor, 50, 'real')
+add('lip6-outdoor-wide', *lip6, 50, 'real')
+add('lip6-outdoor-strict', *lip6_strict, 50, 'real (+-2 GT: FP there are 3+ frames off)')
+add('nordland-trimmed', *nordland, 100, 'real')
+for seed in range(1, 7):
+    name = f'street-s{seed}'
+    if want(name):
+        out = os.path.join(W, name)
+        if not os.path.isfile(os.path.join(out, 'groundtruth.txt')):
+            subprocess.run([args.lsgd, 'demo', '--seed', str(seed), '--output', out], check=True,
+                           stdout=subprocess.DEVNULL)
+        add(name, out, os.path.join(out, 'groundtruth.txt'), 50, 'synthetic')
+for name, base, size, gamma in [('lip6-640x480', lip6, (640, 480), None), ('lip6-960x540', lip6, (960, 540), None),
+                                ('lip6-dark', lip6, None, 1.8), ('corridor-320x240', corridor, (320, 240), None),
+                                ('corridor-640x480', corridor, (640, 480), None), ('corridor-dark', corridor, None, 1.8)]:
+    if want(name):
+        out = variant(name, *base, size=size, gamma=gamma)
+        add(name, out, os.path.join(out, 'groundtruth.txt'), 50, 'resized / darkened')
+# Revisits before the statistics fill: a walk back to the start after 40 frames.
+for name, base, ranges in [('lip6-short', lip6, [(0, 40), (460, 500)]),
+                           ('corridor-short', corridor, [(0, 40), (111, 151)]),
+                           ('lip6-short-strict', lip6_strict, [(0, 40), (460, 500)])]:
+    if want(name):
+        out = splice(name, *base, ranges)
+        add(name, out, os.path.join(out, 'groundtruth.txt'), 20, 'early revisits')
+maps = [('mm-lip6-100-corridor', [(*lip6, 100), corridor]),
+        ('mm-lip6-300-corridor', [(*lip6, 300), corridor]),
+        ('mm-lip6-1000-corridor', [(*lip6, 1000), corridor]),
+        ('mm-corridor-100-lip6', [(*corridor, 100), lip6]),
+        ('mm-corridor-222-lip6', [(*corridor, 222), lip6]),
+        ('mm-corridor-222-nordland-300-lip6', [(*corridor, 222), (*nordland, 300), lip6]),
+        ('mm-lip6-300-nordland-300-corridor', [(*lip6, 300), (*nordland, 300), corridor])]
+for name, parts in maps:
+    if not want(name):
+        continue
+    out = mixed(name, parts)
+    # Each part alone, as the map holds it (the same size).
+    size = Image.open(frames(parts[-1][0])[0]).size
+    alone = []  # (folder, ground truth)
+    for dataset, gt, *n in parts:
+        if n:
+            out_part = variant(f'part-{os.path.basename(dataset)}-{n[0]}-{size[0]}x{size[1]}',
+                               dataset, gt, size=size, n=n[0])
+            alone.append((out_part, os.path.join(out_part, 'groundtruth.txt')))
+        else:
+            alone.append((dataset, gt))
+    add(name, out, os.path.join(out, 'groundtruth.txt'), 50, 'mixed map', parts=alone)
+
+
+def evaluate(name, dataset, gt, w):
+    os.makedirs(os.path.join(W, 'runs'), exist_ok=True)
+    stem = os.path.join(W, 'runs', name)
+    cmd = [args.lsgd, 'eval', '--sequence', dataset, '--gt', gt, '--gt-format', 'pairs', '--min-gap', str(w), '--json',
+           stem + '.json', '--output', stem + '.csv'] + [a for o in args.option for a in ('--option', o)]
+    r = subprocess.run(cmd, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
+    if r.returncode != 0:
+        sys.exit(f'{" ".join(cmd)}: exit {r.returncode}\n{r.stderr}')
+    with open(stem + '.json') as f:
+        m = json.load(f)
+    with open(stem + '.csv') as f:
+        rows = [(int(r['frame']), int(r['loop_frame'])) for r in csv.DictReader(f)]
+    return m, rows
+
+
+def true_loops(rows, gt, first=0, count=None):
+    truth = set(pairs(gt))
+    end = first + count if count is not None else float('inf')
+    return sum(1 for q, j in rows if j >= 0 and first <= q < end and (q, j) in truth)
+
+
+names = [n for n in suite if want(n)]
+jobs = {}
+with concurrent.futures.ThreadPoolExecutor(max(1, args.jobs)) as pool:
+    for n in names:
+        s = suite[n]
+        jobs[n] = pool.submit(evaluate, n, s['dataset'], s['gt'], s['w'])
+        for k, part in enumerate(s['parts'] or []):
+            if part not in jobs:
+                stem = os.path.basename(part[0]) + '-' + os.path.basename(part[1]).split('.')[0]
+                jobs[part] = pool.submit(evaluate, stem + '-alone', part[0], part[1], s['w'])
+results = {}
+for n in names:
+    s = suite[n]
+    m, rows = jobs[n].result()
+    entry = {k: m[k] for k in ('declared_loops', 'declared_true', 'declared_false', 'positives',
+                               'recall_at_decision', 'recall_at_100_precision', 'average_precision',
+                               'recall_at_1', 'ms_per_frame_median', 'ms_per_frame_p95')}
+    for k in ('ranking_recall_at_100_precision', 'ranking_average_precision'):
+        if k in m:
+            entry[k] = m[k]
+    entry['kind'] = s['kind']
+    if s['parts']:
+        with open(os.path.join(s['dataset'], 'parts.txt')) as f:
+            spans = [tuple(map(int, line.split()[:2])) for line in f]
+        entry['parts'] = []
+        for (first, count), part in zip(spans, s['parts']):
+            am, arows = jobs[part].result()
+            entry['parts'].append({'part': os.path.basename(part[0]), 'true_in_map': true_loops(rows, s['gt'], first, count),
+                                   'true_alone': am['declared_true']})
+    results[n] = entry
+
+print('| sequence | kind | declared (TP / FP) | recall at decision | R@100P | AP | R@1 | each part: true loops in the map (alone) | ms median / p95 |')
+print('|---|---|---|---|---|---|---|---|---|')
+for n, e in results.items():
+    parts = ', '.join(f"{p['true_in_map']} ({p['true_alone']})" for p in e.get('parts', []))
+    print(f"| {n} | {e['kind']} | {e['declared_loops']} ({e['declared_true']} / {e['declared_false']}) | "
+          f"{e['recall_at_decision']:.3f} | {e['recall_at_100_precision']:.3f} | {e['average_precision']:.3f} | "
+          f"{e['recall_at_1']:.3f} | {parts} | {e['ms_per_frame_median']:.2f} / {e['ms_per_frame_p95']:.2f} |")
+if args.json:
+    with open(args.json, 'w') as f:
+        json.dump({'options': args.option, 'results': results}, f, indent=1)
+if args.baseline:
+    with open(args.baseline) as f:
+        old = json.load(f)['results']
+    worse = []
+    for n, e in results.items():
+        o = old.get(n)
+        if o is None:
+            continue
+        strict = 'strict' in n  # the +-2 ground truth: its false loops are a ground-truth question
+        if e['recall_at_1'] < o['recall_at_1'] - 1e-9:
+            worse.append(f"{n}: R@1 {o['recall_at_1']:.3f} -> {e['recall_at_1']:.3f}")
+        if e['recall_at_decision'] < o['recall_at_decision'] - 1e-9:
+            worse.append(f"{n}: recall at decision {o['recall_at_decision']:.3f} -> {e['recall_at_decision']:.3f}")
+        if not strict and e['declared_false'] > o['declared_false']:
+            worse.append(f"{n}: false loops {o['declared_false']} -> {e['declared_false']}")
+    print('\nAgainst ' + args.baseline + (':' if worse else ': nothing worse'))
+    for w in worse:
+        print('  worse: ' + w)
+    sys.exit(1 if worse else 0)

@@ -23,6 +23,10 @@ const OptionTable<DecisionOptions>& DecisionOptions::fields() {
                     "(0: no continuity)"),
         real_option("continuity_inliers", &S::continuity_inliers, 0.0, 1.0, true, "",
                     "a continuing candidate needs this fraction of its loop's average inliers"),
+        real_option("strong_bonus", &S::strong_bonus, 0.0, 1000.0, false, "sigma",
+                    "added to a confirmed candidate with at least strong_inliers inliers (0: off)"),
+        integer_option("strong_inliers", &S::strong_inliers, 1, 100000, "inliers",
+                       "the geometric support a confirmed candidate needs for strong_bonus"),
     };
     for (OptionField<S>& f : t) f.resumable = true;  // the decision may change on resume
     return t;
@@ -138,14 +142,24 @@ Decision LoopDecision::decide(const DecisionQuery& q, const std::vector<Verifica
       }
     }
     if (continuation.frame >= 0 && !has_continuation) examined_.push_back(continuation);
+    // strong_bonus is for the candidate appearance ranks first (after the
+    // gates), as a first loop: geometry confirms a weak ranking, and a
+    // continuation keeps its own bar.
+    const auto strong = [&](const Candidate& c) {
+      return first < n && c.frame == candidates[first].frame && !continues(c) ? d.strong_bonus : 0.0;
+    };
+    // The most a candidate can score once confirmed.
     const auto potential = [&](const Candidate& c) {
-      return c.score + d.geometric_bonus + (continues(c) ? d.continuity_bonus : 0.0);
+      return c.score + d.geometric_bonus + strong(c) + (continues(c) ? d.continuity_bonus : 0.0);
     };
     std::stable_sort(examined_.begin(), examined_.end(),
                      [&](const Candidate& a, const Candidate& b) { return potential(a) > potential(b); });
     for (const Candidate& c : examined_) {
       const double score = potential(c);
-      if (score < d.threshold) break;  // sorted: no later one can reach it either
+      // Sorted: no later one can reach the threshold either. A young query's
+      // best candidate is examined whatever it could score.
+      const bool young_first = q.young && first < n && c.frame == candidates[first].frame;
+      if (score < d.threshold && !young_first) break;
       const bool continuing = continues(c);
       bool accepted = true;
       double support = -1;
@@ -169,21 +183,29 @@ Decision LoopDecision::decide(const DecisionQuery& q, const std::vector<Verifica
         first_support = support;
         first_rejected = !accepted;
       }
-      if (accepted) {
-        out.best = {c.frame, score};
+      if (!accepted) continue;
+      // What it scores with its support: strong_bonus needs strong_inliers.
+      const double scored = support >= d.strong_inliers ? score : score - strong(c);
+      if (out.best.frame < 0 || scored >= d.threshold) {
+        out.best = {c.frame, scored};
         out.evidence = {c.score, static_cast<int>(support), true, continuing};
-        break;
       }
+      // A confirmed candidate below the threshold is reported unless a later
+      // one (a lower potential) reaches it.
+      if (scored >= d.threshold) break;
     }
   }
 
-  // 3. Nothing confirmed: the best candidate through the gates, unconfirmed.
-  if (out.best.frame < 0 && first < n) {
+  // 3. Nothing confirmed: the best candidate through the gates, unconfirmed
+  // (a young query with a confirming stage reports nothing unconfirmed).
+  if (out.best.frame < 0 && first < n && !(q.young && !confirms.empty())) {
     const Candidate& c = candidates[first];
     double score = c.score;
     // Rejected by a confirming stage, or appearance alone on a degenerate
     // grid: never a loop.
-    const bool untrusted = confirms.empty() && q.cells < kMinAppearanceCells;
+    // A young query on appearance alone: its scores come from the prior, and
+    // are never a loop either.
+    const bool untrusted = confirms.empty() && (q.cells < kMinAppearanceCells || q.young);
     if (first_rejected || untrusted) score = std::min(score, std::nextafter(d.threshold, -1.0));
     out.best = {c.frame, score};
     out.evidence.appearance = c.score;

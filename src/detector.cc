@@ -206,6 +206,19 @@ Result Detector::process_gray(double convert_ms, std::int64_t start_ns) {
 void Detector::score_candidates(bool every_frame, Result& result) {
   const SimilarityMetric metric = options_.similarity.metric;
   const int top_n = options_.search.top_n;
+  if (options_.verification.has(kTemporalStage) && evidence_.young()) {
+    // Too few candidates for sequence evidence: the search's best frames,
+    // standardised with the prior (evidence.h).
+    result.candidates.clear();
+    if (evidence_.similarity_statistics().valid()) {
+      const std::size_t n = std::min(raw_.size(), static_cast<std::size_t>(top_n));
+      for (std::size_t i = 0; i < n; ++i) {
+        result.candidates.push_back({raw_[i].frame, evidence_.single_frame(raw_[i].score)});
+      }
+    }
+    places_ = result.candidates;
+    return;
+  }
   if (options_.verification.has(kTemporalStage)) {
     if (every_frame) {
       evidence_.best_places(top_n, result.candidates);
@@ -244,6 +257,7 @@ void Detector::verify(Result& result) {
   q.continuity = sequence;
   q.tolerance = options_.verification.temporal_options.tolerance;
   q.cells = descriptor_.grid.cells();
+  q.young = evidence_.young();
   q.appearance = [&](std::int64_t j) {
     return sequence ? evidence_.sequence(store_, descriptor_.view(), j, metric)
                     : evidence_.single_frame(

@@ -92,6 +92,15 @@ ScoreStatistics AppearanceEvidence::kept_statistics(std::int64_t query,
   return statistics(subset_.data(), subset_.size());
 }
 
+bool AppearanceEvidence::young(std::int64_t query) const {
+  return offsets(query, min_gap_) < kMinCalibration;
+}
+
+ScoreStatistics AppearanceEvidence::prior(const std::vector<double>& values) {
+  prior_.insert(prior_.end(), values.begin(), values.end());
+  return statistics(prior_.data(), prior_.size());
+}
+
 std::int64_t AppearanceEvidence::diagonals(std::int64_t query) const {
   const std::int64_t s = stride(query);
   return (offsets(query, min_gap_) + s - 1) / s;
@@ -182,7 +191,10 @@ void AppearanceEvidence::add_query(const FrameStore& store, const DescriptorView
                             last_query_, " with ", store.size(), " frames stored");
   }
   diagonal_similarities(store, descriptor, query, metric, row, scratch_);
-  level1_ = kept_statistics(query, scratch_);
+  // A young query's own statistics are not valid: its row's z stay 0 (no
+  // sequence term) and it is scored on the prior alone.
+  const ScoreStatistics own = kept_statistics(query, scratch_);
+  level1_ = young(query) ? prior(scratch_) : own;
   level2_ = ScoreStatistics{};
   scored_.clear();
   // The previous query's carries are this one's (add_query takes the queries in order).
@@ -208,15 +220,15 @@ void AppearanceEvidence::add_query(const FrameStore& store, const DescriptorView
   }
   Row r;
   r.query = query;
-  r.stats = level1_;
+  r.stats = own;
   r.z.resize(scratch_.size());
-  for (std::size_t k = 0; k < scratch_.size(); ++k) r.z[k] = quantise(level1_, scratch_[k]);
+  for (std::size_t k = 0; k < scratch_.size(); ++k) r.z[k] = quantise(own, scratch_[k]);
   push_row(std::move(r));
 
   const std::size_t n = scratch_.size();
   sequence_.resize(n);
   for (std::size_t k = 0; k < n; ++k) sequence_[k] = sequence_mean(short_sum_[k], long_sum_[k]);
-  if (level1_.valid()) level2_ = kept_statistics(query, sequence_);
+  if (own.valid()) level2_ = kept_statistics(query, sequence_);
 }
 
 double AppearanceEvidence::single_frame(double similarity) const {
@@ -341,7 +353,7 @@ double AppearanceEvidence::sequence(const FrameStore& store, const DescriptorVie
   // query's (0 when it left the ring or was never calibrated).
   const std::size_t r = terms(d);
   const auto z = [&](int t) -> std::int32_t {
-    if (t == 0) return term(r, store, descriptor, i, d, level1_, metric);
+    if (t == 0) return term(r, store, descriptor, i, d, ring_.back().stats, metric);
     const Row* row = ring_row(i - t);
     return row == nullptr ? 0 : term(r, store, store.view(i - t), i - t, d, row->stats, metric);
   };
@@ -545,6 +557,14 @@ void AppearanceEvidence::rebuild(const FrameStore& store, SimilarityMetric metri
   term_limit_ = kTermRecords;
   level1_ = level2_ = ScoreStatistics{};
   last_query_ = store.size() - 1;
+  // The prior, when the next query is young: every young query's similarities.
+  prior_.clear();
+  if (young(store.size())) {
+    for (std::int64_t q = 0; q < store.size(); ++q) {
+      diagonal_similarities(store, store.view(q), q, metric, nullptr, scratch_);
+      prior_.insert(prior_.end(), scratch_.begin(), scratch_.end());
+    }
+  }
   if (!options_.enabled || store.empty()) return;
   const std::int64_t first = std::max<std::int64_t>(0, store.size() - span_);
   std::vector<double> row;

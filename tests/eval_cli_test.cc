@@ -165,7 +165,7 @@ TEST_F(ShortStreet, CompareScoresAnotherSystemWithTheSameEvaluator) {
 
 // A setup the method cannot work in is said on stderr and in the JSON: frames
 // of 64x32 give one grid cell at the default superpixel size, are too small
-// for geometry, and the ground-truth loop comes before scores are calibrated.
+// for geometry, and the ground-truth loop comes before any candidate is scored.
 TEST(EvalCli, DegenerateSetupIsWarnedAbout) {
   const fs::path dir = kTmp / "tiny";
   fs::remove_all(dir);
@@ -179,7 +179,7 @@ TEST(EvalCli, DegenerateSetupIsWarnedAbout) {
     list += name + "\n";
   }
   write_text(dir / "sequence.txt", list);
-  write_text(dir / "gt.txt", "35 5\n");
+  write_text(dir / "gt.txt", "15 2\n");  // before frame 18, the first scored (min gap 10)
   const fs::path json = kTmp / "tiny.json";
   const CmdResult r = lsgd("eval --sequence " + q(dir / "sequence.txt") + " --gt " +
                            q(dir / "gt.txt") + " --min-gap 10 --json " + q(json));

@@ -146,22 +146,54 @@ TEST(Statistics, MeanAndPopulationSd) {
   EXPECT_EQ(statistics(v, 0).count, 0);
 }
 
-TEST(AppearanceEvidence, NotCalibratedBeforeEnoughCandidates) {
+// A young query (fewer than kMinCalibration candidates) has no statistics of
+// its own and no sequence evidence; its similarities are standardised with
+// the prior, every similarity of the young queries so far, once those are
+// kMinCalibration or more. Its row adds no sequence term (z 0), so the
+// queries after it score as without the prior. A rebuild (a detector
+// restored from storage) recomputes the prior.
+TEST(AppearanceEvidence, YoungQueriesAreScoredOnThePrior) {
   const std::int64_t w = 5;
   EvidenceRun run({}, w, false);
+  std::vector<double> prior;
   for (int i = 0; i < w + kMinCalibration; ++i) {
+    SCOPED_TRACE(i);
     const Descriptor d = frame(i, 1000);
+    for (int j = 0; j < i - w; ++j) {
+      prior.push_back(similarity(d.view(), run.store.view(j), SimilarityMetric::kReference));
+    }
     run.add(d, w, true);
-    EXPECT_FALSE(run.evidence.similarity_statistics().valid()) << i;
-    EXPECT_TRUE(std::isnan(run.evidence.single_frame(0.5)));
+    EXPECT_TRUE(run.evidence.young());
+    const ScoreStatistics want = statistics(prior.data(), prior.size());
+    const ScoreStatistics& got = run.evidence.similarity_statistics();
+    EXPECT_EQ(got.count, static_cast<std::int64_t>(prior.size()));
+    EXPECT_EQ(got.valid(), prior.size() >= static_cast<std::size_t>(kMinCalibration));
+    if (got.valid()) {
+      EXPECT_NEAR(got.mean, want.mean, 1e-12);
+      EXPECT_NEAR(got.sd, want.sd, 1e-12);
+      EXPECT_NEAR(run.evidence.single_frame(0.5), (0.5 - want.mean) / want.sd, 1e-9);
+      // Rebuilt from the stored frames, the next query has the same prior.
+      EvidenceRun rebuilt({}, w, false);
+      for (int j = 0; j < i; ++j) rebuilt.store.add(frame(j, 1000));
+      rebuilt.evidence.rebuild(rebuilt.store, SimilarityMetric::kReference);
+      rebuilt.add(d, w, true);
+      EXPECT_EQ(rebuilt.evidence.similarity_statistics().mean, got.mean);
+      EXPECT_EQ(rebuilt.evidence.similarity_statistics().sd, got.sd);
+    } else {
+      EXPECT_TRUE(std::isnan(run.evidence.single_frame(0.5)));
+    }
+    EXPECT_FALSE(run.evidence.sequence_statistics().valid());
     std::vector<Candidate> out;
     run.evidence.best_places(10, out);
     EXPECT_TRUE(out.empty());
     run.store.add(d);
   }
+  // The first query with kMinCalibration candidates has statistics of its own.
   const Descriptor d = frame(w + kMinCalibration, 1000);
   run.add(d, w, true);
-  EXPECT_TRUE(run.evidence.similarity_statistics().valid());
+  EXPECT_FALSE(run.evidence.young());
+  EXPECT_EQ(run.evidence.similarity_statistics().count, kMinCalibration);
+  EXPECT_TRUE(run.evidence.sequence_statistics().valid());
 }
 
 // Every candidate's evidence equals the definition, in particular the
@@ -324,7 +356,8 @@ TEST(AppearanceEvidence, BeyondTheExactLimitExhaustiveScoresAsTheSampledModes) {
     const ScoreStatistics& a = all.evidence.similarity_statistics();
     const ScoreStatistics& b = sampled.evidence.similarity_statistics();
     if (q - w <= exact) {
-      EXPECT_EQ(a.count, std::max<std::int64_t>(0, q - w)) << q;
+      // (A young query's statistics are the prior's, over more values.)
+      if (q - w >= kMinCalibration) EXPECT_EQ(a.count, q - w) << q;
       EXPECT_EQ(all.evidence.statistics_stride(q), 1);
     } else {
       SCOPED_TRACE(q);

@@ -7,6 +7,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <map>
 #include <opencv2/core.hpp>
 
 #include "lsgd/detector.h"
@@ -129,6 +130,110 @@ TEST(DecisionOptions, RangesNameTheField) {
   EXPECT_NO_THROW(DecisionOptions{}.check());
 }
 
+// A confirming stage whose support (inliers) per candidate frame is given.
+class FixedSupport final : public VerificationStage {
+ public:
+  explicit FixedSupport(std::map<std::int64_t, int> inliers) : inliers_(std::move(inliers)) {}
+  const char* name() const override { return "fixed"; }
+  Role role() const override { return Role::kConfirm; }
+  StageCheck check(std::int64_t, const Candidate& c) override {
+    ++checks;
+    const auto it = inliers_.find(c.frame);
+    const int n = it == inliers_.end() ? 0 : it->second;
+    return {n >= 20, static_cast<double>(n), std::to_string(n) + " inliers", 0};
+  }
+  int checks = 0;
+
+ private:
+  std::map<std::int64_t, int> inliers_;
+};
+
+Decision decide_one(LoopDecision& decision, FixedSupport& stage, std::int64_t frame,
+                    const std::vector<Candidate>& candidates, bool young = false) {
+  DecisionQuery q;
+  q.frame = frame;
+  q.candidates = &candidates;
+  q.cells = 12;
+  q.young = young;
+  q.appearance = [](std::int64_t) { return std::nan(""); };
+  return decision.decide(q, {&stage});
+}
+
+// decision.strong_bonus: the candidate appearance ranks first, confirmed with
+// at least strong_inliers, is a first loop with that much less appearance;
+// fewer inliers, or a candidate ranked below it, earn no strong bonus. Off
+// (0), the decision is the one before it.
+TEST(LoopDecision, StrongGeometryConfirmsAWeakFirstRank) {
+  DecisionOptions d;
+  d.strong_bonus = 2.0;
+  d.strong_inliers = 40;
+  const std::vector<Candidate> weak = {{5, 2.0}, {9, 1.8}};
+  {
+    LoopDecision decision(d);
+    FixedSupport stage(std::map<std::int64_t, int>{{5, 45}, {9, 90}});
+    const Decision out = decide_one(decision, stage, 100, weak);
+    EXPECT_TRUE(out.loop);  // 2.0 + 3.5 + 2.0
+    EXPECT_EQ(out.best.frame, 5);
+    EXPECT_DOUBLE_EQ(out.best.score, 7.5);
+    EXPECT_EQ(out.evidence.inliers, 45);
+  }
+  {
+    // Confirmed, but with fewer than strong_inliers: reported, no loop, and
+    // the second candidate (no strong bonus below the first rank) neither.
+    LoopDecision decision(d);
+    FixedSupport stage(std::map<std::int64_t, int>{{5, 39}, {9, 90}});
+    const Decision out = decide_one(decision, stage, 100, weak);
+    EXPECT_FALSE(out.loop);
+    EXPECT_EQ(out.best.frame, 5);
+    EXPECT_DOUBLE_EQ(out.best.score, 5.5);
+    EXPECT_TRUE(out.evidence.confirmed);
+    EXPECT_EQ(stage.checks, 1);  // 1.8 + 3.5 cannot reach 7
+  }
+  {
+    // Off: geometry is not even consulted for a candidate that cannot reach 7.
+    LoopDecision decision(DecisionOptions{});
+    FixedSupport stage(std::map<std::int64_t, int>{{5, 200}});
+    const Decision out = decide_one(decision, stage, 100, weak);
+    EXPECT_FALSE(out.loop);
+    EXPECT_EQ(stage.checks, 0);
+    EXPECT_FALSE(out.evidence.confirmed);
+    EXPECT_DOUBLE_EQ(out.best.score, 2.0);
+  }
+}
+
+// A young query (scored on the prior) has its best candidate examined
+// whatever it could score, and reports a candidate only when confirmed.
+TEST(LoopDecision, AYoungQueryReportsOnlyWhatIsConfirmed) {
+  const std::vector<Candidate> candidates = {{3, 1.0}, {7, 0.5}};
+  {
+    LoopDecision decision(DecisionOptions{});
+    FixedSupport stage(std::map<std::int64_t, int>{{3, 10}});
+    const Decision out = decide_one(decision, stage, 30, candidates, true);
+    EXPECT_EQ(stage.checks, 1);
+    EXPECT_EQ(out.best.frame, -1);
+    EXPECT_FALSE(out.loop);
+    ASSERT_EQ(out.verdicts.size(), 1u);
+    EXPECT_FALSE(out.verdicts[0].accepted);
+  }
+  {
+    LoopDecision decision(DecisionOptions{});
+    FixedSupport stage(std::map<std::int64_t, int>{{3, 30}});
+    const Decision out = decide_one(decision, stage, 30, candidates, true);
+    EXPECT_EQ(out.best.frame, 3);
+    EXPECT_DOUBLE_EQ(out.best.score, 4.5);  // confirmed, below the threshold
+    EXPECT_FALSE(out.loop);
+  }
+  {
+    // Not young: the unconfirmed best candidate is reported, geometry not consulted.
+    LoopDecision decision(DecisionOptions{});
+    FixedSupport stage(std::map<std::int64_t, int>{{3, 30}});
+    const Decision out = decide_one(decision, stage, 30, candidates, false);
+    EXPECT_EQ(stage.checks, 0);
+    EXPECT_EQ(out.best.frame, 3);
+    EXPECT_DOUBLE_EQ(out.best.score, 1.0);
+  }
+}
+
 // A revisit may be slower (the same frame again) or faster (up to tolerance
 // frames skipped), never backwards, and only right after the declared loop.
 TEST(ContinuityState, ContinuesForwardFromTheLastLoop) {
@@ -194,7 +299,13 @@ TEST(DetectorVerification, NoneReportsTheBestCandidate) {
     EXPECT_TRUE(r.verification.empty());
     if (!r.candidates.empty()) {
       EXPECT_EQ(r.best.frame, r.candidates.front().frame);
-      EXPECT_EQ(r.best.score, r.candidates.front().score);  // the standardised similarity
+      if (r.frame - 10 >= kMinCalibration) {
+        EXPECT_EQ(r.best.score, r.candidates.front().score);  // the standardised similarity
+      } else {
+        // A young query, on the prior: reported, never a loop on appearance alone.
+        EXPECT_EQ(r.best.score, std::min(r.candidates.front().score, std::nextafter(7.0, -1.0)));
+        EXPECT_FALSE(r.loop);
+      }
     }
   }
 }
@@ -262,6 +373,12 @@ TEST(DetectorVerification, GeometryOnlyAddsToTheTemporalRanking) {
       EXPECT_GE(both[i].best.score, temporal[i].best.score);
       continue;
     }
+    EXPECT_EQ(both[i].candidates.size(), temporal[i].candidates.size());
+    if (static_cast<std::int64_t>(i) - 10 < kMinCalibration) {
+      // A young query: only what geometry confirms is reported.
+      EXPECT_EQ(both[i].best.frame, -1) << i;
+      continue;
+    }
     EXPECT_EQ(both[i].best.frame, temporal[i].best.frame) << i;
     if (both[i].evidence.inliers < 0) {
       EXPECT_EQ(both[i].best.score, temporal[i].best.score) << i;
@@ -314,12 +431,18 @@ TEST(DetectorVerification, GeometricOnlyChecksCandidatesThatCouldBeLoops) {
       EXPECT_EQ(r.best.frame, i - kPlaces);
     }
     for (const auto& v : r.verification) {
-      // Only candidates whose score plus the bonus reached the threshold.
+      // Only candidates whose score plus the bonus reached the threshold, and
+      // a young query's best candidate (the only way it reports one).
       for (const Candidate& c : r.candidates) {
-        if (c.frame == v.candidate) {
+        if (c.frame == v.candidate && !(r.frame - 10 < kMinCalibration && &c == &r.candidates[0])) {
           EXPECT_GE(c.score + 3.5, 7.0);
         }
       }
+    }
+    if (r.frame - 10 < kMinCalibration && !r.candidates.empty()) {
+      ASSERT_FALSE(r.verification.empty());
+      EXPECT_EQ(r.verification[0].candidate, r.candidates[0].frame);
+      EXPECT_EQ(r.best.frame >= 0, r.evidence.confirmed);  // reported only when confirmed
     }
   }
 }

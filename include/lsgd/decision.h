@@ -6,6 +6,7 @@
 //                                                 the standardised similarity without it)
 //         + geometric_bonus   when the confirming stages (the geometric stage;
 //                             lsgd/stage.h) confirmed the candidate
+//         + strong_bonus      when confirmed with at least strong_inliers inliers
 //         + continuity_bonus  when, confirmed, it continues the loop declared for
 //                             the previous frame: it is that loop's frame j or
 //                             one of the next 1 + verification.temporal.tolerance
@@ -53,6 +54,12 @@ struct DecisionOptions {
   // A continuing candidate passes the geometric check with at least this
   // fraction of its loop's average inliers; (0, 1].
   double continuity_inliers = 0.2;
+  // Added to a confirmed candidate whose geometric support (inliers) reaches
+  // strong_inliers: a candidate appearance ranks weakly (a viewpoint change,
+  // another lens) but geometry holds strongly; sigma, [0, 1000] (0: off).
+  double strong_bonus = 0.0;
+  // The support a confirmed candidate needs for strong_bonus; inliers, [1, 100000].
+  int strong_inliers = 60;
   void check() const;
   static const OptionTable<DecisionOptions>& fields();  // lsgd/options.h
 };
@@ -91,6 +98,10 @@ struct DecisionQuery {
   bool continuity = false;
   int tolerance = 0;
   int cells = 0;  // the descriptor grid's cells (kMinAppearanceCells)
+  // The query is young (evidence.h): its candidates are scored on the prior,
+  // not on statistics of its own, so only a candidate a confirming stage
+  // accepts is reported (its best candidate is always examined).
+  bool young = false;
   // The appearance score of frame j for this query, as the candidates are
   // scored (NaN: not available).
   std::function<double(std::int64_t)> appearance;

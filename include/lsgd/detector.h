@@ -67,8 +67,9 @@ struct Result {
   // verification.max_candidates) that no enabled stage rejected, preferring
   // one the geometric stage confirmed. Its score is the loop score of
   // decision.h, in standard deviations (sigma): its appearance score plus the
-  // bonuses it earned. Frame -1 when there is none (also while the map is too
-  // short to calibrate scores: kMinCalibration candidates).
+  // bonuses it earned. Frame -1 when there is none: before the first scored
+  // query (first_scored_query(), evidence.h), and for a young query (fewer
+  // than kMinCalibration candidates) that no confirming stage confirmed.
   Candidate best;
   LoopEvidence evidence;  // what the score of `best` is made of
   // Candidates best first, up to search.top_n, scored by appearance (sigma):

@@ -54,10 +54,21 @@
 
 namespace lsgd {
 
-// A query's scores are standardised only when it has at least this many
-// candidates (exhaustive) or sampled diagonals (nodes); before that it
-// reports no candidate.
+// A query's scores are standardised with statistics of its own when it has
+// at least this many candidates (exhaustive) or sampled diagonals (nodes).
+// Before that it is young: its similarities are standardised with the prior
+// (every similarity of the young queries so far, once they are this many),
+// it has no sequence evidence, and only a candidate geometry confirms is
+// reported (decision.h).
 constexpr std::int64_t kMinCalibration = 32;
+
+// The first query with a score (the prior has kMinCalibration similarities:
+// queries min_gap + 1, + 2, ... have 1, 2, ... candidates).
+constexpr std::int64_t first_scored_query(std::int64_t min_gap) {
+  std::int64_t k = 0, values = 0;
+  while (values < kMinCalibration) values += ++k;
+  return min_gap + k;
+}
 // The most diagonals sampled per query (between half this and this).
 constexpr std::int64_t kMaxSampledDiagonals = 512;
 // Exhaustive search: statistics over every candidate up to this many, over the
@@ -111,8 +122,15 @@ class AppearanceEvidence {
   const ScoreStatistics& similarity_statistics() const { return level1_; }
   const ScoreStatistics& sequence_statistics() const { return level2_; }
 
+  // Whether the last query is young: it has fewer than kMinCalibration
+  // candidates, so it has no statistics of its own and no sequence evidence;
+  // its similarities are standardised with the prior (valid once the young
+  // queries so far have kMinCalibration similarities between them).
+  bool young() const { return last_query_ >= 0 && young(last_query_); }
+
   // Standardised single-frame score of candidate `frame` for the last query,
-  // given its raw similarity; NaN when the query is not calibrated.
+  // given its raw similarity (a young query's: with the prior); NaN when the
+  // query is not calibrated.
   double single_frame(double similarity) const;
 
   // Sequence evidence R of candidate `frame` of the last query (the query's
@@ -197,6 +215,9 @@ class AppearanceEvidence {
     std::vector<std::int32_t> z;  // fixed point, one per kept diagonal (slot order)
   };
   std::int32_t quantise(const ScoreStatistics& stats, double similarity) const;
+  bool young(std::int64_t query) const;
+  // Adds a young query's similarities to the prior and returns its statistics.
+  ScoreStatistics prior(const std::vector<double>& values);
   void push_row(Row row);
   // Statistics of `values` (one per kept diagonal of `query`) over the
   // diagonals of statistics_stride(query).
@@ -232,6 +253,8 @@ class AppearanceEvidence {
   ScoreStatistics level1_, level2_;
   std::vector<double> scratch_;
   std::vector<double> subset_;     // kept_statistics()
+  // The prior: the similarities of every young query so far, pooled.
+  std::vector<double> prior_;
   Table<double> scored_;  // A of the frames scored for the last query
   // By diagonal (offset query - frame): the carries of the sequences the
   // previous query scored off the kept diagonals (read by this query's

@@ -65,23 +65,23 @@ std::vector<std::string> setup_warnings(const Detector& detector, const GroundTr
           "x): it will confirm few loops"));
     }
   }
-  const std::int64_t calibrated = min_gap + kMinCalibration;
+  const std::int64_t scored = first_scored_query(min_gap);
   std::int64_t early = 0, positives = 0;
   for (std::int64_t q = 0; q < gt.frames(); ++q) {
     if (!gt.has_loop(q, min_gap)) continue;
     ++positives;
-    early += q < calibrated ? 1 : 0;
+    early += q < scored ? 1 : 0;
   }
-  if (gt.frames() <= calibrated) {
+  if (gt.frames() <= scored) {
     out.push_back(internal::concat("the sequence has ", gt.frames(),
-                                   " frames: the detector calibrates its scores from frame ",
-                                   calibrated, " (search.min_gap + ", kMinCalibration,
-                                   " candidates) and cannot report a loop before"));
+                                   " frames: the detector scores candidates from frame ", scored,
+                                   " (search.min_gap + enough candidates for ", kMinCalibration,
+                                   " similarities) and cannot report a loop before"));
   } else if (early > 0) {
     out.push_back(internal::concat(early, " of ", positives,
-                                   " ground-truth loop queries come before frame ", calibrated,
-                                   ", where the detector starts reporting (search.min_gap + ",
-                                   kMinCalibration, " candidates to calibrate its scores)"));
+                                   " ground-truth loop queries come before frame ", scored,
+                                   ", where the detector starts scoring candidates (search.min_gap "
+                                   "+ enough candidates for ", kMinCalibration, " similarities)"));
   }
   return out;
 }

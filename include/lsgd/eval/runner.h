@@ -74,7 +74,7 @@ struct RunOptions {
 // `lsgd eval` to print (stderr), store (JSON) and show (HTML report): a grid of
 // fewer than 4 cells (the descriptor is nearly a whole-image histogram),
 // frames too small for geometric verification, and ground-truth loops before
-// the detector calibrates its scores (frame min_gap + kMinCalibration) or a
+// the detector scores candidates (first_scored_query(), evidence.h) or a
 // sequence too short to reach that frame. `detector` has run over the
 // sequence (its frame size is known); empty when all is well.
 std::vector<std::string> setup_warnings(const Detector& detector, const GroundTruth& gt);

@@ -231,6 +231,9 @@ PYBIND11_MODULE(_lsgd, m) {
            "Processes the next frame (uint8 numpy array: (H, W) gray, (H, W, 3) BGR or "
            "(H, W, 4) BGRA) and returns its Result. Zero-copy when each row's pixels are "
            "contiguous; the GIL is released while it runs.")
+      .def("cut", &lsgd::Detector::cut,
+           "The next frame starts a new sequence (a new session, another place): it "
+           "continues no loop declared for the frame before it.")
       .def_property_readonly("size", &lsgd::Detector::size)
       .def("__len__", &lsgd::Detector::size)
       .def_property_readonly("nodes", &lsgd::Detector::nodes)

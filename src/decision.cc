@@ -23,6 +23,9 @@ const OptionTable<DecisionOptions>& DecisionOptions::fields() {
                     "(0: no continuity)"),
         real_option("continuity_inliers", &S::continuity_inliers, 0.0, 1.0, true, "",
                     "a continuing candidate needs this fraction of its loop's average inliers"),
+        real_option("continuity_min_z", &S::continuity_min_z, -1000.0, 1000.0, false, "sigma",
+                    "a frame that would continue the loop continues nothing when it scores below "
+                    "this for the query, single frame (a scene cut)"),
         real_option("strong_bonus", &S::strong_bonus, 0.0, 1000.0, false, "sigma",
                     "added to a confirmed candidate with at least strong_inliers inliers (0: off)"),
         integer_option("strong_inliers", &S::strong_inliers, 1, 100000, "inliers",
@@ -92,8 +95,22 @@ Decision LoopDecision::decide(const DecisionQuery& q, const std::vector<Verifica
   bool first_rejected = false;
   if (!confirms.empty()) {
     const bool continuity = q.continuity && d.continuity_bonus > 0;
+    // A scene cut: a frame that would continue the loop but looks unlike the
+    // query (its single-frame score below continuity_min_z: a new place, not
+    // the revisit going on) continues nothing.
+    unlike_.clear();  // the window's frames loop .. loop + 1 + tolerance, 1: unlike
+    if (continuity && state_.continues(q.frame, state_.loop + 1, q.tolerance) && q.single_frame) {
+      for (std::int64_t j = state_.loop; j <= state_.loop + 1 + q.tolerance; ++j) {
+        const double z = j < q.frame - q.min_gap ? q.single_frame(j) : std::nan("");
+        unlike_.push_back(z < d.continuity_min_z ? 1 : 0);  // NaN: not unlike
+      }
+    }
+    const auto unlike = [&](std::int64_t j) {
+      const std::int64_t k = j - state_.loop;
+      return k >= 0 && k < static_cast<std::int64_t>(unlike_.size()) && unlike_[static_cast<std::size_t>(k)];
+    };
     const auto continues = [&](const Candidate& c) {
-      return continuity && state_.continues(q.frame, c.frame, q.tolerance);
+      return continuity && state_.continues(q.frame, c.frame, q.tolerance) && !unlike(c.frame);
     };
     // The best-scored frame that continues the previous frame's loop,
     // outside the temporal window; frame -1 when there is none.
@@ -101,6 +118,7 @@ Decision LoopDecision::decide(const DecisionQuery& q, const std::vector<Verifica
     if (continuity && state_.continues(q.frame, state_.loop + 1, q.tolerance)) {
       const std::int64_t limit = q.frame - q.min_gap;
       for (std::int64_t j = state_.loop; j <= std::min(limit - 1, state_.loop + 1 + q.tolerance); ++j) {
+        if (unlike(j)) continue;
         const double score = q.appearance(j);
         if (std::isnan(score)) {
           continuation = {};

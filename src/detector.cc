@@ -139,6 +139,11 @@ Result Detector::process(const ImageView& frame) {
   return process_gray(ms_since(start), start);
 }
 
+void Detector::cut() {
+  const Exclusive exclusive(busy_, "cut");
+  decision_.cut();
+}
+
 std::int64_t Detector::nodes() const { return search_->groups(); }
 
 double Detector::similarity(std::int64_t a, std::int64_t b) const {
@@ -258,6 +263,9 @@ void Detector::verify(Result& result) {
   q.tolerance = options_.verification.temporal_options.tolerance;
   q.cells = descriptor_.grid.cells();
   q.young = evidence_.young();
+  q.single_frame = [&](std::int64_t j) {
+    return evidence_.single_frame(lsgd::similarity(descriptor_.view(), store_.view(j), metric));
+  };
   q.appearance = [&](std::int64_t j) {
     return sequence ? evidence_.sequence(store_, descriptor_.view(), j, metric)
                     : evidence_.single_frame(

@@ -234,6 +234,43 @@ TEST(LoopDecision, AYoungQueryReportsOnlyWhatIsConfirmed) {
   }
 }
 
+// A scene cut: the frame that would continue the previous frame's loop, but
+// looks unlike the query (single frame below continuity_min_z), gets neither
+// the continuity bonus nor its relaxed inliers; one that looks like it does.
+// Detector::cut() (LoopDecision::cut()) ends the loop outright.
+TEST(LoopDecision, NothingContinuesAcrossACut) {
+  for (const double z : {-2.7, -1.3}) {
+    for (const bool cut : {false, true}) {
+      SCOPED_TRACE(testing::Message() << "z " << z << (cut ? " cut" : ""));
+      LoopDecision decision(DecisionOptions{});
+      FixedSupport stage(std::map<std::int64_t, int>{{10, 60}, {11, 8}});
+      DecisionQuery q;
+      q.cells = 12;
+      q.continuity = true;
+      q.tolerance = 2;
+      q.min_gap = 5;
+      q.appearance = [](std::int64_t j) { return j == 11 ? 1.5 : 0.0; };
+      q.single_frame = [&](std::int64_t j) { return j == 11 ? z : 0.0; };
+      // Frame 50: a first loop to 10 (appearance 4 + 3.5).
+      std::vector<Candidate> first = {{10, 4.0}};
+      q.frame = 50;
+      q.candidates = &first;
+      ASSERT_TRUE(decision.decide(q, {&stage}).loop);
+      if (cut) decision.cut();
+      // Frame 51: frame 11 would continue it, 1.5 sigma and 13 inliers: a
+      // continuation needs 0.2 of the loop's 60 (12), a first loop 20.
+      FixedSupport next(std::map<std::int64_t, int>{{11, 13}});
+      std::vector<Candidate> second = {{11, 1.5}};
+      q.frame = 51;
+      q.candidates = &second;
+      const Decision out = decision.decide(q, {&next});
+      const bool continues = z > -2.0 && !cut;
+      EXPECT_EQ(out.loop, continues);  // 1.5 + 3.5 + 2.5 with 13 of the 12 inliers needed
+      EXPECT_EQ(out.evidence.continues, continues);
+    }
+  }
+}
+
 // A revisit may be slower (the same frame again) or faster (up to tolerance
 // frames skipped), never backwards, and only right after the declared loop.
 TEST(ContinuityState, ContinuesForwardFromTheLastLoop) {
@@ -332,6 +369,26 @@ TEST(DetectorVerification, DefaultsFindTheRevisitAndExplainThemselves) {
   }
   EXPECT_GE(loops, kPlaces - 15);
   EXPECT_GT(continued, 0);
+}
+
+// Detector::cut() between two frames of a revisit: the frame after it
+// continues no loop (its result is the one of a first loop, or none), while
+// the same frame without the cut continues the loop.
+TEST(DetectorVerification, ACutEndsTheLoopItFollows) {
+  const DetectorOptions options = route_options("temporal,geometric");
+  Detector plain(options), cut(options);
+  int checked = 0;
+  for (int i = 0; i < 2 * kPlaces; ++i) {
+    const cv::Mat frame = place(i % kPlaces, i / kPlaces);
+    const Result a = plain.process(frame);
+    const Result b = cut.process(frame);
+    if (a.loop && i % 7 == 0) cut.cut();
+    if (i > 0 && (i - 1) % 7 == 0 && plain.size() > kPlaces + 1 && a.evidence.continues) {
+      ++checked;
+      EXPECT_FALSE(b.evidence.continues) << i;
+    }
+  }
+  EXPECT_GT(checked, 3);
 }
 
 // The geometric stage can sink a candidate: with a zero bonus and a low

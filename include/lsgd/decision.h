@@ -19,6 +19,11 @@
 // appearance alone (no geometric stage) >= 7 sigma. docs/results.md has the
 // leave-one-sequence-out study behind these values.
 //
+// Continuity stops at a scene cut: a frame that would continue the loop but
+// scores below continuity_min_z for the query, single frame, is another
+// place than the query and continues nothing (a new session starts with no
+// loop to continue at all: Detector::cut()).
+//
 // Continuity: the geometric check of a continuing candidate passes with
 // `continuity_inliers` times the inliers its loop has had so far (an average
 // over the loop's frames) instead of geometric.min_inliers, so a long revisit
@@ -54,6 +59,12 @@ struct DecisionOptions {
   // A continuing candidate passes the geometric check with at least this
   // fraction of its loop's average inliers; (0, 1].
   double continuity_inliers = 0.2;
+  // A scene cut: a frame that would continue the loop (the loop's frame j ..
+  // j + 1 + tolerance) continues nothing when it scores below this for the
+  // query, single frame (the query's standardised similarity to it); sigma,
+  // [-1000, 1000]. True continuations score -1.3 at the lowest on every
+  // sequence measured, the cut of a two-place map -2.7 (docs/results.md).
+  double continuity_min_z = -2.0;
   // Added to a confirmed candidate whose geometric support (inliers) reaches
   // strong_inliers: a candidate appearance ranks weakly (a viewpoint change,
   // another lens) but geometry holds strongly; sigma, [0, 1000] (0: off).
@@ -105,6 +116,9 @@ struct DecisionQuery {
   // The appearance score of frame j for this query, as the candidates are
   // scored (NaN: not available).
   std::function<double(std::int64_t)> appearance;
+  // The standardised similarity (single frame) of frame j for this query
+  // (NaN: not available): a continuation must not look unlike the query.
+  std::function<double(std::int64_t)> single_frame;
 };
 
 // What the decision found for one query (fields of Result).
@@ -135,6 +149,8 @@ class LoopDecision final : public Stateful {
 
   // The state after the last frame decided.
   const ContinuityState& continuity() const { return state_; }
+  // The next frame continues no loop (Detector::cut()).
+  void cut() { state_.loop = -1, state_.inliers = 0; }
 
   const char* name() const override { return "decision"; }
   bool has_state() const override { return true; }
@@ -156,6 +172,7 @@ class LoopDecision final : public Stateful {
   std::vector<Loop> history_;  // state_.loop and state_.inliers after every frame
   // Scratch reused across frames.
   std::vector<char> gated_;          // 1 for a candidate a gate rejected
+  std::vector<char> unlike_;         // 1 for a frame of the continuation window unlike the query
   std::vector<Candidate> examined_;  // candidates the confirming stages check, in order
   std::vector<VerificationStage*> confirms_;  // the confirming stages of this frame
 };

@@ -100,6 +100,12 @@ class Detector {
   Result process(const cv::Mat& frame);
   Result process(const ImageView& frame);
 
+  // The next frame starts a new sequence (a new session of a map, a robot
+  // put down elsewhere, the next place of a map of several): it continues no
+  // loop declared for the frame before it (decision.h, continuity). `lsgd run
+  // --database` calls it when it starts a new session on stored frames.
+  void cut();
+
   const DetectorOptions& options() const { return options_; }
   std::int64_t size() const { return store_.size(); }
   const FrameStore& store() const { return store_; }

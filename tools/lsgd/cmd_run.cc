@@ -286,6 +286,8 @@ void run_database(const RunArgs& args, const io::Sequence& sequence) {
               << (plan.resume ? " at image " + std::to_string(plan.first) : std::string())
               << ", frame ids " << plan.first_id + plan.first << " .. "
               << plan.first_id + images - 1 << "\n";
+    // A new session is another sequence: nothing continues across it.
+    if (!plan.resume && detector.size() > 0) detector.cut();
     const std::unique_ptr<CsvWriter> csv =
         plan.resume ? continue_csv(args, plan) : std::make_unique<CsvWriter>(args.output);
     eval::RunOptions run_options;

@@ -46,7 +46,7 @@ def neighbours(g):
 def choose(train, margin=False):
     """The rule; with margin, every grid neighbour must be free of false loops too."""
     def safe(g):
-        points = [g] + neighbours(g) if margin else [g]
+        points = [g] + [x for x in neighbours(g) if x in grid] if margin else [g]
         return all(s in grid[x] and fp(x, s) == 0 for x in points for s in train)
     ok = [g for g in grid if safe(g)]
     if not ok: return None

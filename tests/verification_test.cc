@@ -191,7 +191,9 @@ TEST(LoopDecision, StrongGeometryConfirmsAWeakFirstRank) {
   }
   {
     // Off: geometry is not even consulted for a candidate that cannot reach 7.
-    LoopDecision decision(DecisionOptions{});
+    DecisionOptions off;
+    off.strong_bonus = 0;
+    LoopDecision decision(off);
     FixedSupport stage(std::map<std::int64_t, int>{{5, 200}});
     const Decision out = decide_one(decision, stage, 100, weak);
     EXPECT_FALSE(out.loop);
@@ -360,7 +362,10 @@ TEST(DetectorVerification, DefaultsFindTheRevisitAndExplainThemselves) {
     EXPECT_EQ(r.best.frame, r.frame - kPlaces) << "frame " << r.frame;
     EXPECT_TRUE(r.evidence.confirmed);
     EXPECT_GE(r.evidence.inliers, 1);
-    const double bonus = 3.5 + (r.evidence.continues ? 2.5 : 0.0);
+    // The strong bonus (1.5): a first loop of the best-ranked candidate with 40 inliers or more.
+    const bool strong = !r.evidence.continues && r.evidence.inliers >= 40 &&
+                        r.best.frame == r.candidates[0].frame;
+    const double bonus = 3.5 + (r.evidence.continues ? 2.5 : 0.0) + (strong ? 1.5 : 0.0);
     EXPECT_DOUBLE_EQ(r.best.score, r.evidence.appearance + bonus);
     continued += r.evidence.continues;
     ASSERT_FALSE(r.verification.empty());
@@ -488,11 +493,12 @@ TEST(DetectorVerification, GeometricOnlyChecksCandidatesThatCouldBeLoops) {
       EXPECT_EQ(r.best.frame, i - kPlaces);
     }
     for (const auto& v : r.verification) {
-      // Only candidates whose score plus the bonus reached the threshold, and
-      // a young query's best candidate (the only way it reports one).
+      // Only candidates whose score plus the bonuses could reach the threshold
+      // (the best-ranked one: with the strong bonus, 1.5), and a young query's
+      // best candidate (the only way it reports one).
       for (const Candidate& c : r.candidates) {
         if (c.frame == v.candidate && !(r.frame - 10 < kMinCalibration && &c == &r.candidates[0])) {
-          EXPECT_GE(c.score + 3.5, 7.0);
+          EXPECT_GE(c.score + 3.5 + (&c == &r.candidates[0] ? 1.5 : 0.0), 7.0);
         }
       }
     }

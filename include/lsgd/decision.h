@@ -65,12 +65,15 @@ struct DecisionOptions {
   // [-1000, 1000]. True continuations score -1.3 at the lowest on every
   // sequence measured, the cut of a two-place map -2.7 (docs/results.md).
   double continuity_min_z = -2.0;
-  // Added to a confirmed candidate whose geometric support (inliers) reaches
-  // strong_inliers: a candidate appearance ranks weakly (a viewpoint change,
-  // another lens) but geometry holds strongly; sigma, [0, 1000] (0: off).
-  double strong_bonus = 0.0;
+  // Added to the candidate appearance ranks first when it is confirmed with
+  // at least strong_inliers (its geometric support) as a first loop: a
+  // weak ranking (a viewpoint change, another lens) that geometry holds
+  // strongly; sigma, [0, 1000] (0: off). With the defaults a first loop
+  // needs 2 sigma and 40 inliers, or 3.5 sigma and 20 (docs/results.md has
+  // the leave-one-sequence-out choice).
+  double strong_bonus = 1.5;
   // The support a confirmed candidate needs for strong_bonus; inliers, [1, 100000].
-  int strong_inliers = 60;
+  int strong_inliers = 40;
   void check() const;
   static const OptionTable<DecisionOptions>& fields();  // lsgd/options.h
 };

@@ -207,24 +207,12 @@ Result Detector::process_gray(double convert_ms, std::int64_t start_ns) {
 }
 
 // Appearance scores in sigma (evidence.h): the temporal stage's sequence
-// evidence, else the standardised similarity of the search's candidates.
+// evidence, else (or for a young query) the standardised similarity of the
+// search's candidates.
 void Detector::score_candidates(bool every_frame, Result& result) {
   const SimilarityMetric metric = options_.similarity.metric;
   const int top_n = options_.search.top_n;
-  if (options_.verification.has(kTemporalStage) && evidence_.young()) {
-    // Too few candidates for sequence evidence: the search's best frames,
-    // standardised with the prior (evidence.h).
-    result.candidates.clear();
-    if (evidence_.similarity_statistics().valid()) {
-      const std::size_t n = std::min(raw_.size(), static_cast<std::size_t>(top_n));
-      for (std::size_t i = 0; i < n; ++i) {
-        result.candidates.push_back({raw_[i].frame, evidence_.single_frame(raw_[i].score)});
-      }
-    }
-    places_ = result.candidates;
-    return;
-  }
-  if (options_.verification.has(kTemporalStage)) {
+  if (options_.verification.has(kTemporalStage) && !evidence_.young()) {
     if (every_frame) {
       evidence_.best_places(top_n, result.candidates);
       places_ = result.candidates;
@@ -238,6 +226,8 @@ void Detector::score_candidates(bool every_frame, Result& result) {
     }
     return;
   }
+  // Single-frame scores: without the temporal stage, and for a young query
+  // (too few candidates for sequence evidence; standardised with the prior).
   result.candidates.clear();
   if (evidence_.similarity_statistics().valid()) {
     const std::size_t n = std::min(raw_.size(), static_cast<std::size_t>(top_n));

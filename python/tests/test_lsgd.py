@@ -117,6 +117,23 @@ def test_results_match_lsgd_run_frame_for_frame(tmp_path):
     assert loops > 10
 
 
+def test_cut_ends_the_loop_it_follows():
+    """Detector.cut(): the frame after it continues no loop; without it, the same frame does."""
+    frames = route(30, 3)
+    plain = lsgd.Detector(search={"min_gap": 10})
+    cut = lsgd.Detector(search={"min_gap": 10})
+    checked = 0
+    for i, f in enumerate(frames):
+        a, b = plain.process(f), cut.process(f)
+        if i > 0 and a.evidence.continues and previous_cut:
+            assert not b.evidence.continues
+            checked += 1
+        previous_cut = a.loop and i % 5 == 0
+        if previous_cut:
+            cut.cut()
+    assert checked > 0
+
+
 def test_evaluation_in_ten_lines_matches_lsgd_eval(tmp_path):
     corridor = os.path.join(SHARED, "corridor")
     if not os.path.isdir(corridor) or not CLI:

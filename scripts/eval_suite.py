@@ -20,6 +20,8 @@ import argparse, concurrent.futures, csv, json, os, subprocess, sys
 from PIL import Image
 
 HERE = os.path.dirname(os.path.abspath(__file__))
+sys.path.insert(0, HERE)
+from mixed_map import frames, pairs  # noqa: E402
 ROOT = os.path.dirname(HERE)
 ap = argparse.ArgumentParser(description=__doc__)
 ap.add_argument('--lsgd', default=os.path.join(ROOT, 'build/tools/lsgd/lsgd'))
@@ -35,16 +37,10 @@ D = os.path.abspath(args.shared)
 W = os.path.abspath(args.work)
 if not os.path.isdir(os.path.join(D, 'corridor')):
     sys.exit(f'{D}: no real sequences there (--shared)')
-
-
-def frames(dataset):
-    with open(os.path.join(dataset, 'sequence.txt')) as f:
-        return [os.path.abspath(os.path.join(dataset, line.strip())) for line in f if line.strip()]
-
-
-def pairs(path):
-    with open(path) as f:
-        return [tuple(map(int, line.split()[:2])) for line in f if line.strip() and not line.startswith('#')]
+# What it writes never lands among the inputs.
+real_d, real_w = os.path.realpath(D), os.path.realpath(W)
+if os.path.commonpath([real_d, real_w]) in (real_d, real_w):
+    sys.exit(f'--work {W} is or holds {D}, the input sequences: choose another folder')
 
 
 def write_dataset(out, images, gt):

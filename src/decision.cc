@@ -27,7 +27,8 @@ const OptionTable<DecisionOptions>& DecisionOptions::fields() {
                     "a frame that would continue the loop continues nothing when it scores below "
                     "this for the query, single frame (a scene cut)"),
         real_option("strong_bonus", &S::strong_bonus, 0.0, 1000.0, false, "sigma",
-                    "added to a confirmed candidate with at least strong_inliers inliers (0: off)"),
+                    "added to the best-ranked candidate, confirmed as a first loop with at least "
+                    "strong_inliers inliers (0: off)"),
         integer_option("strong_inliers", &S::strong_inliers, 1, 100000, "inliers",
                        "the geometric support a confirmed candidate needs for strong_bonus"),
     };

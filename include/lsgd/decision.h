@@ -6,7 +6,8 @@
 //                                                 the standardised similarity without it)
 //         + geometric_bonus   when the confirming stages (the geometric stage;
 //                             lsgd/stage.h) confirmed the candidate
-//         + strong_bonus      when confirmed with at least strong_inliers inliers
+//         + strong_bonus      when it is the best-ranked candidate, confirmed as a
+//                             first loop with at least strong_inliers inliers
 //         + continuity_bonus  when, confirmed, it continues the loop declared for
 //                             the previous frame: it is that loop's frame j or
 //                             one of the next 1 + verification.temporal.tolerance

@@ -125,6 +125,7 @@ lsgd::eval::FrameRecord record_of(const lsgd::Result& r) {
   rec.frame = r.frame;
   rec.reported = r.best;
   rec.loop = r.loop;
+  rec.ranking = r.ranking;
   rec.candidates = r.candidates;
   rec.timings = r.timings;
   return rec;
@@ -173,6 +174,13 @@ PYBIND11_MODULE(_lsgd, m) {
       .def_readonly("inliers", &lsgd::LoopEvidence::inliers)
       .def_readonly("confirmed", &lsgd::LoopEvidence::confirmed)
       .def_readonly("continues", &lsgd::LoopEvidence::continues);
+  py::class_<lsgd::Ranking>(m, "Ranking")
+      .def_readonly("best", &lsgd::Ranking::best)
+      .def_readonly("confirmed", &lsgd::Ranking::confirmed)
+      .def("__repr__", [](const lsgd::Ranking& r) {
+        return "Ranking(best=Candidate(frame=" + std::to_string(r.best.frame) + ", score=" +
+               lsgd::format_real(r.best.score) + "), confirmed=" + (r.confirmed ? "True" : "False") + ")";
+      });
   py::class_<lsgd::StageVerdict>(m, "StageVerdict")
       .def_readonly("candidate", &lsgd::StageVerdict::candidate)
       .def_readonly("stage", &lsgd::StageVerdict::stage)
@@ -193,6 +201,7 @@ PYBIND11_MODULE(_lsgd, m) {
       .def_readonly("loop", &lsgd::Result::loop)
       .def_readonly("best", &lsgd::Result::best)
       .def_readonly("evidence", &lsgd::Result::evidence)
+      .def_readonly("ranking", &lsgd::Result::ranking)
       .def_readonly("candidates", &lsgd::Result::candidates)
       .def_readonly("verification", &lsgd::Result::verification)
       .def_readonly("node", &lsgd::Result::node)
@@ -300,7 +309,8 @@ PYBIND11_MODULE(_lsgd, m) {
   py::class_<lsgd::eval::PrPoint>(m, "PrPoint")
       .def_readonly("threshold", &lsgd::eval::PrPoint::threshold)
       .def_readonly("precision", &lsgd::eval::PrPoint::precision)
-      .def_readonly("recall", &lsgd::eval::PrPoint::recall);
+      .def_readonly("recall", &lsgd::eval::PrPoint::recall)
+      .def_readonly("confirmed", &lsgd::eval::PrPoint::confirmed);
   py::class_<lsgd::eval::Metrics>(m, "Metrics")
       .def_readonly("protocol", &lsgd::eval::Metrics::protocol)
       .def_readonly("frames", &lsgd::eval::Metrics::frames)
@@ -315,6 +325,11 @@ PYBIND11_MODULE(_lsgd, m) {
       .def_readonly("threshold_at_100_precision", &lsgd::eval::Metrics::threshold_at_100_precision)
       .def_readonly("precision_at_100_recall", &lsgd::eval::Metrics::precision_at_100_recall)
       .def_readonly("average_precision", &lsgd::eval::Metrics::average_precision)
+      .def_readonly("decision_recall_at_100_precision",
+                    &lsgd::eval::Metrics::decision_recall_at_100_precision)
+      .def_readonly("decision_threshold_at_100_precision",
+                    &lsgd::eval::Metrics::decision_threshold_at_100_precision)
+      .def_readonly("decision_average_precision", &lsgd::eval::Metrics::decision_average_precision)
       .def_readonly("recall_at_1", &lsgd::eval::Metrics::recall_at_1)
       .def_readonly("recall_at_5", &lsgd::eval::Metrics::recall_at_5)
       .def_readonly("recall_at_10", &lsgd::eval::Metrics::recall_at_10)

@@ -199,7 +199,7 @@ for n in names:
     entry = {k: m[k] for k in ('declared_loops', 'declared_true', 'declared_false', 'positives',
                                'recall_at_decision', 'recall_at_100_precision', 'average_precision',
                                'recall_at_1', 'ms_per_frame_median', 'ms_per_frame_p95')}
-    for k in ('ranking_recall_at_100_precision', 'ranking_average_precision'):
+    for k in ('decision_recall_at_100_precision', 'decision_average_precision'):
         if k in m:
             entry[k] = m[k]
     entry['kind'] = s['kind']

@@ -61,7 +61,36 @@ LoopDecision::LoopDecision(const DecisionOptions& options) : options_(options) {
 void LoopDecision::record(std::int64_t frame, std::int64_t loop, int inliers, bool continued) {
   state_.record(frame, loop, inliers, continued);
   history_.resize(static_cast<std::size_t>(frame));
-  history_.push_back({state_.loop, state_.inliers});
+  history_.push_back({state_.loop, state_.inliers, track_.loop, track_.inliers});
+}
+
+void LoopDecision::rank(const DecisionQuery& q, const Candidate& best,
+                        const std::vector<VerificationStage*>& confirms, Decision& out) {
+  first_checks_.clear();
+  out.ranking.best = best;
+  out.ranking.confirmed = best.frame >= 0;
+  bool tracking = q.continuity && best.frame >= 0 && track_.continues(q.frame, best.frame, q.tolerance);
+  if (tracking && q.single_frame && !confirms.empty()) {
+    tracking = !(q.single_frame(best.frame) < kRankingTrackMinZ);  // a scene cut; NaN: not unlike
+  }
+  double support = -1;
+  for (VerificationStage* stage : confirms) {
+    if (best.frame < 0) break;
+    StageCheck check = stage->check(q.frame, best);
+    out.verdicts.push_back({best.frame, stage->name(), check.accepted, check.reason, check.ms});
+    // Tracking the ranking's candidate of the previous frame, a fraction of
+    // the track's inliers is enough.
+    const bool accepted = check.accepted || (tracking && check.support > 0 &&
+                                             check.support >= kRankingTrackInliers * track_.inliers);
+    if (check.support >= 0) support = support < 0 ? check.support : std::min(support, check.support);
+    first_checks_.push_back(std::move(check));
+    if (!accepted) {
+      out.ranking.confirmed = false;
+      break;
+    }
+  }
+  const bool tracked = out.ranking.confirmed && !confirms.empty();
+  track_.record(q.frame, tracked ? best.frame : -1, static_cast<int>(support), tracked && tracking);
 }
 
 Decision LoopDecision::decide(const DecisionQuery& q, const std::vector<VerificationStage*>& stages) {
@@ -91,9 +120,20 @@ Decision LoopDecision::decide(const DecisionQuery& q, const std::vector<Verifica
   std::size_t first = 0;  // the best candidate the gates let through
   while (first < n && gated_[first]) ++first;
 
-  // 2. Confirmation, continuation first when it could score higher.
+  // 2. The ranking (no decision setting changes it): the best candidate
+  // through the gates, examined by every confirming stage on every query.
+  // The decision reuses these checks.
+  rank(q, first < n ? candidates[first] : Candidate{}, confirms, out);
   double first_support = -1;  // support of candidates[first] when checked
   bool first_rejected = false;
+  for (const StageCheck& check : first_checks_) {
+    if (check.support >= 0) {
+      first_support = first_support < 0 ? check.support : std::min(first_support, check.support);
+    }
+    first_rejected = first_rejected || !check.accepted;
+  }
+
+  // 3. Confirmation, continuation first when it could score higher.
   if (!confirms.empty()) {
     const bool continuity = q.continuity && d.continuity_bonus > 0;
     // A scene cut: a frame that would continue the loop but looks unlike the
@@ -180,25 +220,34 @@ Decision LoopDecision::decide(const DecisionQuery& q, const std::vector<Verifica
       const bool young_first = q.young && first < n && c.frame == candidates[first].frame;
       if (score < d.threshold && !young_first) break;
       const bool continuing = continues(c);
+      const bool is_first = first < n && c.frame == candidates[first].frame;
       bool accepted = true;
       double support = -1;
-      for (VerificationStage* stage : confirms) {
-        StageCheck check = stage->check(q.frame, c);
+      for (std::size_t k = 0; k < confirms.size(); ++k) {
+        VerificationStage* stage = confirms[k];
+        // The ranking checked the best candidate already (its verdict is
+        // listed again only when the continuity rule changes it).
+        const bool cached = is_first && k < first_checks_.size();
+        StageCheck check = cached ? first_checks_[k] : stage->check(q.frame, c);
+        const bool listed = cached && !(continuing && check.support >= 0);
         if (continuing && check.support >= 0) {
           const double needed = d.continuity_inliers * state_.inliers;
           check.accepted = check.support > 0 && check.support >= needed;
           check.reason += internal::concat("; continues the loop of frame ", q.frame - 1,
                                            ": needs ", needed, " inliers (", d.continuity_inliers,
                                            " of its average ", state_.inliers, ")");
+          if (cached) check.ms = 0;  // counted once, by the ranking
         }
-        out.verdicts.push_back({c.frame, stage->name(), check.accepted, check.reason, check.ms});
+        if (!listed) {
+          out.verdicts.push_back({c.frame, stage->name(), check.accepted, check.reason, check.ms});
+        }
         if (check.support >= 0) support = support < 0 ? check.support : std::min(support, check.support);
         if (!check.accepted) {
           accepted = false;
           break;
         }
       }
-      if (first < n && c.frame == candidates[first].frame) {
+      if (is_first) {
         first_support = support;
         first_rejected = !accepted;
       }
@@ -215,7 +264,7 @@ Decision LoopDecision::decide(const DecisionQuery& q, const std::vector<Verifica
     }
   }
 
-  // 3. Nothing confirmed: the best candidate through the gates, unconfirmed
+  // 4. Nothing confirmed: the best candidate through the gates, unconfirmed
   // (a young query with a confirming stage reports nothing unconfirmed).
   if (out.best.frame < 0 && first < n && !(q.young && !confirms.empty())) {
     const Candidate& c = candidates[first];
@@ -236,40 +285,51 @@ Decision LoopDecision::decide(const DecisionQuery& q, const std::vector<Verifica
   return out;
 }
 
-// State, version 1: the loop declared for the frame (int64, -1: none) and its
-// loop's inlier average (float64). A frame without a record (written before
-// the decision kept one) declared no loop.
+// State, version 2: the loop declared for the frame (int64, -1: none) and its
+// loop's inlier average (float64), then the ranking's track after the frame
+// alike (version 1 has no track: none). A frame without a record (written
+// before the decision kept one) declared no loop.
 void LoopDecision::save_frame(std::int64_t frame, StateWriter& out) const {
   if (frame < 0 || frame >= static_cast<std::int64_t>(history_.size())) {
     internal::throw_invalid("decision: frame ", frame, " was not decided (", history_.size(),
                             " frames)");
   }
-  out.put_i64(history_[static_cast<std::size_t>(frame)].frame);
-  out.put_f64(history_[static_cast<std::size_t>(frame)].inliers);
+  const Loop& h = history_[static_cast<std::size_t>(frame)];
+  out.put_i64(h.frame);
+  out.put_f64(h.inliers);
+  out.put_i64(h.track);
+  out.put_f64(h.track_inliers);
 }
 
 void LoopDecision::check_frame(std::int64_t frame, int, int, std::uint32_t version,
                                StateReader in) const {
   if (!in.present()) return;
-  check_state_version(in.what(), name(), version, 1);
-  const std::int64_t loop = in.get_i64();
-  const double inliers = in.get_f64();
-  in.finish();
-  if (loop < -1 || loop >= frame || !std::isfinite(inliers) || inliers < 0) {
-    internal::throw_invalid(in.what(), ": loop ", loop, " with ", inliers,
-                            " inliers is not an earlier frame or -1");
+  check_state_version(in.what(), name(), version, 2);
+  for (int k = 0; k < (version >= 2 ? 2 : 1); ++k) {
+    const std::int64_t loop = in.get_i64();
+    const double inliers = in.get_f64();
+    if (loop < -1 || loop >= frame || !std::isfinite(inliers) || inliers < 0) {
+      internal::throw_invalid(in.what(), ": ", k == 0 ? "loop " : "the ranking's track ", loop,
+                              " with ", inliers, " inliers is not an earlier frame or -1");
+    }
   }
+  in.finish();
 }
 
-void LoopDecision::restore_frame(std::int64_t frame, int, int, std::uint32_t, StateReader in) {
-  ContinuityState s{frame, -1, 0};
+void LoopDecision::restore_frame(std::int64_t frame, int, int, std::uint32_t version, StateReader in) {
+  ContinuityState s{frame, -1, 0}, t{frame, -1, 0};
   if (in.present()) {
     s.loop = in.get_i64();
     s.inliers = in.get_f64();
+    if (version >= 2) {
+      t.loop = in.get_i64();
+      t.inliers = in.get_f64();
+    }
   }
   state_ = s;
+  track_ = t;
   history_.resize(static_cast<std::size_t>(frame));
-  history_.push_back({s.loop, s.inliers});
+  history_.push_back({s.loop, s.inliers, t.loop, t.inliers});
 }
 
 }  // namespace lsgd

@@ -265,6 +265,7 @@ void Detector::verify(Result& result) {
   result.loop = decision.loop;
   result.best = decision.best;
   result.evidence = decision.evidence;
+  result.ranking = decision.ranking;
   result.verification = std::move(decision.verdicts);
   for (const auto& stage : stages_) stage->end(result.frame, result.candidates);
 }

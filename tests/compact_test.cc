@@ -292,13 +292,16 @@ TEST(CompactDetector, RestoreFramePlacesFramesByNode) {
   EXPECT_THROW(d.restore_frame(160, 120, c, node_state(4)), InvalidArgument);
   EXPECT_EQ(d.size(), 9);
   for (std::int64_t f = 0; f < 9; ++f) {
-    // Saved as restored: the node, then the decision (no loop).
+    // Saved as restored: the node, then the decision (no loop, no ranking
+    // track: version 2 writes both).
     StateWriter w;
     w.put_i64(d.search().group_of(f));
     StateWriter loop;
     loop.put_i64(-1);
     loop.put_f64(0);
-    EXPECT_EQ(d.frame_state(f), records({{kNodesSearch, 1, w.bytes()}, {"decision", 1, loop.bytes()}}));
+    loop.put_i64(-1);
+    loop.put_f64(0);
+    EXPECT_EQ(d.frame_state(f), records({{kNodesSearch, 1, w.bytes()}, {"decision", 2, loop.bytes()}}));
   }
   EXPECT_THROW(d.frame_state(9), InvalidArgument);
   EXPECT_THROW(d.search().members(3), InvalidArgument);

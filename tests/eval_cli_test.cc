@@ -104,6 +104,10 @@ TEST_F(ShortStreet, RunCsvScoredAsDetectionsMatchesEval) {
   EXPECT_DOUBLE_EQ(x["recall_at_100_precision"].get<double>(),
                    y["recall_at_100_precision"].get<double>());
   EXPECT_DOUBLE_EQ(x["average_precision"].get<double>(), y["average_precision"].get<double>());
+  // The decision's own, from the CSV's loop scores, alike.
+  for (const char* key : {"decision_recall_at_100_precision", "decision_average_precision"}) {
+    EXPECT_DOUBLE_EQ(x[key].get<double>(), y[key].get<double>()) << key;
+  }
   EXPECT_EQ(y["detections"], (dir_ / "run.csv").string());
   // Per-stage p95 and peak memory, as the protocol asks.
   EXPECT_GT(x["stage_ms_p95"]["segment"].get<double>(), 0.0);
@@ -128,6 +132,29 @@ TEST_F(ShortStreet, RunCsvScoredAsDetectionsMatchesEval) {
             std::string::npos)
       << a.out;
   EXPECT_TRUE(x["warnings"].empty()) << x["warnings"];
+}
+
+// R@100P, AP and the curve come from the ranking, which no decision setting
+// changes (issue 32: they moved with --threshold); the decision's own are
+// reported apart and do move.
+TEST_F(ShortStreet, RankingMetricsDoNotMoveWithTheDecisionSettings) {
+  std::vector<nlohmann::json> runs;
+  for (const std::string flags : {"", " --threshold 5 --option decision.continuity_bonus=1",
+                                  " --threshold 12 --option decision.strong_bonus=0"}) {
+    const fs::path json = kTmp / ("threshold-" + std::to_string(runs.size()) + ".json");
+    const CmdResult r = lsgd("eval --sequence " + q(dir_ / "sequence.txt") + common(json) + flags);
+    ASSERT_EQ(r.code, 0) << r.err;
+    runs.push_back(read_json(json));
+  }
+  EXPECT_GT(runs[0]["recall_at_100_precision"].get<double>(), 0.1);
+  for (const auto& j : runs) {
+    for (const char* key : {"recall_at_100_precision", "average_precision", "threshold_at_100_precision",
+                            "recall_at_1", "pr_curve"}) {
+      EXPECT_EQ(j[key], runs[0][key]) << key;
+    }
+  }
+  EXPECT_NE(runs[2]["declared_loops"], runs[0]["declared_loops"]);  // the decision did change
+  EXPECT_NE(runs[2]["decision_average_precision"], runs[0]["decision_average_precision"]);
 }
 
 // --compare scores another system's detections with the same evaluator as

@@ -146,6 +146,54 @@ TEST(Evaluate, OperatingPointScoresTheDeclaredLoops) {
   EXPECT_EQ(lenient.declared_false, 0);
 }
 
+// R@100P, AP and the curve sweep the ranking (confirmed reports first, by
+// score, then the unconfirmed ones); the decision's loop scores give the
+// decision_* metrics; a record without a ranking is its report, confirmed.
+TEST(Evaluate, TheRankingIsSweptConfirmedFirstAndTheDecisionApart) {
+  const GroundTruth gt = small_gt();
+  std::vector<FrameRecord> r = {report(5, {{0, 9.0}}), report(6, {{4, 8.0}}), report(7, {{2, 7.0}})};
+  // The ranking: query 5's right place, confirmed, appearance 2; query 6's
+  // wrong one, unconfirmed, appearance 5 (above it); query 7's right one,
+  // confirmed, appearance 1.
+  r[0].ranking = lsgd::Ranking{{0, 2.0}, true};
+  r[1].ranking = lsgd::Ranking{{4, 5.0}, false};
+  r[2].ranking = lsgd::Ranking{{2, 1.0}, true};
+  const auto m = lsgd::eval::evaluate(r, gt, 2);
+  // Ranking: 2 T, 1 T (confirmed), then 5 F (unconfirmed).
+  ASSERT_EQ(m.curve.size(), 3u);
+  EXPECT_TRUE(m.curve[0].confirmed);
+  EXPECT_TRUE(m.curve[1].confirmed);
+  EXPECT_FALSE(m.curve[2].confirmed);
+  EXPECT_DOUBLE_EQ(m.curve[2].threshold, 5.0);
+  EXPECT_DOUBLE_EQ(m.recall_at_100_precision, 2.0 / 3.0);
+  EXPECT_DOUBLE_EQ(m.threshold_at_100_precision, 1.0);
+  EXPECT_DOUBLE_EQ(m.average_precision, 2.0 / 3.0);
+  // Decision: 9 T, 8 F, 7 T.
+  EXPECT_DOUBLE_EQ(m.decision_recall_at_100_precision, 1.0 / 3.0);
+  EXPECT_DOUBLE_EQ(m.decision_threshold_at_100_precision, 9.0);
+  EXPECT_DOUBLE_EQ(m.decision_average_precision, 1.0 / 3.0 + (1.0 / 3.0) * (2.0 / 3.0));
+  // A ranking with no candidate counts at no threshold.
+  r[1].ranking = lsgd::Ranking{};
+  EXPECT_EQ(lsgd::eval::evaluate(r, gt, 2).curve.size(), 2u);
+  // Without rankings (another system's detections) both sweeps are the reports'.
+  for (FrameRecord& f : r) f.ranking.reset();
+  const auto plain = lsgd::eval::evaluate(r, gt, 2);
+  EXPECT_DOUBLE_EQ(plain.recall_at_100_precision, plain.decision_recall_at_100_precision);
+  EXPECT_DOUBLE_EQ(plain.average_precision, plain.decision_average_precision);
+  EXPECT_DOUBLE_EQ(plain.threshold_at_100_precision, 9.0);
+  // The lenient protocol sweeps the ranking too.
+  r[0].ranking = lsgd::Ranking{{0, 2.0}, true};
+  r[1].ranking = lsgd::Ranking{{4, 5.0}, false};
+  r[2].ranking = lsgd::Ranking{{2, 1.0}, true};
+  const auto lenient = lsgd::eval::evaluate_lsgddn_reference(r, gt, {2, 1, false});
+  // (It drops query 6's reports of frame 4, |6 - 4| <= 2: 2 T and 1 T;
+  // 9 T and 7 T.)
+  EXPECT_DOUBLE_EQ(lenient.recall_at_100_precision, 2.0 / 3.0);
+  EXPECT_DOUBLE_EQ(lenient.threshold_at_100_precision, 1.0);
+  EXPECT_DOUBLE_EQ(lenient.decision_recall_at_100_precision, 2.0 / 3.0);
+  EXPECT_DOUBLE_EQ(lenient.decision_threshold_at_100_precision, 7.0);
+}
+
 TEST(Evaluate, TimingsAndPrt) {
   std::vector<FrameRecord> r;
   for (int i = 0; i < 10; ++i) r.push_back(report(i, {}, i + 1.0));  // 1..10 ms

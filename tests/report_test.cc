@@ -295,10 +295,11 @@ TEST(Report, HeatmapIsAPngOfTheSampledMatrixWithOverlays) {
   EXPECT_GT(magenta, 500);
   EXPECT_GT(blue, 10000);
   EXPECT_GT(yellow, 1000);
-  // One marker per loop at the operating (here R@100P) threshold: all true positives.
+  // One marker per loop at the operating threshold (here the loop score's
+  // R@100P threshold, as the markers are the decision's reports): all true positives.
   std::int64_t tp = 0;
   for (const FrameRecord& f : r.records) {
-    tp += f.reported.frame >= 0 && f.reported.score >= r.metrics.threshold_at_100_precision;
+    tp += f.reported.frame >= 0 && f.reported.score >= r.metrics.decision_threshold_at_100_precision;
   }
   EXPECT_GT(tp, 0);
   EXPECT_EQ(count(html, "<circle class='tp'"), static_cast<std::size_t>(tp));

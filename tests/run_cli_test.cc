@@ -297,6 +297,31 @@ TEST_F(RunCli, RowsBeyondTheOneBeingCommittedAreReportedAsLostFrames) {
   EXPECT_EQ(database_rows(kTmp / "a.db").size(), 20u);
 }
 
+// A CSV written before the ranking's columns existed resumes in its own
+// columns: every row has as many fields as its header.
+TEST_F(RunCli, ACsvWithoutTheRankingColumnsResumesWithoutThem) {
+  ASSERT_EQ(lsgd(run_args("a.db", "a.csv", " --last 9")).code, 0);
+  std::istringstream rows(slurp(kTmp / "a.csv"));
+  std::string old, line;
+  while (std::getline(rows, line)) {  // drop the last three columns
+    for (int k = 0; k < 3; ++k) line.erase(line.rfind(','));
+    old += line + "\n";
+  }
+  ASSERT_EQ(old.rfind("frame,image,loop_frame,candidate_frame,score,ms,appearance,inliers\n", 0), 0u);
+  std::ofstream(kTmp / "a.csv", std::ios::trunc) << old;
+  const CmdResult r = lsgd(run_args("a.db", "a.csv", " --last 19"));
+  ASSERT_EQ(r.code, 0) << r.err;
+  const std::string text = slurp(kTmp / "a.csv");
+  EXPECT_EQ(text.rfind(old, 0), 0u);  // the old rows kept as they were
+  std::istringstream all(text);
+  int n = 0;
+  while (std::getline(all, line)) {
+    EXPECT_EQ(std::count(line.begin(), line.end(), ','), 7) << line;
+    ++n;
+  }
+  EXPECT_EQ(n, 21);
+}
+
 // Messages that say what happened (issue 15, class 10).
 TEST_F(RunCli, MessagesNameWhatHappened) {
   ASSERT_EQ(lsgd(run_args("a.db", "a.csv", " --last 9")).code, 0);

@@ -316,7 +316,9 @@ const Strings kHeader = {"dataset",
                          "ms_per_frame_p95",
                          "nodes",
                          "bytes_per_frame",
-                         "skipped_frames"};
+                         "skipped_frames",
+                         "decision_recall_at_100_precision",
+                         "decision_average_precision"};
 constexpr std::size_t kFirstTimeColumn = 19;  // ms_per_frame_median, ms_per_frame_p95
 
 TEST_F(SweepCli, FourCellsMatchDirectEvals) {
@@ -493,8 +495,10 @@ TEST_F(SweepCli, ABadImageIsSkippedAsByEvalOrStopsUnderStrict) {
   rows = read_csv(csv);
   ASSERT_EQ(rows.size(), 5u);
   EXPECT_EQ(rows[3][0], "broken");
-  EXPECT_EQ(rows[3].back(), "1");  // skipped_frames
-  EXPECT_EQ(rows[1].back(), "0");
+  const std::size_t skipped_column = rows[0].size() - 3;  // skipped_frames, then decision_*
+  ASSERT_EQ(rows[0][skipped_column], "skipped_frames");
+  EXPECT_EQ(rows[3][skipped_column], "1");
+  EXPECT_EQ(rows[1][skipped_column], "0");
   const fs::path out = kTmp / "broken.json";
   const CmdResult e = lsgd_cli("eval --sequence '" + (broken / "sequence.txt").string() +
                                "' --gt '" + (broken / "groundtruth.txt").string() +

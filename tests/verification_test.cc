@@ -190,16 +190,20 @@ TEST(LoopDecision, StrongGeometryConfirmsAWeakFirstRank) {
     EXPECT_EQ(stage.checks, 1);  // 1.8 + 3.5 cannot reach 7
   }
   {
-    // Off: geometry is not even consulted for a candidate that cannot reach 7.
+    // Off: a candidate that cannot reach 7 is not confirmed by the decision
+    // (the ranking examines it: confirmed there, and its inliers reported).
     DecisionOptions off;
     off.strong_bonus = 0;
     LoopDecision decision(off);
     FixedSupport stage(std::map<std::int64_t, int>{{5, 200}});
     const Decision out = decide_one(decision, stage, 100, weak);
     EXPECT_FALSE(out.loop);
-    EXPECT_EQ(stage.checks, 0);
+    EXPECT_EQ(stage.checks, 1);
     EXPECT_FALSE(out.evidence.confirmed);
+    EXPECT_EQ(out.evidence.inliers, 200);
     EXPECT_DOUBLE_EQ(out.best.score, 2.0);
+    EXPECT_EQ(out.ranking.best.frame, 5);
+    EXPECT_TRUE(out.ranking.confirmed);
   }
 }
 
@@ -226,13 +230,16 @@ TEST(LoopDecision, AYoungQueryReportsOnlyWhatIsConfirmed) {
     EXPECT_FALSE(out.loop);
   }
   {
-    // Not young: the unconfirmed best candidate is reported, geometry not consulted.
+    // Not young: the best candidate is reported with its appearance score
+    // (the ranking's check confirms it, but 1 + 3.5 + 1.5 cannot reach 7).
     LoopDecision decision(DecisionOptions{});
     FixedSupport stage(std::map<std::int64_t, int>{{3, 30}});
     const Decision out = decide_one(decision, stage, 30, candidates, false);
-    EXPECT_EQ(stage.checks, 0);
+    EXPECT_EQ(stage.checks, 1);
     EXPECT_EQ(out.best.frame, 3);
     EXPECT_DOUBLE_EQ(out.best.score, 1.0);
+    EXPECT_FALSE(out.loop);
+    EXPECT_TRUE(out.ranking.confirmed);
   }
 }
 
@@ -271,6 +278,75 @@ TEST(LoopDecision, NothingContinuesAcrossACut) {
       EXPECT_EQ(out.evidence.continues, continues);
     }
   }
+}
+
+// The ranking (decision.h): the best candidate, checked on every query; one
+// that tracks the ranking's confirmed candidate of the previous frame passes
+// with kRankingTrackInliers of the track's inliers, unless it looks unlike
+// the query. No decision setting changes it: with a threshold nothing
+// reaches, it is the same.
+TEST(LoopDecision, TheRankingTracksItsOwnConfirmedCandidates) {
+  for (const double threshold : {7.0, 1000.0}) {
+    // 0: tracked, 1: no temporal stage, 2: cut, 3: frame 11 unlike the query (a scene cut)
+    for (const int variant : {0, 1, 2, 3}) {
+      SCOPED_TRACE(testing::Message() << "threshold " << threshold << " variant " << variant);
+      DecisionOptions d;
+      d.threshold = threshold;
+      LoopDecision decision(d);
+      FixedSupport stage(std::map<std::int64_t, int>{{10, 60}, {11, 13}});
+      DecisionQuery q;
+      q.cells = 12;
+      q.continuity = variant != 1;
+      q.tolerance = 2;
+      q.min_gap = 5;
+      q.appearance = [](std::int64_t) { return 0.5; };
+      q.single_frame = [&](std::int64_t j) { return variant == 3 && j == 11 ? -2.7 : 0.0; };
+      std::vector<Candidate> first = {{10, 0.5}};  // weak: never a loop
+      q.frame = 50;
+      q.candidates = &first;
+      const Decision a = decision.decide(q, {&stage});
+      EXPECT_FALSE(a.loop);
+      EXPECT_EQ(a.ranking.best.frame, 10);
+      EXPECT_TRUE(a.ranking.confirmed);
+      EXPECT_EQ(decision.ranking_track().loop, 10);
+      if (variant == 2) decision.cut();
+      std::vector<Candidate> second = {{11, 0.4}};
+      q.frame = 51;
+      q.candidates = &second;
+      const Decision b = decision.decide(q, {&stage});
+      EXPECT_FALSE(b.loop);
+      // 13 inliers: below geometric.min_inliers (20), above 0.2 of 60.
+      EXPECT_EQ(b.ranking.confirmed, variant == 0);
+      ASSERT_FALSE(b.verdicts.empty());
+      EXPECT_FALSE(b.verdicts[0].accepted);  // the stage's own verdict, as it is
+      // The track is persisted with the decision's state (version 2).
+      StateWriter out;
+      decision.save_frame(51, out);
+      LoopDecision restored(d);
+      restored.restore_frame(51, 64, 48, 2, StateReader(out.bytes().data(), out.bytes().size(), "t"));
+      EXPECT_EQ(restored.ranking_track().loop, decision.ranking_track().loop);
+      EXPECT_DOUBLE_EQ(restored.ranking_track().inliers, decision.ranking_track().inliers);
+    }
+  }
+}
+
+// A decision state of version 1 (before the ranking's track) restores with no track.
+TEST(LoopDecision, RestoresAVersion1StateWithoutATrack) {
+  StateWriter v1;
+  v1.put_i64(3);
+  v1.put_f64(42);
+  LoopDecision d(DecisionOptions{});
+  d.check_frame(9, 64, 48, 1, StateReader(v1.bytes().data(), v1.bytes().size(), "t"));
+  d.restore_frame(9, 64, 48, 1, StateReader(v1.bytes().data(), v1.bytes().size(), "t"));
+  EXPECT_EQ(d.continuity().loop, 3);
+  EXPECT_EQ(d.ranking_track().loop, -1);
+  StateWriter bad;  // version 2, a track that is no earlier frame
+  bad.put_i64(3);
+  bad.put_f64(42);
+  bad.put_i64(9);
+  bad.put_f64(1);
+  const StateReader in(bad.bytes().data(), bad.bytes().size(), "frame 9's decision state");
+  EXPECT_THROW(d.check_frame(9, 64, 48, 2, in), InvalidArgument);
 }
 
 // A revisit may be slower (the same frame again) or faster (up to tolerance
@@ -493,14 +569,20 @@ TEST(DetectorVerification, GeometricOnlyChecksCandidatesThatCouldBeLoops) {
       EXPECT_EQ(r.best.frame, i - kPlaces);
     }
     for (const auto& v : r.verification) {
-      // Only candidates whose score plus the bonuses could reach the threshold
-      // (the best-ranked one: with the strong bonus, 1.5), and a young query's
-      // best candidate (the only way it reports one).
+      // Only candidates whose score plus the bonuses could reach the threshold,
+      // and the best-ranked one (the ranking examines it on every query).
       for (const Candidate& c : r.candidates) {
-        if (c.frame == v.candidate && !(r.frame - 10 < kMinCalibration && &c == &r.candidates[0])) {
-          EXPECT_GE(c.score + 3.5 + (&c == &r.candidates[0] ? 1.5 : 0.0), 7.0);
+        if (c.frame == v.candidate && &c != &r.candidates[0]) {
+          EXPECT_GE(c.score + 3.5, 7.0);
         }
       }
+    }
+    // The best candidate's verdict comes first, and is the ranking's.
+    if (!r.candidates.empty()) {
+      ASSERT_FALSE(r.verification.empty());
+      EXPECT_EQ(r.verification[0].candidate, r.candidates[0].frame);
+      EXPECT_EQ(r.ranking.best.frame, r.candidates[0].frame);
+      EXPECT_EQ(r.ranking.confirmed, r.verification[0].accepted);  // no temporal stage: no track
     }
     if (r.frame - 10 < kMinCalibration && !r.candidates.empty()) {
       ASSERT_FALSE(r.verification.empty());

@@ -125,11 +125,30 @@ struct DecisionQuery {
   std::function<double(std::int64_t)> single_frame;
 };
 
+// The ranking no decision setting changes (what R@100P and AP are computed
+// from, docs/evaluation.md): the candidate appearance ranks first among those
+// the gates let through, its appearance score, and whether every confirming
+// stage accepts it. The confirming stages examine it on every query, whatever
+// the decision needs. As the decision's continuity rule does, a candidate
+// that tracks the ranking's confirmed candidate of the previous frame (it is
+// that frame or one of the next 1 + verification.temporal.tolerance) passes
+// the geometric check with kRankingTrackInliers of the track's average
+// inliers, unless it looks unlike the query (single frame below
+// kRankingTrackMinZ: a scene cut); the track is the ranking's own, whatever
+// the decision declared. (The constants are the decision's defaults.)
+struct Ranking {
+  Candidate best;          // frame -1: no candidate (or every one gated)
+  bool confirmed = false;  // every confirming stage accepts it (true without one)
+};
+constexpr double kRankingTrackInliers = 0.2;
+constexpr double kRankingTrackMinZ = -2.0;
+
 // What the decision found for one query (fields of Result).
 struct Decision {
   bool loop = false;
   Candidate best;
   LoopEvidence evidence;
+  Ranking ranking;
   std::vector<StageVerdict> verdicts;  // in the order examined
 };
 
@@ -153,11 +172,14 @@ class LoopDecision final : public Stateful {
 
   // The state after the last frame decided.
   const ContinuityState& continuity() const { return state_; }
-  // The next frame continues no loop (Detector::cut()).
-  void cut() { state_.loop = -1, state_.inliers = 0; }
+  // The ranking's track after the last frame (its confirmed candidate, -1: none).
+  const ContinuityState& ranking_track() const { return track_; }
+  // The next frame continues no loop, and tracks no ranked candidate (Detector::cut()).
+  void cut() { state_.loop = -1, state_.inliers = 0, track_.loop = -1, track_.inliers = 0; }
 
   const char* name() const override { return "decision"; }
   bool has_state() const override { return true; }
+  std::uint32_t state_version() const override { return 2; }
   void save_frame(std::int64_t frame, StateWriter& out) const override;
   void check_frame(std::int64_t frame, int width, int height, std::uint32_t version,
                    StateReader in) const override;
@@ -166,19 +188,26 @@ class LoopDecision final : public Stateful {
 
  private:
   void record(std::int64_t frame, std::int64_t loop, int inliers, bool continued);
+  // The ranking's candidate and its verdicts (step 2 of decide()).
+  void rank(const DecisionQuery& q, const Candidate& best, const std::vector<VerificationStage*>& confirms,
+            Decision& out);
 
   DecisionOptions options_;
   ContinuityState state_;
+  ContinuityState track_;  // the ranking's track: its confirmed candidate of the last frame
   struct Loop {
     std::int64_t frame;
     double inliers;
+    std::int64_t track;
+    double track_inliers;
   };
-  std::vector<Loop> history_;  // state_.loop and state_.inliers after every frame
+  std::vector<Loop> history_;  // state_ and track_ after every frame
   // Scratch reused across frames.
   std::vector<char> gated_;          // 1 for a candidate a gate rejected
   std::vector<char> unlike_;         // 1 for a frame of the continuation window unlike the query
   std::vector<Candidate> examined_;  // candidates the confirming stages check, in order
   std::vector<VerificationStage*> confirms_;  // the confirming stages of this frame
+  std::vector<StageCheck> first_checks_;      // their verdicts on the best candidate (ranking)
 };
 
 }  // namespace lsgd

@@ -72,6 +72,12 @@ struct Result {
   // than kMinCalibration candidates) that no confirming stage confirmed.
   Candidate best;
   LoopEvidence evidence;  // what the score of `best` is made of
+  // The ranking no decision setting changes (decision.h): the candidate
+  // appearance ranks first through the gates, scored by appearance (sigma),
+  // and whether the confirming stages accept it. lsgd::eval computes R@100P
+  // and AP from it (a candidate they reject counts at no threshold); `best`'s
+  // loop score gives the decision's own (Metrics::decision_*).
+  Ranking ranking;
   // Candidates best first, up to search.top_n, scored by appearance (sigma):
   // sequence evidence with the temporal stage (distinct places in exhaustive
   // search), the standardised similarity without it (evidence.h).

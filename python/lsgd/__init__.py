@@ -25,6 +25,7 @@ from ._lsgd import (  # noqa: F401
     LoopEvidence,
     Metrics,
     PrPoint,
+    Ranking,
     Result,
     StageVerdict,
     Timings,

@@ -149,8 +149,10 @@ def test_evaluation_in_ten_lines_matches_lsgd_eval(tmp_path):
                    check=True, capture_output=True)
     j = json.load(open(out))
     assert m.declared_loops == j["declared_loops"] and m.declared_false == j["declared_false"]
-    for key in ["recall_at_100_precision", "average_precision", "recall_at_1", "recall_at_5"]:
+    for key in ["recall_at_100_precision", "average_precision", "recall_at_1", "recall_at_5",
+                "decision_recall_at_100_precision", "decision_average_precision"]:
         assert getattr(m, key) == pytest.approx(j[key], abs=1e-12), key
+    assert [p.confirmed for p in m.curve] == [p[3] for p in j["pr_curve"]["points"]]
     assert m.declared_false == 0 and m.declared_loops > 0
 
 
@@ -224,6 +226,11 @@ def test_result_fields():
     assert all(v.stage in ("temporal", "geometric") for x in results for v in x.verification)
     assert r.evidence.inliers >= -1
     assert "Result(frame=" in repr(r)
+    # The ranking: the best candidate, examined on every query.
+    for x in results:
+        if x.candidates:
+            assert (x.ranking.best.frame, x.ranking.best.score) in [(c.frame, c.score) for c in x.candidates]
+    assert isinstance(r.ranking, lsgd.Ranking) and "Ranking(best=" in repr(r.ranking)
 
 
 def test_example_script_evaluates_and_plots(tmp_path):

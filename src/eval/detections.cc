@@ -85,9 +85,14 @@ std::optional<double> parse_double(const std::string& s) {
 // Which field holds what; -1: absent.
 // `loop`: lsgd run's loop_frame (the loop it declared, -1 for none); other
 // systems' files have none and every reported match counts as declared.
+// `ranked_*`: lsgd run's ranking (Result::ranking); the ranking is then read
+// from them, not from the match.
 struct Columns {
   int query = 0, match = 1, score = 2, ms = -1, loop = -1;
-  int needed() const { return std::max({query, match, score, ms, loop}) + 1; }
+  int ranked_frame = -1, ranked_score = -1, ranked_confirmed = -1;
+  int needed() const {
+    return std::max({query, match, score, ms, loop, ranked_frame, ranked_score, ranked_confirmed}) + 1;
+  }
 };
 
 int find_column(const std::vector<std::string>& header, std::initializer_list<const char*> names) {
@@ -108,6 +113,12 @@ Columns columns_from_header(std::vector<std::string> header) {
     c.score = find_column(header, {"score"});
     c.ms = find_column(header, {"ms"});
     c.loop = find_column(header, {"loop_frame"});
+    c.ranked_frame = find_column(header, {"ranked_frame"});
+    c.ranked_score = find_column(header, {"ranked_score"});
+    c.ranked_confirmed = find_column(header, {"ranked_confirmed"});
+    if (c.ranked_frame < 0 || c.ranked_score < 0 || c.ranked_confirmed < 0) {
+      c.ranked_frame = c.ranked_score = c.ranked_confirmed = -1;  // all three, or none
+    }
   } else {
     const int q = find_column(header, {"query", "frame"});
     const int m = find_column(header, {"match"});
@@ -169,6 +180,7 @@ struct Row {
   double score = 0;
   double ms = 0;
   bool declared = false;
+  std::optional<Ranking> ranking;  // lsgd run's ranking columns
 };
 
 Row parse_row(const std::vector<std::string>& f, const Columns& c, const std::string& where) {
@@ -219,6 +231,23 @@ Row parse_row(const std::vector<std::string>& f, const Columns& c, const std::st
     }
     row.ms = *ms;
   }
+  if (c.ranked_frame >= 0) {
+    const std::string& frame = f[static_cast<std::size_t>(c.ranked_frame)];
+    const std::string& score = f[static_cast<std::size_t>(c.ranked_score)];
+    const std::string& confirmed = f[static_cast<std::size_t>(c.ranked_confirmed)];
+    const auto j = parse_int(frame);
+    if (!j || *j < -1 || *j >= kMaxFrames) {
+      throw FormatError(concat(where, ": ranked_frame '", frame, "' is not a frame id or -1"));
+    }
+    const auto v = parse_double(score);
+    if (!v || !std::isfinite(*v)) {
+      throw FormatError(concat(where, ": ranked_score '", score, "' is not a finite number"));
+    }
+    if (confirmed != "0" && confirmed != "1") {
+      throw FormatError(concat(where, ": ranked_confirmed '", confirmed, "' is neither 0 nor 1"));
+    }
+    row.ranking = Ranking{Candidate{*j, *v}, confirmed == "1"};
+  }
   return row;
 }
 
@@ -261,8 +290,9 @@ std::vector<FrameRecord> read_detections(const std::string& path, std::int64_t f
       throw FormatError(concat(where, ": query ", r.query, " is outside the ", frames,
                                " frames (does the file belong to this sequence and subsampling?)"));
     }
-    if (r.match >= frames) {
-      throw FormatError(concat(where, ": match ", r.match, " is outside the ", frames, " frames"));
+    if (r.match >= frames || (r.ranking && r.ranking->best.frame >= frames)) {
+      throw FormatError(concat(where, ": match ", std::max(r.match, r.ranking ? r.ranking->best.frame : -1),
+                               " is outside the ", frames, " frames"));
     }
     std::int64_t& seen = line_of[static_cast<std::size_t>(r.query)];
     if (seen != 0) {
@@ -272,6 +302,7 @@ std::vector<FrameRecord> read_detections(const std::string& path, std::int64_t f
     seen = r.line;
     FrameRecord& out = records[static_cast<std::size_t>(r.query)];
     out.timings.total_ms = r.ms;
+    out.ranking = r.ranking;
     if (r.match >= 0) {
       out.reported = Candidate{r.match, r.score};
       out.candidates = {out.reported};

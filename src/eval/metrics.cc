@@ -16,7 +16,14 @@ struct Report {
   bool correct;
   bool recalled;  // counts towards recall (strict: iff correct)
   bool declared;  // the system declared it a loop
+  bool confirmed = true;  // the ranking's: swept before every unconfirmed report
 };
+
+// The report the ranking sweeps for record r (its `reported` when it has no ranking).
+Report ranked(const FrameRecord& r, const Candidate*& c) {
+  c = r.ranking ? &r.ranking->best : &r.reported;
+  return {c->score, false, false, false, r.ranking ? r.ranking->confirmed : true};
+}
 
 // The operating point: the declared reports alone.
 void operating_point(const std::vector<Report>& reports, Metrics& m) {
@@ -65,18 +72,22 @@ void check_records(const std::vector<FrameRecord>& records, const GroundTruth& g
 
 // Fills the threshold sweep, R@100P, P@100R and AP from the best reports.
 void sweep(std::vector<Report> reports, Metrics& m) {
-  std::sort(reports.begin(), reports.end(),
-            [](const Report& a, const Report& b) { return a.score > b.score; });
+  std::sort(reports.begin(), reports.end(), [](const Report& a, const Report& b) {
+    return a.confirmed != b.confirmed ? a.confirmed : a.score > b.score;
+  });
   std::int64_t tp = 0, fp = 0, recalled = 0;
   double previous_recall = 0;
   for (std::size_t i = 0; i < reports.size();) {
     const double threshold = reports[i].score;
-    for (; i < reports.size() && reports[i].score == threshold; ++i) {
+    const bool confirmed = reports[i].confirmed;
+    for (; i < reports.size() && reports[i].score == threshold && reports[i].confirmed == confirmed;
+         ++i) {
       (reports[i].correct ? tp : fp) += 1;
       recalled += reports[i].recalled ? 1 : 0;
     }
     PrPoint p;
     p.threshold = threshold;
+    p.confirmed = confirmed;
     p.true_positives = tp;
     p.false_positives = fp;
     p.precision = static_cast<double>(tp) / static_cast<double>(tp + fp);
@@ -93,6 +104,17 @@ void sweep(std::vector<Report> reports, Metrics& m) {
     }
     m.curve.push_back(p);
   }
+}
+
+// The ranking's sweep (the main metrics) and the decision's.
+void sweeps(std::vector<Report> ranking, std::vector<Report> decision, Metrics& m) {
+  sweep(std::move(ranking), m);
+  Metrics d;
+  d.positives = m.positives;
+  sweep(std::move(decision), d);
+  m.decision_recall_at_100_precision = d.recall_at_100_precision;
+  m.decision_threshold_at_100_precision = d.threshold_at_100_precision;
+  m.decision_average_precision = d.average_precision;
 }
 
 // Recall@1/5/10 over the positive queries; correct(query, candidate) decides a hit.
@@ -169,16 +191,22 @@ Metrics evaluate(const std::vector<FrameRecord>& records, const GroundTruth& gt,
   m.min_gap = min_gap;
   m.frames = static_cast<std::int64_t>(records.size());
   check_records(records, gt, "evaluate");
-  std::vector<Report> reports;
+  std::vector<Report> reports, ranking;
   for (const auto& r : records) {
     if (gt.has_loop(r.frame, min_gap)) ++m.positives;
     if (r.reported.frame >= 0) {
       const bool correct = correct_loop(gt, r.frame, r.reported, min_gap);
       reports.push_back({r.reported.score, correct, correct, r.loop});
     }
+    const Candidate* c = nullptr;
+    Report report = ranked(r, c);
+    if (c->frame >= 0) {
+      report.correct = report.recalled = correct_loop(gt, r.frame, *c, min_gap);
+      ranking.push_back(report);
+    }
   }
   operating_point(reports, m);
-  sweep(std::move(reports), m);
+  sweeps(std::move(ranking), std::move(reports), m);
   fill_recall_at_n(
       records, gt, min_gap,
       [&](std::int64_t q, const Candidate& c) { return correct_loop(gt, q, c, min_gap); }, m);
@@ -203,18 +231,26 @@ Metrics evaluate_lsgddn_reference(const std::vector<FrameRecord>& records, const
   const auto correct = [&](std::int64_t q, const Candidate& c) {
     return near_loop(gt, q, c, options.min_gap, options.tolerance);
   };
-  std::vector<Report> reports;
+  std::vector<Report> reports, ranking;
+  // A report the protocol looks at (outside the window), into `out`.
+  const auto add = [&](std::int64_t query, const Candidate& c, Report report,
+                       std::vector<Report>& out) {
+    if (c.frame < 0 || std::abs(query - c.frame) <= options.min_gap) return;
+    report.correct = correct(query, c);
+    report.recalled = report.correct || options.recall_counts_any_report;
+    out.push_back(report);
+  };
   for (const auto& r : records) {
     // Queries without a ground-truth loop are never looked at: their reports vanish.
     if (!gt.has_loop(r.frame, options.min_gap)) continue;
     ++m.positives;
-    const std::int64_t j = r.reported.frame;
-    if (j < 0 || std::abs(r.frame - j) <= options.min_gap) continue;
-    const bool ok = correct(r.frame, r.reported);
-    reports.push_back({r.reported.score, ok, ok || options.recall_counts_any_report, r.loop});
+    add(r.frame, r.reported, {r.reported.score, false, false, r.loop}, reports);
+    const Candidate* c = nullptr;
+    const Report report = ranked(r, c);
+    add(r.frame, *c, report, ranking);
   }
   operating_point(reports, m);
-  sweep(std::move(reports), m);
+  sweeps(std::move(ranking), std::move(reports), m);
   fill_recall_at_n(records, gt, options.min_gap, correct, m);
   fill_timings(records, m);
   return m;

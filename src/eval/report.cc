@@ -8,6 +8,7 @@
 #include <cstring>
 #include <fstream>
 #include <limits>
+#include <optional>
 #include <opencv2/core.hpp>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
@@ -103,12 +104,13 @@ void pr_curve(std::ostream& html, const ReportInput& in, const Operating& op) {
     svg << "<circle cx='" << x(m.recall_at_100_precision) << "' cy='" << y(1) << "' r='6' fill='"
         << kTpColour << "' stroke='#fff' stroke-width='1.5'/>";
   }
-  // The operating point: the sweep point of the smallest threshold >= the operating threshold.
-  const PrPoint* at = nullptr;
-  for (const PrPoint& p : m.curve) {
-    if (p.threshold >= op.threshold) at = &p;
-  }
-  if (at) {
+  // The operating point: the precision and recall of the loops it marks (the
+  // decision's, which the ranking's curve need not pass through).
+  std::optional<PrPoint> at;
+  if (op.tp + op.fp > 0 && m.positives > 0) {
+    at = PrPoint{};
+    at->precision = static_cast<double>(op.tp) / static_cast<double>(op.tp + op.fp);
+    at->recall = static_cast<double>(op.tp) / static_cast<double>(m.positives);
     svg << "<rect x='" << x(at->recall) - 5 << "' y='" << y(at->precision) - 5
         << "' width='10' height='10' fill='none' stroke='#111' stroke-width='2'/>";
   }

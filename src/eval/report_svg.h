@@ -238,9 +238,10 @@ inline Operating operating_point(const ReportInput& in) {
   } else if (in.threshold) {
     op.threshold = *in.threshold;
     op.label = escape(in.threshold_name) + " " + num(op.threshold, 4);
-  } else if (m.recall_at_100_precision > 0) {
-    op.threshold = m.threshold_at_100_precision;
-    op.label = "R@100P threshold " + num(op.threshold, 4);
+  } else if (m.decision_recall_at_100_precision > 0) {
+    // The loops are the decision's (their loop scores): its own R@100P threshold.
+    op.threshold = m.decision_threshold_at_100_precision;
+    op.label = "the loop score's R@100P threshold " + num(op.threshold, 4);
   } else {
     op.label = "none (no threshold reaches precision 1, so no loop is marked)";
   }

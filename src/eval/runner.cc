@@ -151,6 +151,7 @@ std::vector<FrameRecord> run_detector(Detector& detector, const FrameSource& sou
     ids.push_back(id);
     result.frame = id;
     result.best.frame = to_id(result.best.frame);
+    result.ranking.best.frame = to_id(result.ranking.best.frame);
     for (Candidate& c : result.candidates) c.frame = to_id(c.frame);
     for (StageVerdict& v : result.verification) v.candidate = to_id(v.candidate);
     if (on_frame) on_frame(result, times);
@@ -159,6 +160,7 @@ std::vector<FrameRecord> run_detector(Detector& detector, const FrameSource& sou
       record.frame = result.frame;
       record.reported = result.best;
       record.loop = result.loop;
+      record.ranking = result.ranking;
       record.candidates = std::move(result.candidates);
       record.timings = result.timings;
       record.load_ms = times.load_ms;

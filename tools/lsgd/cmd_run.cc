@@ -229,7 +229,7 @@ std::unique_ptr<CsvWriter> continue_csv(const RunArgs& args, const SessionPlan& 
               << ", but session " << plan.session << " holds frames up to " << plan.last_stored
               << " (their rows went to another output)\n";
   }
-  return std::make_unique<CsvWriter>(args.output, CsvWriter::kAppend);
+  return std::make_unique<CsvWriter>(args.output, CsvWriter::kAppend, trim.ranking_columns);
 }
 
 void run_database(const RunArgs& args, const io::Sequence& sequence) {

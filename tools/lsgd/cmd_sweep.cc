@@ -132,7 +132,8 @@ class SweepOutput {
                "precision_at_decision,recall_at_decision,recall_at_100_precision,"
                "threshold_at_100_precision,"
                "precision_at_100_recall,average_precision,recall_at_1,recall_at_5,recall_at_10,"
-               "prt,ms_per_frame_median,ms_per_frame_p95,nodes,bytes_per_frame,skipped_frames\n"
+               "prt,ms_per_frame_median,ms_per_frame_p95,nodes,bytes_per_frame,skipped_frames,"
+               "decision_recall_at_100_precision,decision_average_precision\n"
             << std::flush;
     }
     std::ostringstream md;
@@ -251,7 +252,8 @@ class SweepOutput {
           << exact(m.recall_at_1) << ',' << exact(m.recall_at_5) << ',' << exact(m.recall_at_10)
           << ',' << exact(m.prt) << ',' << exact(m.ms_per_frame_median) << ','
           << exact(m.ms_per_frame_p95) << ',' << rows_[i].nodes << ',' << rows_[i].bytes_per_frame
-          << ',' << rows_[i].skipped << '\n'
+          << ',' << rows_[i].skipped << ',' << exact(m.decision_recall_at_100_precision) << ','
+          << exact(m.decision_average_precision) << '\n'
           << std::flush;
     if (!*csv_) throw IoError("error while writing CSV file '" + args_.csv + "': is the disk full?");
   }

@@ -163,7 +163,12 @@ void Progress::update(std::int64_t done, double ms_per_frame) {
 
 namespace {
 
-constexpr const char* kCsvHeader = "frame,image,loop_frame,candidate_frame,score,ms,appearance,inliers";
+constexpr const char* kCsvHeader =
+    "frame,image,loop_frame,candidate_frame,score,ms,appearance,inliers,ranked_frame,ranked_score,"
+    "ranked_confirmed";
+// The header before the ranking's columns (a run written by it resumes with its columns).
+constexpr const char* kCsvHeaderWithoutRanking =
+    "frame,image,loop_frame,candidate_frame,score,ms,appearance,inliers";
 
 }  // namespace
 
@@ -177,7 +182,8 @@ std::vector<std::string> search_mode_list() {
   return names;
 }
 
-CsvWriter::CsvWriter(const std::string& path, Mode mode) : path_(path), out_(&std::cout) {
+CsvWriter::CsvWriter(const std::string& path, Mode mode, bool ranking_columns)
+    : path_(path), ranking_columns_(ranking_columns || mode == kCreate), out_(&std::cout) {
   if (!path.empty()) {
     file_ = std::make_unique<std::ofstream>(
         path, mode == kAppend ? std::ios::out | std::ios::app : std::ios::out | std::ios::trunc);
@@ -198,8 +204,13 @@ void CsvWriter::write(const Result& r, const std::string& image) {
   *out_ << r.frame << ',' << quoted << ',' << (r.loop ? r.best.frame : -1) << ',' << r.best.frame
         << ',' << std::setprecision(9) << (r.best.frame >= 0 ? r.best.score : 0.0) << ','
         << std::setprecision(4) << r.timings.total_ms << ',' << std::setprecision(6)
-        << (r.best.frame >= 0 ? r.evidence.appearance : 0.0) << ',' << r.evidence.inliers << '\n'
-        << std::flush;
+        << (r.best.frame >= 0 ? r.evidence.appearance : 0.0) << ',' << r.evidence.inliers;
+  if (ranking_columns_) {
+    const bool ranked = r.ranking.best.frame >= 0;
+    *out_ << ',' << r.ranking.best.frame << ',' << std::setprecision(9)
+          << (ranked ? r.ranking.best.score : 0.0) << ',' << (ranked && r.ranking.confirmed ? 1 : 0);
+  }
+  *out_ << '\n' << std::flush;
   if (!*out_) {
     throw IoError("error while writing the row of frame " + std::to_string(r.frame) + " to " +
                   (path_.empty() ? std::string("standard output")
@@ -212,11 +223,12 @@ CsvWriter::Trim CsvWriter::trim(const std::string& path, std::int64_t last_frame
   std::ifstream in(path, std::ios::binary);
   if (!in) throw IoError("cannot read '" + path + "'");
   std::string line;
-  if (!std::getline(in, line) || line != kCsvHeader) {
+  if (!std::getline(in, line) || (line != kCsvHeader && line != kCsvHeaderWithoutRanking)) {
     throw FormatError("'" + path + "' is not a CSV of lsgd run (its first line is not '" +
                       kCsvHeader + "'); pass another --output");
   }
   Trim trim;
+  trim.ranking_columns = line == kCsvHeader;
   std::int64_t keep = static_cast<std::int64_t>(line.size()) + 1;  // bytes kept
   bool cutting = false;
   while (std::getline(in, line)) {
@@ -348,6 +360,9 @@ nlohmann::json metrics_json(const eval::Metrics& m) {
   j["threshold_at_100_precision"] = m.threshold_at_100_precision;
   j["precision_at_100_recall"] = m.precision_at_100_recall;
   j["average_precision"] = m.average_precision;
+  j["decision_recall_at_100_precision"] = m.decision_recall_at_100_precision;
+  j["decision_threshold_at_100_precision"] = m.decision_threshold_at_100_precision;
+  j["decision_average_precision"] = m.decision_average_precision;
   j["recall_at_1"] = m.recall_at_1;
   j["recall_at_5"] = m.recall_at_5;
   j["recall_at_10"] = m.recall_at_10;
@@ -364,10 +379,23 @@ nlohmann::json metrics_json(const eval::Metrics& m) {
   // Peak resident memory of the whole process so far (getrusage), MB.
   j["peak_rss_mb"] = static_cast<double>(bench::peak_rss_bytes()) / (1024.0 * 1024.0);
   nlohmann::json curve = nlohmann::json::array();
-  for (const auto& p : m.curve) curve.push_back({p.threshold, p.precision, p.recall});
-  j["pr_curve"] = {{"columns", {"threshold", "precision", "recall"}}, {"points", curve}};
+  for (const auto& p : m.curve) curve.push_back({p.threshold, p.precision, p.recall, p.confirmed});
+  j["pr_curve"] = {{"columns", {"threshold", "precision", "recall", "confirmed"}}, {"points", curve}};
   return j;
 }
+
+namespace {
+
+// Whether R@100P is reached among the ranking's confirmed reports.
+bool at_100_confirmed(const eval::Metrics& m) {
+  for (const eval::PrPoint& p : m.curve) {
+    if (p.false_positives > 0) break;
+    if (p.recall >= m.recall_at_100_precision) return p.confirmed;
+  }
+  return true;
+}
+
+}  // namespace
 
 void print_metrics(const eval::Metrics& m, std::int64_t nodes, std::ostream& out) {
   if (m.protocol != "strict") {
@@ -380,8 +408,13 @@ void print_metrics(const eval::Metrics& m, std::int64_t nodes, std::ostream& out
       << m.declared_false << " false (precision " << m.precision_at_decision << ", recall "
       << m.recall_at_decision << ")" << (m.declared_false > 0 ? "  <- FALSE LOOPS" : "") << "\n"
       << "  R@100P " << m.recall_at_100_precision << "  (threshold "
-      << m.threshold_at_100_precision << ", chosen with the ground truth)\n"
-      << "  AP     " << m.average_precision << "\n"
+      << m.threshold_at_100_precision << (at_100_confirmed(m) ? "" : " after every confirmed report")
+      << ", chosen with the ground truth)\n"
+      << "  AP     " << m.average_precision
+      << "   (ranking: the best candidate's appearance, geometry-confirmed first; no decision "
+         "setting changes them)\n"
+      << "  decision's loop score: R@100P " << m.decision_recall_at_100_precision << ", AP "
+      << m.decision_average_precision << "\n"
       << "  R@1    " << m.recall_at_1 << "   R@5 " << m.recall_at_5 << "   R@10 " << m.recall_at_10
       << "\n"
       << "  time   " << std::setprecision(2) << m.ms_per_frame_median << " ms/frame median, "

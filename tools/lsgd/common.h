@@ -77,15 +77,18 @@ class Progress {
 std::string format_duration(double seconds);
 
 // Writes `lsgd run` rows:
-// frame,image,loop_frame,candidate_frame,score,ms,appearance,inliers.
+// frame,image,loop_frame,candidate_frame,score,ms,appearance,inliers,
+// ranked_frame,ranked_score,ranked_confirmed (the ranking, Result::ranking).
 // Each row is flushed, so an error later in the run loses nothing written.
 // Errors name the file.
 class CsvWriter {
  public:
   enum Mode { kCreate, kAppend };
   // Empty path: stdout. kCreate writes the header (replacing the file);
-  // kAppend adds rows after the existing ones (a file trim() accepted).
-  explicit CsvWriter(const std::string& path, Mode mode = kCreate);
+  // kAppend adds rows after the existing ones (a file trim() accepted), with
+  // the ranking's columns unless the file has the header of a version
+  // without them (Trim::ranking_columns).
+  explicit CsvWriter(const std::string& path, Mode mode = kCreate, bool ranking_columns = true);
   void write(const Result& result, const std::string& image);
   std::int64_t loops() const { return loops_; }  // rows written with a loop
 
@@ -93,6 +96,7 @@ class CsvWriter {
     std::int64_t dropped = 0;    // complete rows cut
     bool partial = false;        // an incomplete last line was cut
     std::int64_t last_row = -1;  // frame of the last row kept; -1: none
+    bool ranking_columns = true;  // false: the header of a version without them
   };
   // Cuts the rows of frames after `last_frame` (and an incomplete last line)
   // from an existing CSV this writer wrote, in place. Throws FormatError when
@@ -101,6 +105,7 @@ class CsvWriter {
 
  private:
   std::string path_;
+  bool ranking_columns_ = true;
   std::int64_t loops_ = 0;
   std::unique_ptr<std::ofstream> file_;
   std::ostream* out_;

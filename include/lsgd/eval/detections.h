@@ -13,7 +13,10 @@
 //                             recognised by its header; candidate_frame is the
 //                             match (the reported candidate whatever its score,
 //                             so the threshold sweep sees every report) and ms
-//                             the per-frame time
+//                             the per-frame time; with ranked_frame,
+//                             ranked_score and ranked_confirmed (written since
+//                             the ranking was), R@100P and AP sweep the ranking
+//                             (FrameRecord::ranking), as lsgd eval does
 // Frame ids are 0-based and must be those of the evaluated sequence (after
 // any --first/--last/--every).
 #pragma once

@@ -6,6 +6,7 @@
 #pragma once
 
 #include <cstdint>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -21,6 +22,11 @@ struct FrameRecord {
   // The system declared `reported` a loop (Result::loop; for detections of
   // another system, every reported match). The operating point scores these.
   bool loop = false;
+  // The ranking, which no decision setting changes (Result::ranking: the
+  // best candidate, its appearance score, confirmed or not): R@100P, AP and
+  // the PR curve sweep over it, confirmed reports first. Not given (another
+  // system's detections): the sweep takes `reported`, every report confirmed.
+  std::optional<Ranking> ranking;
   std::vector<Candidate> candidates;  // ranked candidates, best first (for Recall@N)
   Timings timings;                    // zeros when unknown (detections from another system)
   double load_ms = 0;                 // reading and decoding the image (outside process())
@@ -28,7 +34,11 @@ struct FrameRecord {
 };
 
 struct PrPoint {
-  double threshold = 0;  // score threshold: loops with score >= threshold are reported
+  // Score threshold: loops with score >= threshold are reported; of the
+  // ranking, the confirmed ones (confirmed true) and then, after every
+  // confirmed report, the unconfirmed ones too (confirmed false).
+  double threshold = 0;
+  bool confirmed = true;
   double precision = 0;
   double recall = 0;
   std::int64_t true_positives = 0;
@@ -50,6 +60,9 @@ struct Metrics {
   std::int64_t declared_false = 0;
   double precision_at_decision = 0;  // declared_true / declared_loops (0 when none)
   double recall_at_decision = 0;     // recalled positives / positives
+  // The ranking metrics sweep a threshold over the ranking's scores
+  // (FrameRecord::ranking), confirmed reports first; no decision setting
+  // changes them.
   // Largest recall reached at precision exactly 1 (0 when the best-scored
   // report is already false), and the threshold that reaches it.
   double recall_at_100_precision = 0;
@@ -59,6 +72,12 @@ struct Metrics {
   // Area under the PR curve, step-wise: sum over thresholds of
   // (R_k - R_{k-1}) * P_k (as scikit-learn's average_precision_score).
   double average_precision = 0;
+  // The same sweep over the decision's own loop scores (FrameRecord::reported),
+  // which the decision's settings change (continuity feeds decisions back
+  // into later scores): for comparing decision settings, not methods.
+  double decision_recall_at_100_precision = 0;
+  double decision_threshold_at_100_precision = 0;
+  double decision_average_precision = 0;
   // Fraction of positive queries with a GT match among their N best candidates.
   double recall_at_1 = 0;
   double recall_at_5 = 0;
@@ -84,7 +103,7 @@ struct Metrics {
   double verify_ms_p95 = 0;
   // PRT = AP / (1 + omega * t), t = mean seconds per frame, omega = 10 (paper Sec. IV-D).
   double prt = 0;
-  std::vector<PrPoint> curve;  // one point per distinct score, decreasing threshold
+  std::vector<PrPoint> curve;  // the ranking's: one point per distinct score, decreasing threshold
 };
 
 // Scores records (one per query, any order, frame ids in [0, gt.frames()))

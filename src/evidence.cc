@@ -31,17 +31,54 @@ std::int64_t sampled_stride(std::int64_t offsets) {
 
 }  // namespace
 
-ScoreStatistics statistics(const double* values, std::size_t n) {
+namespace {
+constexpr double kSummaryScale = 1099511627776.0;  // 2^40
+constexpr double kSummaryClamp = 8192.0;           // 2^13: |q| <= 2^53, q^2 * kMaxCount < 2^127
+}  // namespace
+
+void StatisticsSummary::add(double value) {
+  if (count_ >= kMaxCount) {
+    internal::throw_invalid("StatisticsSummary: more than ", kMaxCount, " values");
+  }
+  const double v = std::isnan(value) ? 0.0 : std::clamp(value, -kSummaryClamp, kSummaryClamp);
+  const auto q = static_cast<std::int64_t>(std::llround(v * kSummaryScale));
+  ++count_;
+  sum_ += q;
+  squares_ += static_cast<Sum>(q) * q;
+}
+
+void StatisticsSummary::add(const double* values, std::size_t n) {
+  for (std::size_t i = 0; i < n; ++i) add(values[i]);
+}
+
+void StatisticsSummary::merge(const StatisticsSummary& other) {
+  if (count_ + other.count_ > kMaxCount) {
+    internal::throw_invalid("StatisticsSummary: merging ", count_, " and ", other.count_,
+                            " values, more than ", kMaxCount);
+  }
+  count_ += other.count_;
+  sum_ += other.sum_;
+  squares_ += other.squares_;
+}
+
+ScoreStatistics StatisticsSummary::statistics() const {
   ScoreStatistics s;
-  s.count = static_cast<std::int64_t>(n);
-  if (n == 0) return s;
-  double sum = 0;
-  for (std::size_t i = 0; i < n; ++i) sum += values[i];
-  s.mean = sum / static_cast<double>(n);
-  double squares = 0;
-  for (std::size_t i = 0; i < n; ++i) squares += (values[i] - s.mean) * (values[i] - s.mean);
-  s.sd = std::sqrt(squares / static_cast<double>(n));
+  s.count = count_;
+  if (count_ == 0) return s;
+  // Long double: the squares' mean minus the squared mean keeps the 53 bits
+  // of a double for any spread the evidence meets (sd / mean >= 1e-4).
+  const long double n = static_cast<long double>(count_);
+  const long double mean = static_cast<long double>(sum_) / n;
+  const long double variance = static_cast<long double>(squares_) / n - mean * mean;
+  s.mean = static_cast<double>(mean / kSummaryScale);
+  s.sd = variance > 0 ? static_cast<double>(std::sqrt(variance) / kSummaryScale) : 0.0;
   return s;
+}
+
+ScoreStatistics statistics(const double* values, std::size_t n) {
+  StatisticsSummary summary;
+  summary.add(values, n);
+  return summary.statistics();
 }
 
 AppearanceEvidence::AppearanceEvidence(const SequenceOptions& sequence, std::int64_t min_gap,

@@ -351,7 +351,9 @@ TEST(EarlyRevisits, AreDeclaredBeforeTheQueriesHaveStatistics) {
       std::getline(fields, loop, ',');
       if (std::stoi(frame) < 20 + lsgd::kMinCalibration && std::stoi(loop) >= 0) ++young_loops;
     }
-    if (c.min_declared > 0) EXPECT_GE(young_loops, 5);
+    if (c.min_declared > 0) {
+      EXPECT_GE(young_loops, 5);
+    }
   }
   if (ran == 0) GTEST_SKIP() << "../shared/datasets is absent";
 }

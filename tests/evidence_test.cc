@@ -9,12 +9,17 @@
 
 #include <algorithm>
 #include <cmath>
+#include <filesystem>
+#include <random>
 #include <limits>
 #include <map>
+#include <opencv2/core.hpp>
 #include <set>
 #include <utility>
 
+#include "lsgd/detector.h"
 #include "lsgd/error.h"
+#include "lsgd/io/sequence.h"
 #include "test_util.h"
 
 namespace lsgd {
@@ -144,6 +149,104 @@ TEST(Statistics, MeanAndPopulationSd) {
   EXPECT_EQ(s.count, 4);
   EXPECT_FALSE(s.valid());  // fewer than kMinCalibration values
   EXPECT_EQ(statistics(v, 0).count, 0);
+}
+
+// Statistics that merge: the summaries of any split of a set of values,
+// merged in any order, give the statistics of the whole bit for bit, and
+// the order of the values does not matter either.
+TEST(StatisticsSummary, AnySplitMergesToTheWholeBitForBit) {
+  std::mt19937_64 rng(7);
+  for (const double spread : {0.02, 3.0}) {  // similarities; sequence scores (sigma)
+    std::normal_distribution<double> value(spread < 1 ? 0.8 : 0.0, spread);
+    std::vector<double> v(5000);
+    for (double& x : v) x = value(rng);
+    const ScoreStatistics whole = statistics(v.data(), v.size());
+    for (const int k : {1, 2, 3}) {
+      SCOPED_TRACE(testing::Message() << "spread " << spread << ", " << k << " parts");
+      // Contiguous parts, merged last to first; interleaved parts.
+      std::vector<StatisticsSummary> parts(static_cast<std::size_t>(k)), woven(parts);
+      for (std::size_t i = 0; i < v.size(); ++i) {
+        parts[i * static_cast<std::size_t>(k) / v.size()].add(v[i]);
+        woven[i % static_cast<std::size_t>(k)].add(v[i]);
+      }
+      StatisticsSummary a, b;
+      for (auto it = parts.rbegin(); it != parts.rend(); ++it) a.merge(*it);
+      for (const StatisticsSummary& p : woven) b.merge(p);
+      for (const StatisticsSummary* m : {&a, &b}) {
+        const ScoreStatistics s = m->statistics();
+        EXPECT_EQ(s.count, whole.count);
+        EXPECT_EQ(s.mean, whole.mean);
+        EXPECT_EQ(s.sd, whole.sd);
+      }
+    }
+    std::shuffle(v.begin(), v.end(), rng);
+    const ScoreStatistics shuffled = statistics(v.data(), v.size());
+    EXPECT_EQ(shuffled.mean, whole.mean);
+    EXPECT_EQ(shuffled.sd, whole.sd);
+    // The fixed point (1/2^40) is far below what the evidence resolves (1/1024 sigma).
+    double sum = 0, squares = 0;
+    for (const double x : v) sum += x;
+    for (const double x : v) squares += (x - sum / v.size()) * (x - sum / v.size());
+    EXPECT_NEAR(whole.mean, sum / v.size(), 1e-9 * spread);
+    EXPECT_NEAR(whole.sd, std::sqrt(squares / v.size()), 1e-9 * spread);
+  }
+  // Equal values: no spread (never a valid standardisation).
+  const std::vector<double> same(40, 0.75);
+  EXPECT_EQ(statistics(same.data(), same.size()).sd, 0.0);
+  EXPECT_FALSE(statistics(same.data(), same.size()).valid());
+  // Beyond kMaxCount values the sums could overflow: refused.
+  StatisticsSummary big;
+  for (std::int64_t i = 0; i < StatisticsSummary::kMaxCount; ++i) big.add(1e6);  // clamped to 2^13
+  EXPECT_THROW(big.add(1.0), InvalidArgument);
+  EXPECT_THROW(big.merge(big), InvalidArgument);
+}
+
+// On real sequences: every query's similarity statistics over the map, from
+// the summaries of the map split into k = 1, 2, 3 parts (frame ranges, as
+// a fleet's shards would hold them), equal the whole map's bit for bit.
+TEST(StatisticsSummary, RealMapsSplitIntoPartsGiveTheSameStatistics) {
+  namespace fs = std::filesystem;
+  const fs::path root = fs::path(LSGD_SHARED_DIR) / "datasets";
+  int sequences = 0;
+  for (const char* name : {"corridor", "lip6-outdoor"}) {
+    if (!fs::is_regular_file(root / name / "sequence.txt")) continue;
+    SCOPED_TRACE(name);
+    ++sequences;
+    const std::int64_t w = 50;
+    DetectorOptions options;
+    options.search.min_gap = w;
+    options.verification.stages = {};  // the statistics only
+    Detector detector(options);
+    const io::Sequence seq = io::open_sequence((root / name / "sequence.txt").string());
+    const std::size_t n = std::min<std::size_t>(seq.images.size(), 300);
+    for (std::size_t i = 0; i < n; ++i) detector.process(io::read_image(seq.images[i]));
+    int queries = 0;
+    for (std::int64_t q = w + 1 + kMinCalibration; q < detector.size(); q += 7) {
+      const std::int64_t candidates = q - w;
+      std::vector<double> row;
+      for (std::int64_t j = 0; j < candidates; ++j) row.push_back(detector.similarity(q, j));
+      const ScoreStatistics whole = statistics(row.data(), row.size());
+      for (const std::int64_t k : {1, 2, 3}) {
+        // Part p holds frames [p * size / k, (p + 1) * size / k) of the map.
+        StatisticsSummary merged;
+        for (std::int64_t p = k - 1; p >= 0; --p) {
+          StatisticsSummary part;
+          const std::int64_t first = p * detector.size() / k, end = (p + 1) * detector.size() / k;
+          for (std::int64_t j = first; j < std::min(end, candidates); ++j) {
+            part.add(row[static_cast<std::size_t>(j)]);
+          }
+          merged.merge(part);
+        }
+        const ScoreStatistics s = merged.statistics();
+        ASSERT_EQ(s.count, whole.count) << q;
+        ASSERT_EQ(s.mean, whole.mean) << q << " k " << k;
+        ASSERT_EQ(s.sd, whole.sd) << q << " k " << k;
+      }
+      ++queries;
+    }
+    EXPECT_GT(queries, 10);
+  }
+  if (sequences == 0) GTEST_SKIP() << "no real sequence under " << root << " (../shared is absent)";
 }
 
 // A young query (fewer than kMinCalibration candidates) has no statistics of
@@ -357,7 +460,9 @@ TEST(AppearanceEvidence, BeyondTheExactLimitExhaustiveScoresAsTheSampledModes) {
     const ScoreStatistics& b = sampled.evidence.similarity_statistics();
     if (q - w <= exact) {
       // (A young query's statistics are the prior's, over more values.)
-      if (q - w >= kMinCalibration) EXPECT_EQ(a.count, q - w) << q;
+      if (q - w >= kMinCalibration) {
+        EXPECT_EQ(a.count, q - w) << q;
+      }
       EXPECT_EQ(all.evidence.statistics_stride(q), 1);
     } else {
       SCOPED_TRACE(q);

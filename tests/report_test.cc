@@ -452,7 +452,9 @@ TEST(Report, ExampleThumbnailsAndWhatMadeTheRun) {
   ASSERT_NE(html.find("<section class='examples'>"), std::string::npos);
   const std::size_t thumbs = count(html, "src='data:image/jpeg;base64,");
   EXPECT_EQ(static_cast<int>(thumbs), loaded);
-  if (gone > 0) EXPECT_NE(html.find("frame 7 is gone"), std::string::npos);  // a note instead
+  if (gone > 0) {
+    EXPECT_NE(html.find("frame 7 is gone"), std::string::npos);  // a note instead
+  }
   EXPECT_GE(thumbs, 6u);                                 // 3 true loops, 2 frames each
   EXPECT_LE(thumbs, 3u * 2 + 3 * 3 + 3 * 3);            // at most 3 of each kind
   EXPECT_NE(html.find("Missed revisits ("), std::string::npos);

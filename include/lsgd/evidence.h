@@ -83,7 +83,32 @@ struct ScoreStatistics {
   double standardise(double value) const { return (value - mean) / sd; }
 };
 
-// Mean and standard deviation of values[0 .. n).
+// Statistics that merge (issue 32; a map split into parts, issue 34): the
+// exact sums of a set of values in fixed point (1/2^40, |value| clamped to
+// 2^13), which integer addition makes independent of order and grouping. A
+// part of the map summarises its own candidates; the merged summaries of any
+// split give the statistics of the whole bit for bit (docs/design.md, "Statistics
+// that merge"). Every ScoreStatistics the evidence computes comes from one.
+class StatisticsSummary {
+ public:
+  void add(double value);
+  void add(const double* values, std::size_t n);
+  // Adds another part's summary (InvalidArgument beyond kMaxCount values).
+  void merge(const StatisticsSummary& other);
+  std::int64_t count() const { return count_; }
+  // Mean and population standard deviation, a function of the sums alone.
+  ScoreStatistics statistics() const;
+  // The most values a summary holds (the sums cannot overflow below it).
+  static constexpr std::int64_t kMaxCount = std::int64_t{1} << 20;
+
+ private:
+  __extension__ typedef __int128 Sum;
+  std::int64_t count_ = 0;
+  Sum sum_ = 0;      // of round(value * 2^40)
+  Sum squares_ = 0;  // of its square
+};
+
+// Mean and standard deviation of values[0 .. n) (a StatisticsSummary's).
 ScoreStatistics statistics(const double* values, std::size_t n);
 
 struct SequenceOptions {

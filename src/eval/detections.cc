@@ -233,15 +233,15 @@ Row parse_row(const std::vector<std::string>& f, const Columns& c, const std::st
   }
   if (c.ranked_frame >= 0) {
     const std::string& frame = f[static_cast<std::size_t>(c.ranked_frame)];
-    const std::string& score = f[static_cast<std::size_t>(c.ranked_score)];
+    const std::string& ranked_score = f[static_cast<std::size_t>(c.ranked_score)];
     const std::string& confirmed = f[static_cast<std::size_t>(c.ranked_confirmed)];
     const auto j = parse_int(frame);
     if (!j || *j < -1 || *j >= kMaxFrames) {
       throw FormatError(concat(where, ": ranked_frame '", frame, "' is not a frame id or -1"));
     }
-    const auto v = parse_double(score);
+    const auto v = parse_double(ranked_score);
     if (!v || !std::isfinite(*v)) {
-      throw FormatError(concat(where, ": ranked_score '", score, "' is not a finite number"));
+      throw FormatError(concat(where, ": ranked_score '", ranked_score, "' is not a finite number"));
     }
     if (confirmed != "0" && confirmed != "1") {
       throw FormatError(concat(where, ": ranked_confirmed '", confirmed, "' is neither 0 nor 1"));

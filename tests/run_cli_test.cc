@@ -10,6 +10,7 @@
 #include <unistd.h>
 
 #include <chrono>
+#include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
@@ -295,6 +296,55 @@ TEST_F(RunCli, RowsBeyondTheOneBeingCommittedAreReportedAsLostFrames) {
   EXPECT_NE(r.err.find("had rows for 2 frames after frame 9"), std::string::npos) << r.err;
   EXPECT_EQ(frame_column(kTmp / "a.csv").size(), 20u);
   EXPECT_EQ(database_rows(kTmp / "a.db").size(), 20u);
+}
+
+// A new session of a database is another sequence: its first frame
+// continues no loop of the session before it (Detector::cut()), even when it
+// is the very next image of a revisit. Found in an uninterrupted run of
+// corridor (the small street declares no loop at 160x120): a frame that
+// continued its predecessor's loop (score = appearance + the geometric and
+// continuity bonuses); stored as session 1 after the frames before it, it
+// earns no continuity bonus, while a resumed session 0 gives it as before.
+TEST_F(RunCli, ANewSessionContinuesNoLoopOfTheOneBefore) {
+  const fs::path corridor = fs::path(LSGD_SHARED_DIR) / "datasets" / "corridor" / "sequence.txt";
+  if (!fs::is_regular_file(corridor)) GTEST_SKIP() << corridor << " is absent (../shared)";
+  const auto args = [&](const std::string& db, const std::string& csv, const std::string& extra) {
+    return "run --sequence " + q(corridor) + " --min-gap 50 --database " + q(kTmp / db) +
+           " --output " + q(kTmp / csv) + extra;
+  };
+  const auto fields = [](const std::string& line) {
+    std::vector<std::string> f;
+    std::stringstream in(line);
+    for (std::string x; std::getline(in, x, ',');) f.push_back(x);
+    return f;
+  };
+  ASSERT_EQ(lsgd(args("whole.db", "whole.csv", "")).code, 0);
+  // Rows without the ms column: frame, image, loop_frame, candidate_frame, score, appearance, ...
+  const std::vector<std::string> whole = rows_without_time(kTmp / "whole.csv");
+  long continued = -1;
+  for (std::size_t i = 1; i < whole.size() && continued < 0; ++i) {
+    const std::vector<std::string> f = fields(whole[i]);
+    if (std::stol(f[2]) >= 0 && std::fabs(std::stod(f[4]) - std::stod(f[5]) - 6.0) < 1e-3) {
+      continued = std::stol(f[0]);
+    }
+  }
+  ASSERT_GT(continued, 0) << "corridor has no continued loop any more";
+  const std::string before = " --last " + std::to_string(continued - 1);
+  const std::string through = " --last " + std::to_string(continued);
+  ASSERT_EQ(lsgd(args("s.db", "s0.csv", before)).code, 0);
+  ASSERT_EQ(lsgd(args("s.db", "s1.csv", " --first " + std::to_string(continued) + through +
+                                            " --session 1"))
+                .code,
+            0);
+  const std::vector<std::string> session1 = rows_without_time(kTmp / "s1.csv");
+  ASSERT_EQ(session1.size(), 2u);
+  const std::vector<std::string> f = fields(session1[1]);
+  EXPECT_EQ(std::stol(f[0]), continued);
+  EXPECT_GT(std::fabs(std::stod(f[4]) - std::stod(f[5]) - 6.0), 1e-3) << session1[1];
+  // The same frames as one session, resumed: the loop continues as before.
+  ASSERT_EQ(lsgd(args("r.db", "r.csv", before)).code, 0);
+  ASSERT_EQ(lsgd(args("r.db", "r.csv", through)).code, 0);
+  EXPECT_EQ(rows_without_time(kTmp / "r.csv").back(), whole[static_cast<std::size_t>(continued) + 1]);
 }
 
 // A CSV written before the ranking's columns existed resumes in its own

@@ -202,6 +202,13 @@ TEST(Cli, VersionSuggestionsExitCodesAndDefaults) {
   EXPECT_NE(help.out.find("=auto"), std::string::npos) << help.out;  // --layout's default
   EXPECT_EQ(help.out.find("=-1"), std::string::npos) << help.out;    // sentinels stay hidden
   EXPECT_EQ(help.out.find("=[]"), std::string::npos) << help.out;
+  // The detector flags say the defaults they override (the README promises them).
+  for (const char* text : {"(default 50; overrides search.min_gap)",
+                           "(default exhaustive; overrides search.mode)",
+                           "(default temporal,geometric; overrides verification.stages)",
+                           "(default 7; overrides decision.threshold)"}) {
+    EXPECT_NE(help.out.find(text), std::string::npos) << text << "\n" << help.out;
+  }
 }
 
 TEST(Cli, MissingSequenceFailsWithOneLineNamingIt) {

@@ -33,16 +33,21 @@ void DetectorFlags::add_to(CLI::App& command) {
   command.add_option("--config", config, "YAML detector configuration (unknown keys are errors)")
       ->check(CLI::ExistingFile)
       ->check(kNonEmptyPath);
-  command.add_option("--mode", mode, "search mode, overrides search.mode")
+  const DetectorOptions defaults;
+  command.add_option("--mode", mode,
+                     "search mode (default " + defaults.search.mode + "; overrides search.mode)")
       ->check(CLI::IsMember(search_mode_list()));
   command.add_option("--min-gap", min_gap,
-                     "temporal window in frames: only frames j < i - W are candidates");
+                     "temporal window in frames: only frames j < i - W are candidates (default " +
+                         option_text(defaults, "search.min_gap") + "; overrides search.min_gap)");
   command.add_option("--threshold", threshold,
                      "loop decision threshold on the loop score, standard deviations (default 7; "
                      "overrides decision.threshold)");
   command.add_option("--verify", verify,
                      "verification stages: none or a comma-separated list of " +
-                         verification_stage_names() + " (overrides verification.stages)");
+                         verification_stage_names() + " (default " +
+                         verification_stages(defaults.verification) +
+                         "; overrides verification.stages)");
   command.add_option("--option", options,
                      "KEY=VALUE: sets any detector option (`lsgd options` lists them), after "
                      "--config; repeatable")

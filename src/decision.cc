@@ -64,8 +64,8 @@ void LoopDecision::record(std::int64_t frame, std::int64_t loop, int inliers, bo
   history_.push_back({state_.loop, state_.inliers, track_.loop, track_.inliers});
 }
 
-void LoopDecision::rank(const DecisionQuery& q, const Candidate& best,
-                        const std::vector<VerificationStage*>& confirms, Decision& out) {
+double LoopDecision::rank(const DecisionQuery& q, const Candidate& best,
+                          const std::vector<VerificationStage*>& confirms, Decision& out) {
   first_checks_.clear();
   out.ranking.best = best;
   out.ranking.confirmed = best.frame >= 0;
@@ -91,6 +91,7 @@ void LoopDecision::rank(const DecisionQuery& q, const Candidate& best,
   }
   const bool tracked = out.ranking.confirmed && !confirms.empty();
   track_.record(q.frame, tracked ? best.frame : -1, static_cast<int>(support), tracked && tracking);
+  return support;
 }
 
 Decision LoopDecision::decide(const DecisionQuery& q, const std::vector<VerificationStage*>& stages) {
@@ -123,15 +124,11 @@ Decision LoopDecision::decide(const DecisionQuery& q, const std::vector<Verifica
   // 2. The ranking (no decision setting changes it): the best candidate
   // through the gates, examined by every confirming stage on every query.
   // The decision reuses these checks.
-  rank(q, first < n ? candidates[first] : Candidate{}, confirms, out);
-  double first_support = -1;  // support of candidates[first] when checked
-  bool first_rejected = false;
-  for (const StageCheck& check : first_checks_) {
-    if (check.support >= 0) {
-      first_support = first_support < 0 ? check.support : std::min(first_support, check.support);
-    }
-    first_rejected = first_rejected || !check.accepted;
-  }
+  // Support and verdict of candidates[first] as its stages gave them (the
+  // decision's continuity rule may change them below).
+  double first_support = rank(q, first < n ? candidates[first] : Candidate{}, confirms, out);
+  bool first_rejected = std::any_of(first_checks_.begin(), first_checks_.end(),
+                                    [](const StageCheck& c) { return !c.accepted; });
 
   // 3. Confirmation, continuation first when it could score higher.
   if (!confirms.empty()) {

@@ -126,6 +126,25 @@ TEST_F(DetectionsTest, LsgdRunLoopFrameMustBeTheCandidateOrNone) {
   EXPECT_EQ(records[1].reported.frame, 0);
 }
 
+// lsgd run's ranking columns give each record its ranking; bad values name
+// the column, file and line.
+TEST_F(DetectionsTest, LsgdRunRankingColumnsAreReadAndChecked) {
+  const std::string header =
+      "frame,image,loop_frame,candidate_frame,score,ms,appearance,inliers,ranked_frame,"
+      "ranked_score,ranked_confirmed\n";
+  const auto records = read_detections(
+      write("ranked.csv", header + "0,a.png,-1,-1,0,1,0,-1,-1,0,0\n1,b.png,-1,0,5,1,5,12,0,2.5,1\n"), 2);
+  ASSERT_TRUE(records[1].ranking.has_value());
+  EXPECT_EQ(records[1].ranking->best.frame, 0);
+  EXPECT_DOUBLE_EQ(records[1].ranking->best.score, 2.5);
+  EXPECT_TRUE(records[1].ranking->confirmed);
+  EXPECT_EQ(records[0].ranking->best.frame, -1);
+  expect_line_error(header + "1,b.png,-1,0,5,1,5,12,x,2.5,1\n", 2, "ranked_frame 'x'");
+  expect_line_error(header + "1,b.png,-1,0,5,1,5,12,0,inf,1\n", 2, "ranked_score 'inf'");
+  expect_line_error(header + "1,b.png,-1,0,5,1,5,12,0,2.5,yes\n", 2, "ranked_confirmed 'yes'");
+  expect_line_error(header + "1,b.png,-1,0,5,1,5,12,10,2.5,1\n", 2, "ranked_frame 10 is outside");
+}
+
 TEST_F(DetectionsTest, ScoresLikeHandComputation) {
   // 10 frames, window 2: loops 5~0, 6~1, 7~2 (three positives).
   GroundTruth gt(10);

@@ -188,8 +188,9 @@ class LoopDecision final : public Stateful {
 
  private:
   void record(std::int64_t frame, std::int64_t loop, int inliers, bool continued);
-  // The ranking's candidate and its verdicts (step 2 of decide()).
-  void rank(const DecisionQuery& q, const Candidate& best, const std::vector<VerificationStage*>& confirms,
+  // The ranking's candidate and its verdicts (step 2 of decide()); returns
+  // its support as its stages gave it (the smallest; -1: none).
+  double rank(const DecisionQuery& q, const Candidate& best, const std::vector<VerificationStage*>& confirms,
             Decision& out);
 
   DecisionOptions options_;

@@ -290,9 +290,12 @@ std::vector<FrameRecord> read_detections(const std::string& path, std::int64_t f
       throw FormatError(concat(where, ": query ", r.query, " is outside the ", frames,
                                " frames (does the file belong to this sequence and subsampling?)"));
     }
-    if (r.match >= frames || (r.ranking && r.ranking->best.frame >= frames)) {
-      throw FormatError(concat(where, ": match ", std::max(r.match, r.ranking ? r.ranking->best.frame : -1),
-                               " is outside the ", frames, " frames"));
+    if (r.match >= frames) {
+      throw FormatError(concat(where, ": match ", r.match, " is outside the ", frames, " frames"));
+    }
+    if (r.ranking && r.ranking->best.frame >= frames) {
+      throw FormatError(concat(where, ": ranked_frame ", r.ranking->best.frame, " is outside the ",
+                               frames, " frames"));
     }
     std::int64_t& seen = line_of[static_cast<std::size_t>(r.query)];
     if (seen != 0) {

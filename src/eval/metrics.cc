@@ -19,11 +19,10 @@ struct Report {
   bool confirmed = true;  // the ranking's: swept before every unconfirmed report
 };
 
-// The report the ranking sweeps for record r (its `reported` when it has no ranking).
-Report ranked(const FrameRecord& r, const Candidate*& c) {
-  c = r.ranking ? &r.ranking->best : &r.reported;
-  return {c->score, false, false, false, r.ranking ? r.ranking->confirmed : true};
-}
+// What the ranking sweeps for record r: its ranking, or its `reported`
+// (confirmed) when it has none (another system's detections).
+const Candidate& ranked(const FrameRecord& r) { return r.ranking ? r.ranking->best : r.reported; }
+bool ranked_confirmed(const FrameRecord& r) { return !r.ranking || r.ranking->confirmed; }
 
 // The operating point: the declared reports alone.
 void operating_point(const std::vector<Report>& reports, Metrics& m) {
@@ -198,11 +197,10 @@ Metrics evaluate(const std::vector<FrameRecord>& records, const GroundTruth& gt,
       const bool correct = correct_loop(gt, r.frame, r.reported, min_gap);
       reports.push_back({r.reported.score, correct, correct, r.loop});
     }
-    const Candidate* c = nullptr;
-    Report report = ranked(r, c);
-    if (c->frame >= 0) {
-      report.correct = report.recalled = correct_loop(gt, r.frame, *c, min_gap);
-      ranking.push_back(report);
+    const Candidate& c = ranked(r);
+    if (c.frame >= 0) {
+      const bool correct = correct_loop(gt, r.frame, c, min_gap);
+      ranking.push_back({c.score, correct, correct, false, ranked_confirmed(r)});
     }
   }
   operating_point(reports, m);
@@ -245,9 +243,7 @@ Metrics evaluate_lsgddn_reference(const std::vector<FrameRecord>& records, const
     if (!gt.has_loop(r.frame, options.min_gap)) continue;
     ++m.positives;
     add(r.frame, r.reported, {r.reported.score, false, false, r.loop}, reports);
-    const Candidate* c = nullptr;
-    const Report report = ranked(r, c);
-    add(r.frame, *c, report, ranking);
+    add(r.frame, ranked(r), {ranked(r).score, false, false, false, ranked_confirmed(r)}, ranking);
   }
   operating_point(reports, m);
   sweeps(std::move(ranking), std::move(reports), m);

@@ -196,10 +196,24 @@ PYBIND11_MODULE(_lsgd, m) {
       .def_readonly("evidence_ms", &lsgd::Timings::evidence_ms)
       .def_readonly("verify_ms", &lsgd::Timings::verify_ms)
       .def_readonly("total_ms", &lsgd::Timings::total_ms);
+  py::enum_<lsgd::LoopStatus> status(m, "LoopStatus",
+                                     "Why a query has a loop or none (Result.status); str() of a "
+                                     "value is the CSV's name");
+  status.value("LOOP", lsgd::LoopStatus::kLoop)
+      .value("TOO_FEW_FRAMES", lsgd::LoopStatus::kTooFewFrames)
+      .value("NO_CANDIDATE", lsgd::LoopStatus::kNoCandidate)
+      .value("GATED", lsgd::LoopStatus::kGated)
+      .value("YOUNG", lsgd::LoopStatus::kYoung)
+      .value("NOT_CONFIRMED", lsgd::LoopStatus::kNotConfirmed)
+      .value("BELOW_THRESHOLD", lsgd::LoopStatus::kBelowThreshold);
+  // Replaces enum_'s own __str__ (a def() would only add an overload after it).
+  status.attr("__str__") = py::cpp_function(
+      [](lsgd::LoopStatus s) { return std::string(lsgd::to_string(s)); }, py::is_method(status));
   py::class_<lsgd::Result>(m, "Result")
       .def_readonly("frame", &lsgd::Result::frame)
       .def_readonly("loop", &lsgd::Result::loop)
       .def_readonly("best", &lsgd::Result::best)
+      .def_readonly("status", &lsgd::Result::status)
       .def_readonly("evidence", &lsgd::Result::evidence)
       .def_readonly("ranking", &lsgd::Result::ranking)
       .def_readonly("candidates", &lsgd::Result::candidates)
@@ -209,7 +223,8 @@ PYBIND11_MODULE(_lsgd, m) {
       .def_readonly("timings", &lsgd::Result::timings)
       .def("__repr__", [](const lsgd::Result& r) {
         return "Result(frame=" + std::to_string(r.frame) + ", loop=" + (r.loop ? "True" : "False") +
-               ", best=" + std::to_string(r.best.frame) + ", score=" + lsgd::format_real(r.best.score) + ")";
+               ", best=" + std::to_string(r.best.frame) + ", score=" + lsgd::format_real(r.best.score) +
+               ", status=" + lsgd::to_string(r.status) + ")";
       });
 
   m.def("default_options", [] { return options_dict(lsgd::DetectorOptions{}); },
@@ -240,6 +255,18 @@ PYBIND11_MODULE(_lsgd, m) {
            "Processes the next frame (uint8 numpy array: (H, W) gray, (H, W, 3) BGR or "
            "(H, W, 4) BGRA) and returns its Result. Zero-copy when each row's pixels are "
            "contiguous; the GIL is released while it runs.")
+      .def("query",
+           [](lsgd::Detector& d, py::array image) {
+             if (!rows_dense(image)) image = py::array::ensure(image, py::array::c_style);
+             if (!image) throw lsgd::InvalidArgument("the image is not a numpy array");
+             const lsgd::ImageView view = image_view(image);
+             py::gil_scoped_release release;
+             return d.query(view);
+           },
+           py::arg("image"),
+           "The Result process() would give for the frame as the next one, with nothing "
+           "stored and nothing changed (relocalisation; a map opened read-only). Result.frame "
+           "is the id process() would give it.")
       .def("cut", &lsgd::Detector::cut,
            "The next frame starts a new sequence (a new session, another place): it "
            "continues no loop declared for the frame before it.")

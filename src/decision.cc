@@ -58,6 +58,34 @@ void ContinuityState::record(std::int64_t q, std::int64_t frame, int frame_inlie
 
 LoopDecision::LoopDecision(const DecisionOptions& options) : options_(options) { options_.check(); }
 
+namespace {
+constexpr std::pair<LoopStatus, const char*> kStatusNames[] = {
+    {LoopStatus::kLoop, "loop"},
+    {LoopStatus::kTooFewFrames, "too_few_frames"},
+    {LoopStatus::kNoCandidate, "no_candidate"},
+    {LoopStatus::kGated, "gated"},
+    {LoopStatus::kYoung, "young"},
+    {LoopStatus::kNotConfirmed, "not_confirmed"},
+    {LoopStatus::kBelowThreshold, "below_threshold"},
+};
+}  // namespace
+
+const char* to_string(LoopStatus status) {
+  for (const auto& [s, name] : kStatusNames) {
+    if (s == status) return name;
+  }
+  return "unknown";
+}
+
+LoopStatus parse_loop_status(const std::string& name) {
+  std::string names;
+  for (const auto& [s, n] : kStatusNames) {
+    if (name == n) return s;
+    names += (names.empty() ? "" : ", ") + std::string(n);
+  }
+  internal::throw_invalid("loop status '", name, "' is not one of ", names);
+}
+
 void LoopDecision::record(std::int64_t frame, std::int64_t loop, int inliers, bool continued) {
   state_.record(frame, loop, inliers, continued);
   history_.resize(static_cast<std::size_t>(frame));
@@ -277,6 +305,21 @@ Decision LoopDecision::decide(const DecisionQuery& q, const std::vector<Verifica
     out.evidence.inliers = static_cast<int>(first_support);
   }
   out.loop = out.best.frame >= 0 && out.best.score >= d.threshold;
+  if (out.loop) {
+    out.status = LoopStatus::kLoop;
+  } else if (q.frame - q.min_gap <= 0) {
+    out.status = LoopStatus::kTooFewFrames;
+  } else if (n == 0) {
+    out.status = LoopStatus::kNoCandidate;
+  } else if (first == n) {
+    out.status = LoopStatus::kGated;
+  } else if (out.best.frame < 0 || (q.young && !out.evidence.confirmed)) {
+    out.status = LoopStatus::kYoung;  // nothing unconfirmed is a loop while statistics are young
+  } else if (first_rejected && !out.evidence.confirmed) {
+    out.status = LoopStatus::kNotConfirmed;
+  } else {
+    out.status = LoopStatus::kBelowThreshold;
+  }
   record(q.frame, out.loop ? out.best.frame : -1, out.evidence.inliers,
          out.loop && out.evidence.continues);
   return out;

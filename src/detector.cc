@@ -93,6 +93,7 @@ Detector::Detector(const DetectorOptions& options)
       evidence_(sequence_options(options.verification), options.search.min_gap,
                 !search_->scores_every_frame(), kExactStatisticsCandidates,
                 search_->scores_every_frame_up_to()),
+      query_evidence_(evidence_),
       stages_(make_stages(options.verification)),
       decision_(options.decision) {
   for (const auto& stage : stages_) stage_list_.push_back(stage.get());
@@ -129,14 +130,40 @@ Result Detector::process(const cv::Mat& frame) {
   const Exclusive exclusive(busy_, "process");
   const std::int64_t start = now_ns();
   to_gray(frame, gray_);
-  return process_gray(ms_since(start), start);
+  return process_gray(ms_since(start), start, true);
 }
 
 Result Detector::process(const ImageView& frame) {
   const Exclusive exclusive(busy_, "process");
   const std::int64_t start = now_ns();
   to_gray(frame, gray_);
-  return process_gray(ms_since(start), start);
+  return process_gray(ms_since(start), start, true);
+}
+
+Result Detector::query(const cv::Mat& frame) {
+  const Exclusive exclusive(busy_, "query");
+  check_answers_queries();
+  const std::int64_t start = now_ns();
+  to_gray(frame, gray_);
+  return process_gray(ms_since(start), start, false);
+}
+
+Result Detector::query(const ImageView& frame) {
+  const Exclusive exclusive(busy_, "query");
+  check_answers_queries();
+  const std::int64_t start = now_ns();
+  to_gray(frame, gray_);
+  return process_gray(ms_since(start), start, false);
+}
+
+void Detector::check_answers_queries() const {
+  for (const auto& stage : stages_) {
+    if (!stage->answers_queries()) {
+      internal::throw_invalid("Detector::query: verification stage ", stage->name(),
+                              " keeps per-frame state and cannot forget a query "
+                              "(VerificationStage::answers_queries())");
+    }
+  }
 }
 
 void Detector::cut() {
@@ -150,7 +177,7 @@ double Detector::similarity(std::int64_t a, std::int64_t b) const {
   return lsgd::similarity(store_.view(a), store_.view(b), options_.similarity.metric);
 }
 
-Result Detector::process_gray(double convert_ms, std::int64_t start_ns) {
+Result Detector::process_gray(double convert_ms, std::int64_t start_ns, bool store) {
   if (store_.size() > 0 && (gray_.width != width_ || gray_.height != height_)) {
     internal::throw_invalid("the frame is ", gray_.width, "x", gray_.height,
                             " but the first frame was ", width_, "x", height_,
@@ -176,24 +203,33 @@ Result Detector::process_gray(double convert_ms, std::int64_t start_ns) {
 
   t = now_ns();
   const SimilarityMetric metric = options_.similarity.metric;
-  const CandidateSearch::Outcome outcome =
-      search_->search({store_, descriptor_.view(), result.frame, metric}, raw_, row_);
+  const CandidateSearch::Query search_query{store_, descriptor_.view(), result.frame, metric};
+  const CandidateSearch::Outcome outcome = store ? search_->search(search_query, raw_, row_)
+                                                 : search_->query(search_query, raw_, row_);
   result.node = outcome.group;
   result.node_created = outcome.created;
   result.timings.insert_ms = outcome.insert_ms;
   // After a restore the evidence is recomputed from the stored frames first.
   const std::int64_t evidence_start = now_ns();
   if (evidence_.last_query() != result.frame - 1) evidence_.rebuild(store_, metric);
+  // A query that is not stored adds itself to a copy of the evidence: its
+  // rows, sums and cached terms (kept by query id) stay out of the map's.
+  if (!store) query_evidence_ = evidence_;
+  AppearanceEvidence& evidence = store ? evidence_ : query_evidence_;
   const bool every_frame = search_->scores_every_frame_for(
       std::max<std::int64_t>(0, result.frame - options_.search.min_gap));
-  evidence_.add_query(store_, descriptor_.view(), result.frame, metric, every_frame ? &row_ : nullptr);
-  score_candidates(every_frame, result);
+  evidence.add_query(store_, descriptor_.view(), result.frame, metric, every_frame ? &row_ : nullptr);
+  score_candidates(evidence, every_frame, result);
   result.timings.evidence_ms = ms_since(evidence_start);
   result.timings.search_ms = ms_since(t);
 
   t = now_ns();
-  verify(result);
+  verify(evidence, store, result);
   result.timings.verify_ms = ms_since(t);
+  if (!store) {
+    result.timings.total_ms = ms_since(start_ns);
+    return result;
+  }
   // A node's frames sit together in the store: scoring its members reads one
   // run of memory (FrameStore groups). The group is only a placement, so a
   // node the store has no group for (frames restored without their nodes)
@@ -209,16 +245,16 @@ Result Detector::process_gray(double convert_ms, std::int64_t start_ns) {
 // Appearance scores in sigma (evidence.h): the temporal stage's sequence
 // evidence, else (or for a young query) the standardised similarity of the
 // search's candidates.
-void Detector::score_candidates(bool every_frame, Result& result) {
+void Detector::score_candidates(AppearanceEvidence& evidence, bool every_frame, Result& result) {
   const SimilarityMetric metric = options_.similarity.metric;
   const int top_n = options_.search.top_n;
-  if (options_.verification.has(kTemporalStage) && !evidence_.young()) {
+  if (options_.verification.has(kTemporalStage) && !evidence.young()) {
     if (every_frame) {
-      evidence_.best_places(top_n, result.candidates);
+      evidence.best_places(top_n, result.candidates);
       places_ = result.candidates;
     } else {
       // The top_n places, then those the search follows to the next query.
-      evidence_.realign(store_, descriptor_.view(), raw_, search_->followed(), metric, top_n,
+      evidence.realign(store_, descriptor_.view(), raw_, search_->followed(), metric, top_n,
                         search_->realign_reach(), top_n + search_->follow(), places_);
       result.candidates.assign(places_.begin(),
                                places_.begin() + static_cast<std::ptrdiff_t>(std::min(
@@ -229,19 +265,38 @@ void Detector::score_candidates(bool every_frame, Result& result) {
   // Single-frame scores: without the temporal stage, and for a young query
   // (too few candidates for sequence evidence; standardised with the prior).
   result.candidates.clear();
-  if (evidence_.similarity_statistics().valid()) {
+  if (evidence.similarity_statistics().valid()) {
     const std::size_t n = std::min(raw_.size(), static_cast<std::size_t>(top_n));
     for (std::size_t i = 0; i < n; ++i) {
-      result.candidates.push_back({raw_[i].frame, evidence_.single_frame(raw_[i].score)});
+      result.candidates.push_back({raw_[i].frame, evidence.single_frame(raw_[i].score)});
     }
   }
   places_ = result.candidates;
 }
 
 // The verification stages and the loop decision (decision.h).
-void Detector::verify(Result& result) {
+void Detector::verify(AppearanceEvidence& evidence, bool store, Result& result) {
   const StageQuery query{result.frame, gray_, store_, descriptor_.view()};
-  for (const auto& stage : stages_) stage->begin(query);
+  // A query that is not stored: every stage begun forgets it again, and the
+  // decision is put back, however the query ends.
+  std::size_t begun = 0;
+  const LoopDecision::Checkpoint checkpoint = decision_.checkpoint();
+  struct Undo {
+    Detector& d;
+    const std::size_t& begun;
+    std::int64_t frame;
+    const LoopDecision::Checkpoint& checkpoint;
+    bool active;
+    ~Undo() {
+      if (!active) return;
+      for (std::size_t k = begun; k-- > 0;) d.stages_[k]->discard(frame);
+      d.decision_.restore(checkpoint);
+    }
+  } undo{*this, begun, result.frame, checkpoint, !store};
+  for (const auto& stage : stages_) {
+    stage->begin(query);
+    ++begun;
+  }
   const bool sequence = options_.verification.has(kTemporalStage);
   const SimilarityMetric metric = options_.similarity.metric;
   DecisionQuery q;
@@ -252,22 +307,25 @@ void Detector::verify(Result& result) {
   q.continuity = sequence;
   q.tolerance = options_.verification.temporal_options.tolerance;
   q.cells = descriptor_.grid.cells();
-  q.young = evidence_.young();
+  q.young = evidence.young();
   q.single_frame = [&](std::int64_t j) {
-    return evidence_.single_frame(lsgd::similarity(descriptor_.view(), store_.view(j), metric));
+    return evidence.single_frame(lsgd::similarity(descriptor_.view(), store_.view(j), metric));
   };
   q.appearance = [&](std::int64_t j) {
-    return sequence ? evidence_.sequence(store_, descriptor_.view(), j, metric)
-                    : evidence_.single_frame(
+    return sequence ? evidence.sequence(store_, descriptor_.view(), j, metric)
+                    : evidence.single_frame(
                           lsgd::similarity(descriptor_.view(), store_.view(j), metric));
   };
   Decision decision = decision_.decide(q, stage_list_);
   result.loop = decision.loop;
+  result.status = decision.status;
   result.best = decision.best;
   result.evidence = decision.evidence;
   result.ranking = decision.ranking;
   result.verification = std::move(decision.verdicts);
-  for (const auto& stage : stages_) stage->end(result.frame, result.candidates);
+  if (store) {
+    for (const auto& stage : stages_) stage->end(result.frame, result.candidates);
+  }
 }
 
 std::vector<Stateful*> Detector::stateful() const {

@@ -332,6 +332,15 @@ double GeometricVerifier::working_scale(int width, int height) const {
   return options_.working_scale(width, height);
 }
 
+void GeometricVerifier::remove_last() {
+  if (size() == 0) internal::throw_invalid("GeometricVerifier::remove_last: no frame was added");
+  offsets_.pop_back();
+  const auto n = static_cast<std::size_t>(offsets_.back());
+  points_.resize(2 * n);
+  descriptors_.resize(n * kOrbBytes);
+  scales_.pop_back();
+}
+
 std::int64_t GeometricVerifier::size() const {
   return static_cast<std::int64_t>(offsets_.size()) - 1;
 }

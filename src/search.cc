@@ -139,6 +139,12 @@ const std::vector<std::int64_t>& CandidateSearch::members(std::int64_t group) co
   internal::throw_invalid("search mode ", name(), " has no groups (group ", group, " asked for)");
 }
 
+CandidateSearch::Outcome CandidateSearch::query(const Query& query, std::vector<Candidate>&,
+                                                std::vector<double>&) {
+  internal::throw_invalid("search mode ", name(), " cannot answer query ", query.id,
+                          " without storing it (it does not implement CandidateSearch::query)");
+}
+
 const std::vector<std::int64_t>& CandidateSearch::followed() const {
   static const std::vector<std::int64_t> none;
   return none;

@@ -9,6 +9,7 @@
 #include <cmath>
 #include <cstdint>
 #include <atomic>
+#include <map>
 #include <string>
 #include <thread>
 #include <vector>
@@ -19,6 +20,7 @@
 #include "lsgd/error.h"
 #include "lsgd/image.h"
 #include "lsgd/search/exhaustive.h"
+#include "detector_util.h"
 #include "test_util.h"
 
 namespace lsgd {
@@ -605,6 +607,48 @@ TEST(Detector, TwoThreadsOnOneDetectorAreRefusedNotCorrupted) {
   // Still a working detector.
   const Result r = det.process(frames[0]);
   EXPECT_EQ(r.frame, done.load());
+}
+
+// Result::status says why there is a loop or none, consistently with the
+// rest of the Result, and every status occurs on the street's revisits.
+TEST(Detector, StatusSaysWhyThereIsALoopOrNone) {
+  std::map<LoopStatus, int> seen;
+  for (const int agree : {0, 3}) {
+    DetectorOptions o;
+    o.search.min_gap = 20;
+    o.verification.temporal_options.agree = agree;  // 3: the temporal gate examines
+    Detector d(o);
+    for (std::int64_t i = 0; i < test::world().frames(); ++i) {
+      const Result r = d.process(test::frame(i));
+      ++seen[r.status];
+      SCOPED_TRACE("frame " + std::to_string(i) + " " + to_string(r.status));
+      EXPECT_EQ(r.loop, r.status == LoopStatus::kLoop);
+      EXPECT_EQ(i <= o.search.min_gap, r.status == LoopStatus::kTooFewFrames);
+      if (r.status == LoopStatus::kNoCandidate) {
+        EXPECT_TRUE(r.candidates.empty());
+      }
+      if (r.status == LoopStatus::kGated) {
+        EXPECT_EQ(r.best.frame, -1);
+        for (const StageVerdict& v : r.verification) EXPECT_FALSE(v.accepted);
+      }
+      if (r.status == LoopStatus::kNotConfirmed || r.status == LoopStatus::kBelowThreshold) {
+        EXPECT_GE(r.best.frame, 0);
+        EXPECT_LT(r.best.score, o.decision.threshold);
+      }
+      if (r.status == LoopStatus::kNotConfirmed) {
+        EXPECT_FALSE(r.evidence.confirmed);
+      }
+    }
+  }
+  for (const LoopStatus s : {LoopStatus::kLoop, LoopStatus::kTooFewFrames, LoopStatus::kNoCandidate,
+                             LoopStatus::kGated, LoopStatus::kYoung, LoopStatus::kNotConfirmed,
+                             LoopStatus::kBelowThreshold}) {
+    EXPECT_GT(seen[s], 0) << to_string(s);
+    EXPECT_EQ(parse_loop_status(to_string(s)), s);
+  }
+  EXPECT_NE(test::message_of<InvalidArgument>([] { parse_loop_status("looped"); })
+                .find("loop status 'looped' is not one of loop, too_few_frames"),
+            std::string::npos);
 }
 
 }  // namespace

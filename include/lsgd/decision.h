@@ -87,6 +87,26 @@ struct LoopEvidence {
   bool continues = false;  // confirmed and continuing the previous frame's loop
 };
 
+// Why a query has a loop or none (Result::status), for a program to branch
+// on; the stages' verdicts (Result::verification) say it in words.
+enum class LoopStatus {
+  kLoop,            // a loop is declared (Result::loop)
+  kTooFewFrames,    // no stored frame lies outside the temporal window yet
+  kNoCandidate,     // frames outside the window, but the search returned none
+                    // (statistics not calibrated yet; nodes mode: a new node)
+  kGated,           // every candidate was rejected by a gate (temporal agreement)
+  kYoung,           // too few candidates for statistics of its own, and no
+                    // confirming stage confirmed the best (evidence.h)
+  kNotConfirmed,    // the best candidate was rejected by a confirming stage
+                    // (too few geometric inliers) and nothing else reached the threshold
+  kBelowThreshold,  // the reported candidate scores below decision.threshold
+};
+// "loop", "too_few_frames", "no_candidate", "gated", "young", "not_confirmed",
+// "below_threshold": the CSV's and Python's names.
+const char* to_string(LoopStatus status);
+// The status of that name; InvalidArgument naming the names otherwise.
+LoopStatus parse_loop_status(const std::string& name);
+
 // The state the decision carries from frame to frame: the loop declared for
 // the last processed frame and its loop's average inliers.
 struct ContinuityState {
@@ -146,6 +166,7 @@ constexpr double kRankingTrackMinZ = -2.0;
 // What the decision found for one query (fields of Result).
 struct Decision {
   bool loop = false;
+  LoopStatus status = LoopStatus::kTooFewFrames;
   Candidate best;
   LoopEvidence evidence;
   Ranking ranking;
@@ -174,6 +195,15 @@ class LoopDecision final : public Stateful {
   const ContinuityState& continuity() const { return state_; }
   // The ranking's track after the last frame (its confirmed candidate, -1: none).
   const ContinuityState& ranking_track() const { return track_; }
+  // What decide() changes, to put back after a query that is not stored
+  // (Detector::query()): restore() undoes every decide() since checkpoint().
+  struct Checkpoint {
+    ContinuityState state, track;
+    std::size_t decided = 0;
+  };
+  Checkpoint checkpoint() const { return {state_, track_, history_.size()}; }
+  void restore(const Checkpoint& c) { state_ = c.state, track_ = c.track, history_.resize(c.decided); }
+
   // The next frame continues no loop, and tracks no ranked candidate (Detector::cut()).
   void cut() { state_.loop = -1, state_.inliers = 0, track_.loop = -1, track_.inliers = 0; }
 

@@ -71,6 +71,9 @@ struct Result {
   // query (first_scored_query(), evidence.h), and for a young query (fewer
   // than kMinCalibration candidates) that no confirming stage confirmed.
   Candidate best;
+  // Why there is a loop or none (decision.h): a program branches on it; the
+  // verdicts below say it in words.
+  LoopStatus status = LoopStatus::kTooFewFrames;
   LoopEvidence evidence;  // what the score of `best` is made of
   // The ranking no decision setting changes (decision.h): the candidate
   // appearance ranks first through the gates, scored by appearance (sigma),
@@ -105,6 +108,17 @@ class Detector {
   // detector unchanged.
   Result process(const cv::Mat& frame);
   Result process(const ImageView& frame);
+
+  // The answer process() would give for the frame as the next one, with
+  // nothing stored and nothing changed: relocalisation, or localising in a
+  // map opened read-only (lsgd run --localize). Result::frame is the id
+  // process() would give it. Every later answer is as if the query never
+  // happened (index mode may insert stored frames into its graph earlier
+  // than process() would, the same graph: CandidateSearch::query). Throws
+  // InvalidArgument, detector unchanged, for a frame process() would refuse
+  // or a search mode or stage that cannot answer without storing.
+  Result query(const cv::Mat& frame);
+  Result query(const ImageView& frame);
 
   // The next frame starts a new sequence (a new session of a map, a robot
   // put down elsewhere, the next place of a map of several): it continues no
@@ -159,11 +173,13 @@ class Detector {
   void restore_index(const std::uint8_t* data, std::size_t size);
 
  private:
-  Result process_gray(double convert_ms, std::int64_t start_ns);
+  // store: process(), else query() (nothing stored or changed).
+  Result process_gray(double convert_ms, std::int64_t start_ns, bool store);
+  void check_answers_queries() const;
   // every_frame: the search scored every frame for this query (row_ written),
   // so its places are ranked over every diagonal; else its shortlist is realigned.
-  void score_candidates(bool every_frame, Result& result);
-  void verify(Result& result);
+  void score_candidates(AppearanceEvidence& evidence, bool every_frame, Result& result);
+  void verify(AppearanceEvidence& evidence, bool store, Result& result);
   // The components with per-frame state, in the order their records are saved.
   std::vector<Stateful*> stateful() const;
 
@@ -174,6 +190,7 @@ class Detector {
   FrameStore store_;
   std::unique_ptr<CandidateSearch> search_;  // made from options_.search
   AppearanceEvidence evidence_;
+  AppearanceEvidence query_evidence_;  // query(): a copy of evidence_ the query adds itself to
   std::vector<std::unique_ptr<VerificationStage>> stages_;  // made from options_.verification
   std::vector<VerificationStage*> stage_list_;              // the same, for the decision
   LoopDecision decision_;

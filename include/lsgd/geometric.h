@@ -95,6 +95,10 @@ class GeometricVerifier {
   // Throws InvalidArgument for ids not added yet.
   GeometricCheck verify(std::int64_t query, std::int64_t candidate) const;
 
+  // Forgets the last frame added (a query that is not stored,
+  // Detector::query()); InvalidArgument when there is none.
+  void remove_last();
+
   std::int64_t size() const;
   const GeometricOptions& options() const { return options_; }
   // Keypoints stored for frame i; throws InvalidArgument for ids not added.

@@ -147,6 +147,17 @@ class CandidateSearch : public Stateful {
   // realigns as a whole (the detector keeps top_n); `row` as above.
   virtual Outcome search(const Query& query, std::vector<Candidate>& out,
                          std::vector<double>& row) = 0;
+  // The candidates (and row) search() would write for `query`, without adding
+  // the query to anything that changes a later answer: a query that is not
+  // stored (Detector::query()). The outcome's group is the one the query
+  // would join (created: it would start one). A mode may still bring an
+  // internal structure up to date with frames already stored, as search()
+  // would at the next frame (index mode inserts the frames that left the
+  // temporal window into its graph, in the same order): no later answer
+  // differs. By default InvalidArgument naming the mode: a mode of one's own
+  // implements it to answer queries without storing them.
+  virtual Outcome query(const Query& query, std::vector<Candidate>& out,
+                        std::vector<double>& row);
 
   // How far past +-tolerance of a candidate the temporal stage looks for the
   // places exhaustive search would report, when it realigns a shortlist

@@ -71,6 +71,14 @@ class VerificationStage : public Stateful {
   virtual void end(std::int64_t query, const std::vector<Candidate>& candidates) {
     (void)query, (void)candidates;
   }
+  // A query that is not stored (Detector::query()): discard() is called
+  // instead of end() and forgets whatever begin() kept of it, so that the
+  // stage is as it was before begin(). answers_queries() says the stage can
+  // do that; by default, a stage without per-frame state (has_state()).
+  // Detector::query() refuses (InvalidArgument naming the stage) to run one
+  // that cannot.
+  virtual bool answers_queries() const { return !has_state(); }
+  virtual void discard(std::int64_t query) { (void)query; }
 };
 
 // A registered stage.

@@ -179,6 +179,38 @@ def test_database_resumes_where_it_stopped(tmp_path):
         lsgd.Database.create(path)
 
 
+def test_query_answers_as_process_and_stores_nothing(tmp_path):
+    frames = route(20, 3)
+    d = lsgd.Detector(search={"min_gap": 5})
+    reference = lsgd.Detector(search={"min_gap": 5})
+    for i, f in enumerate(frames):
+        e = reference.process(f)
+        other = d.query(frames[(i + 17) % len(frames)])  # a frame that is not the next
+        q = d.query(f)
+        assert d.size == i and other.frame == i
+        r = d.process(f)
+        for x in (q, r):
+            assert (x.frame, x.best.frame, x.loop, x.best.score, x.ranking.best.frame) == \
+                (e.frame, e.best.frame, e.loop, e.best.score, e.ranking.best.frame)
+    # A map opened read-only: queried, never grown, the file unchanged.
+    path = str(tmp_path / "map.db")
+    db = lsgd.Database.create(path, search={"min_gap": 5})
+    writer = lsgd.Detector(db.options)
+    for f in frames[:40]:
+        db.append(writer, writer.process(f), session=0)
+    del db
+    before = open(path, "rb").read()
+    m = lsgd.Database.open(path, writable=False).detector()
+    expected = writer.process(frames[40])
+    q = m.query(frames[40])
+    assert (q.frame, q.best.frame, q.loop, q.best.score) == \
+        (expected.frame, expected.best.frame, expected.loop, expected.best.score)
+    assert m.size == 40
+    assert open(path, "rb").read() == before
+    with pytest.raises(lsgd.InvalidArgument, match="every frame must have the same size"):
+        m.query(np.zeros((10, 10), np.uint8))
+
+
 def test_index_mode_graph_saved_and_restored(tmp_path):
     path = str(tmp_path / "index.db")
     frames = route(20, 3)
@@ -231,6 +263,11 @@ def test_result_fields():
         if x.candidates:
             assert (x.ranking.best.frame, x.ranking.best.score) in [(c.frame, c.score) for c in x.candidates]
     assert isinstance(r.ranking, lsgd.Ranking) and "Ranking(best=" in repr(r.ranking)
+    # Why there is a loop or none: an enum a program branches on.
+    assert [x.status for x in results[:6]] == [lsgd.LoopStatus.TOO_FEW_FRAMES] * 6
+    assert all((x.status == lsgd.LoopStatus.LOOP) == x.loop for x in results)
+    assert str(lsgd.LoopStatus.NOT_CONFIRMED) == "not_confirmed"
+    assert "status=" in repr(r)
 
 
 def test_example_script_evaluates_and_plots(tmp_path):

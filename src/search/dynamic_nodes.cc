@@ -11,6 +11,15 @@ DynamicNodes::Outcome DynamicNodes::assign(const FrameStore& store, const Descri
                                            std::int64_t query_id, const SearchOptions& options,
                                            SimilarityMetric metric, std::vector<Candidate>& scratch,
                                            std::vector<Candidate>& out) {
+  Outcome outcome = find(store, query, query_id, options, metric, scratch, out);
+  add_member(outcome.node, query_id);
+  return outcome;
+}
+
+DynamicNodes::Outcome DynamicNodes::find(const FrameStore& store, const DescriptorView& query,
+                                         std::int64_t query_id, const SearchOptions& options,
+                                         SimilarityMetric metric, std::vector<Candidate>& scratch,
+                                         std::vector<Candidate>& out) const {
   if (query_id != store.size()) {
     internal::throw_invalid("DynamicNodes::assign: query ", query_id, " must be the next frame (",
                             store.size(), ")");
@@ -23,7 +32,7 @@ DynamicNodes::Outcome DynamicNodes::assign(const FrameStore& store, const Descri
   outcome.similarities += query_id > 0 ? 1 : 0;
   const double base = options.nodes.threshold_0 * previous;
   for (std::size_t i = 0; i < nodes_.size(); ++i) {
-    std::vector<std::int64_t>& node = nodes_[i];
+    const std::vector<std::int64_t>& node = nodes_[i];
     if (query_id - node.front() <= options.min_gap) continue;  // first frame too recent
     const double first = similarity(query, store.view(node.front()), metric);
     ++outcome.similarities;
@@ -40,7 +49,6 @@ DynamicNodes::Outcome DynamicNodes::assign(const FrameStore& store, const Descri
     for (const Candidate& c : scratch) sum += c.score;
     outcome.similarities += static_cast<std::int64_t>(node.size()) - 1;
     if (!(sum / static_cast<double>(node.size()) > options.nodes.beta * base)) continue;
-    node.push_back(query_id);
     // Members inside the temporal window are never candidates.
     const std::int64_t limit = query_id - options.min_gap;
     scratch.erase(std::remove_if(scratch.begin(), scratch.end(),
@@ -50,8 +58,7 @@ DynamicNodes::Outcome DynamicNodes::assign(const FrameStore& store, const Descri
     outcome.node = static_cast<std::int64_t>(i);
     return outcome;
   }
-  nodes_.push_back({query_id});
-  outcome.node = static_cast<std::int64_t>(nodes_.size()) - 1;
+  outcome.node = static_cast<std::int64_t>(nodes_.size());
   outcome.created = true;
   return outcome;
 }
@@ -103,6 +110,12 @@ class NodesSearch final : public CandidateSearch {
         nodes_.assign(q.store, q.descriptor, q.id, options_, q.metric, scratch_, out);
     node_of_.resize(static_cast<std::size_t>(q.id));  // a search whose frame was not stored
     node_of_.push_back(o.node);
+    return {o.node, o.created};
+  }
+  // The node the query would join, nothing added.
+  Outcome query(const Query& q, std::vector<Candidate>& out, std::vector<double>&) override {
+    const DynamicNodes::Outcome o =
+        nodes_.find(q.store, q.descriptor, q.id, options_, q.metric, scratch_, out);
     return {o.node, o.created};
   }
   bool has_groups() const override { return true; }

@@ -33,6 +33,10 @@ class ExhaustiveSearch final : public CandidateSearch {
     search_exhaustive(q.store, q.descriptor, q.id, options_, q.metric, scratch_, out, &row);
     return {};
   }
+  // search() changes nothing.
+  Outcome query(const Query& q, std::vector<Candidate>& out, std::vector<double>& row) override {
+    return search(q, out, row);
+  }
 
  private:
   SearchOptions options_;

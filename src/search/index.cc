@@ -177,6 +177,13 @@ class IndexSearch final : public CandidateSearch {
     return outcome;
   }
 
+  // search() keeps nothing of the query: the frames it inserts are stored
+  // ones search() inserts at the next frame anyway, in the same order (the
+  // same graph), and the followed frames are recomputed at every search.
+  Outcome query(const Query& q, std::vector<Candidate>& out, std::vector<double>& row) override {
+    return search(q, out, row);
+  }
+
   void end(std::int64_t frame, const std::vector<Candidate>& candidates) override {
     previous_frame_ = frame;
     previous_.clear();

@@ -18,6 +18,9 @@ class GeometricStage final : public VerificationStage {
   Role role() const override { return Role::kConfirm; }
 
   void begin(const StageQuery& query) override { verifier_.add(query.gray); }
+  // begin() added the query's features: they go again.
+  bool answers_queries() const override { return true; }
+  void discard(std::int64_t) override { verifier_.remove_last(); }
 
   StageCheck check(std::int64_t query, const Candidate& candidate) override {
     const GeometricCheck c = verifier_.verify(query, candidate.frame);

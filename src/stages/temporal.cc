@@ -82,6 +82,8 @@ class TemporalStage final : public VerificationStage {
     return {c.accepted, -1, c.reason, internal::ms_since(start)};
   }
 
+  // Only end() keeps anything (the query's place): discard() has nothing to forget.
+  bool answers_queries() const override { return true; }
   // The query's best place: its first candidate (-1: none).
   void end(std::int64_t query, const std::vector<Candidate>& candidates) override {
     const std::int64_t place = candidates.empty() ? -1 : candidates.front().frame;

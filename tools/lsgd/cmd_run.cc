@@ -1,4 +1,4 @@
-// lsgd run --sequence PATH [--config FILE] [--output FILE] [--database FILE [--session N]]
+// lsgd run --sequence PATH [--config FILE] [--output FILE] [--database FILE [--session N | --localize]]
 //
 // Frame ids (README, "Frame ids"): image i of the sequence (after --first,
 // --last, --every) is frame first_id + i, whether or not earlier images were
@@ -44,6 +44,7 @@ struct RunArgs {
   std::string database;                 // SQLite file to create or resume; empty: none
   bool rebuild_index = false;           // ignore the database's saved search index
   std::optional<std::int64_t> session;  // session id of this run's frames
+  bool localize = false;                // --database read-only: a session localised in memory
 };
 
 // The command's files: nothing it writes may be something it reads.
@@ -229,7 +230,7 @@ std::unique_ptr<CsvWriter> continue_csv(const RunArgs& args, const SessionPlan& 
               << ", but session " << plan.session << " holds frames up to " << plan.last_stored
               << " (their rows went to another output)\n";
   }
-  return std::make_unique<CsvWriter>(args.output, CsvWriter::kAppend, trim.ranking_columns);
+  return std::make_unique<CsvWriter>(args.output, CsvWriter::kAppend, trim.version);
 }
 
 void run_database(const RunArgs& args, const io::Sequence& sequence) {
@@ -331,9 +332,64 @@ void run_database(const RunArgs& args, const io::Sequence& sequence) {
   }
 }
 
+// --localize: the map is opened read-only and restored; the sequence is a new
+// session processed against it in memory (its frames join the in-memory map
+// as they come, so each has the sequence of the session's own frames before
+// it), and nothing is written to the file. Frame ids continue the map's.
+void run_localize(const RunArgs& args, const io::Sequence& sequence) {
+  CommandFiles files;
+  files.input(args.detector.config, "--config");
+  files.input(args.sequence, "--sequence");
+  files.inputs(sequence.images, "--sequence", "input image");
+  files.input(args.database, "--database");
+  files.output(args.output, "--output");
+  files.check();
+  const io::Database db = io::Database::open(args.database, io::Database::Mode::kReadOnly);
+  DetectorOptions options = args.detector.config.empty() ? db.options() : io::load_config(args.detector.config);
+  args.detector.apply(options);
+  Detector detector(options);
+  db.restore(detector, args.rebuild_index ? io::IndexUse::kRebuild : io::IndexUse::kSaved);
+  if (detector.size() == 0) {
+    throw InvalidArgument("--localize: database " + args.database + " holds no frame to localise against");
+  }
+  // A new session: nothing continues across it.
+  detector.cut();
+  const eval::FrameSource source = eval::sequence_source(sequence);
+  CsvWriter csv(args.output);
+  eval::RunOptions run_options;
+  run_options.skip_bad_frames = !args.layout.strict;
+  run_options.keep_records = false;
+  run_options.stored_ids = db.frame_ids();
+  run_options.first_id = run_options.stored_ids.back() + 1;
+  const auto images = static_cast<std::int64_t>(sequence.images.size());
+  std::cerr << "localising against " << args.database << " (read-only, " << detector.size()
+            << " frames): frame ids " << run_options.first_id << " .. "
+            << run_options.first_id + images - 1 << ", nothing stored\n";
+  const FrameRun run = run_frames(detector, source, "run", run_options,
+                                  [&](const Result& r, const eval::FrameTimes&) {
+                                    csv.write(r, source.name(r.frame - run_options.first_id));
+                                  });
+  if (run.processed == 0) throw_no_frame(run.skipped, run.first_error);
+  std::cerr << "processed " << run.processed << " frames"
+            << (run.skipped > 0 ? " (" + std::to_string(run.skipped) + " skipped)" : std::string())
+            << ", " << csv.loops() << " loops, " << run.mean_ms() << " ms/frame mean; "
+            << args.database << " unchanged" << (args.output.empty() ? "" : ", rows in " + args.output)
+            << "\n";
+}
+
 void run(const RunArgs& args) {
   if (args.session && args.database.empty()) {
     throw InvalidArgument("--session needs --database");
+  }
+  if (args.localize && args.database.empty()) {
+    throw InvalidArgument("--localize needs --database (the map to localise against)");
+  }
+  if (args.localize && args.session) {
+    throw InvalidArgument("--localize stores nothing, so it takes no --session");
+  }
+  if (args.localize) {
+    run_localize(args, io::open_sequence(args.sequence, args.layout.resolve()));
+    return;
   }
   if (!args.database.empty()) {
     run_database(args, io::open_sequence(args.sequence, args.layout.resolve()));
@@ -381,6 +437,9 @@ void register_run(CLI::App& app) {
                   "session when --sequence is its sequence, else last session + 1; 0 for a new "
                   "database)")
       ->check(CLI::Range(std::int64_t{0}, kMaxSession));
+  cmd->add_flag("--localize", args->localize,
+                "with --database: open it read-only and localise --sequence against it, as a "
+                "new session kept in memory; nothing is written to the file");
   cmd->add_flag("--rebuild-index", args->rebuild_index,
                 "with --database: ignore the search index saved in it (index mode's graph) and "
                 "rebuild it from the stored frames");

@@ -168,12 +168,17 @@ void Progress::update(std::int64_t done, double ms_per_frame) {
 
 namespace {
 
-constexpr const char* kCsvHeader =
+// The headers of the CSV's versions, oldest first; a run resumes in the
+// columns of the header its CSV has (CsvWriter::Trim::version).
+constexpr const char* kCsvHeaders[] = {
+    "frame,image,loop_frame,candidate_frame,score,ms,appearance,inliers",
     "frame,image,loop_frame,candidate_frame,score,ms,appearance,inliers,ranked_frame,ranked_score,"
-    "ranked_confirmed";
-// The header before the ranking's columns (a run written by it resumes with its columns).
-constexpr const char* kCsvHeaderWithoutRanking =
-    "frame,image,loop_frame,candidate_frame,score,ms,appearance,inliers";
+    "ranked_confirmed",
+    "frame,image,loop_frame,candidate_frame,score,ms,appearance,inliers,ranked_frame,ranked_score,"
+    "ranked_confirmed,status",
+};
+constexpr int kRankingVersion = 1;  // the first with the ranking's columns
+constexpr int kStatusVersion = 2;   // ... with the status
 
 }  // namespace
 
@@ -187,15 +192,18 @@ std::vector<std::string> search_mode_list() {
   return names;
 }
 
-CsvWriter::CsvWriter(const std::string& path, Mode mode, bool ranking_columns)
-    : path_(path), ranking_columns_(ranking_columns || mode == kCreate), out_(&std::cout) {
+CsvWriter::CsvWriter(const std::string& path, Mode mode, int version)
+    : path_(path), version_(mode == kCreate ? kCsvNewest : version), out_(&std::cout) {
+  if (version_ < 0 || version_ > kCsvNewest) {
+    throw InvalidArgument("CsvWriter: version " + std::to_string(version) + " of the CSV does not exist");
+  }
   if (!path.empty()) {
     file_ = std::make_unique<std::ofstream>(
         path, mode == kAppend ? std::ios::out | std::ios::app : std::ios::out | std::ios::trunc);
     if (!*file_) throw IoError("cannot write output file '" + path + "'");
     out_ = file_.get();
   }
-  if (mode == kCreate) *out_ << kCsvHeader << "\n" << std::flush;
+  if (mode == kCreate) *out_ << kCsvHeaders[kCsvNewest] << "\n" << std::flush;
   if (!*out_) throw IoError("error while writing " + (path.empty() ? "the CSV rows to standard output" : "'" + path + "'"));
 }
 
@@ -210,11 +218,12 @@ void CsvWriter::write(const Result& r, const std::string& image) {
         << ',' << std::setprecision(9) << (r.best.frame >= 0 ? r.best.score : 0.0) << ','
         << std::setprecision(4) << r.timings.total_ms << ',' << std::setprecision(6)
         << (r.best.frame >= 0 ? r.evidence.appearance : 0.0) << ',' << r.evidence.inliers;
-  if (ranking_columns_) {
+  if (version_ >= kRankingVersion) {
     const bool ranked = r.ranking.best.frame >= 0;
     *out_ << ',' << r.ranking.best.frame << ',' << std::setprecision(9)
           << (ranked ? r.ranking.best.score : 0.0) << ',' << (ranked && r.ranking.confirmed ? 1 : 0);
   }
+  if (version_ >= kStatusVersion) *out_ << ',' << to_string(r.status);
   *out_ << '\n' << std::flush;
   if (!*out_) {
     throw IoError("error while writing the row of frame " + std::to_string(r.frame) + " to " +
@@ -228,12 +237,16 @@ CsvWriter::Trim CsvWriter::trim(const std::string& path, std::int64_t last_frame
   std::ifstream in(path, std::ios::binary);
   if (!in) throw IoError("cannot read '" + path + "'");
   std::string line;
-  if (!std::getline(in, line) || (line != kCsvHeader && line != kCsvHeaderWithoutRanking)) {
-    throw FormatError("'" + path + "' is not a CSV of lsgd run (its first line is not '" +
-                      kCsvHeader + "'); pass another --output");
-  }
+  const bool read = static_cast<bool>(std::getline(in, line));
   Trim trim;
-  trim.ranking_columns = line == kCsvHeader;
+  trim.version = -1;
+  for (int v = 0; read && v <= kCsvNewest; ++v) {
+    if (line == kCsvHeaders[v]) trim.version = v;
+  }
+  if (trim.version < 0) {
+    throw FormatError("'" + path + "' is not a CSV of lsgd run (its first line is not '" +
+                      kCsvHeaders[kCsvNewest] + "'); pass another --output");
+  }
   std::int64_t keep = static_cast<std::int64_t>(line.size()) + 1;  // bytes kept
   bool cutting = false;
   while (std::getline(in, line)) {

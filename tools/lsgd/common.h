@@ -83,12 +83,16 @@ std::string format_duration(double seconds);
 // Errors name the file.
 class CsvWriter {
  public:
+  // The CSV's newest version: frame, image, loop_frame, candidate_frame,
+  // score, ms, appearance, inliers (0), ranked_frame, ranked_score,
+  // ranked_confirmed (1), status (2, to_string(LoopStatus)).
+  static constexpr int kCsvNewest = 2;
   enum Mode { kCreate, kAppend };
-  // Empty path: stdout. kCreate writes the header (replacing the file);
-  // kAppend adds rows after the existing ones (a file trim() accepted), with
-  // the ranking's columns unless the file has the header of a version
-  // without them (Trim::ranking_columns).
-  explicit CsvWriter(const std::string& path, Mode mode = kCreate, bool ranking_columns = true);
+  // Empty path: stdout. kCreate writes the newest header (replacing the
+  // file); kAppend adds rows after the existing ones (a file trim()
+  // accepted) in the columns of the CSV's `version` (Trim::version): a run
+  // written before the ranking's or the status column resumes without them.
+  explicit CsvWriter(const std::string& path, Mode mode = kCreate, int version = kCsvNewest);
   void write(const Result& result, const std::string& image);
   std::int64_t loops() const { return loops_; }  // rows written with a loop
 
@@ -96,7 +100,7 @@ class CsvWriter {
     std::int64_t dropped = 0;    // complete rows cut
     bool partial = false;        // an incomplete last line was cut
     std::int64_t last_row = -1;  // frame of the last row kept; -1: none
-    bool ranking_columns = true;  // false: the header of a version without them
+    int version = kCsvNewest;    // of the header: 0 none of the columns below, 1 ranked_*, 2 status
   };
   // Cuts the rows of frames after `last_frame` (and an incomplete last line)
   // from an existing CSV this writer wrote, in place. Throws FormatError when
@@ -105,7 +109,7 @@ class CsvWriter {
 
  private:
   std::string path_;
-  bool ranking_columns_ = true;
+  int version_ = kCsvNewest;
   std::int64_t loops_ = 0;
   std::unique_ptr<std::ofstream> file_;
   std::ostream* out_;

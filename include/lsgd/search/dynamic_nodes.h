@@ -28,6 +28,12 @@ class DynamicNodes {
                  const SearchOptions& options, SimilarityMetric metric,
                  std::vector<Candidate>& scratch, std::vector<Candidate>& out);
 
+  // The same answer without adding the query: the node it would join, or
+  // size() when it would create one (Detector::query()).
+  Outcome find(const FrameStore& store, const DescriptorView& query, std::int64_t query_id,
+               const SearchOptions& options, SimilarityMetric metric,
+               std::vector<Candidate>& scratch, std::vector<Candidate>& out) const;
+
   std::int64_t size() const { return static_cast<std::int64_t>(nodes_.size()); }
   // Frame ids of `node`, first frame first; InvalidArgument for a node that
   // does not exist.

@@ -44,14 +44,15 @@ int main(int argc, char** argv) {
                 where.loop ? "a loop" : "no loop");
 
     detector.cut();  // then a session in memory: it continues no loop of the map's last frames
-    int localised = 0;
+    int localised = 0, loops = 0;
     for (std::size_t i = first; i < sequence.images.size(); ++i) {
       const cv::Mat image = lsgd::io::read_image(sequence.images[i]);
       const lsgd::Result r = detector.process(image);
+      loops += r.loop ? 1 : 0;
       if (r.loop && r.best.frame < mapped) ++localised;  // a place of the map
     }
-    std::printf("%d of %zu images localised in the map of %lld frames\n", localised,
-                sequence.images.size() - first, static_cast<long long>(mapped));
+    std::printf("%d of %zu images localised in the map of %lld frames (%d loops in all)\n",
+                localised, sequence.images.size() - first, static_cast<long long>(mapped), loops);
     return 0;
   } catch (const lsgd::Error& e) {  // IoError, FormatError, InvalidArgument, each naming the file
     std::fprintf(stderr, "error: %s\n", e.what());

@@ -181,6 +181,38 @@ PYBIND11_MODULE(_lsgd, m) {
         return "Ranking(best=Candidate(frame=" + std::to_string(r.best.frame) + ", score=" +
                lsgd::format_real(r.best.score) + "), confirmed=" + (r.confirmed ? "True" : "False") + ")";
       });
+  // Copies into numpy arrays (a LoopGeometry is immutable and shared).
+  const auto points = [](const std::vector<float>& v) {
+    py::array_t<float> out({static_cast<py::ssize_t>(v.size() / 2), py::ssize_t{2}});
+    std::copy(v.begin(), v.end(), out.mutable_data());
+    return out;
+  };
+  py::class_<lsgd::LoopGeometry, std::shared_ptr<lsgd::LoopGeometry>>(m, "LoopGeometry",
+      "What the geometric stage fitted between the query and the reported candidate: its "
+      "matches and the better model (points in pixels of each original image)")
+      .def_readonly("model", &lsgd::LoopGeometry::model, "'fundamental' or 'homography'")
+      .def_property_readonly("matrix", [](const lsgd::LoopGeometry& g) {
+             py::array_t<double> out({py::ssize_t{3}, py::ssize_t{3}});
+             std::copy(g.matrix.begin(), g.matrix.end(), out.mutable_data());
+             return out;
+           }, "3x3 float64: c^T F q = 0 for a match, or c ~ H q (q query, c candidate)")
+      .def_property_readonly("query_points", [points](const lsgd::LoopGeometry& g) {
+             return points(g.query_points);
+           }, "N x 2 float32, x and y of each match in the query")
+      .def_property_readonly("candidate_points", [points](const lsgd::LoopGeometry& g) {
+             return points(g.candidate_points);
+           }, "N x 2 float32, the same matches in the candidate")
+      .def_property_readonly("inliers", [](const lsgd::LoopGeometry& g) {
+             py::array_t<bool> out(static_cast<py::ssize_t>(g.inliers.size()));
+             for (std::size_t k = 0; k < g.inliers.size(); ++k) out.mutable_data()[k] = g.inliers[k] != 0;
+             return out;
+           }, "N bool: the matches that are inliers of the model")
+      .def("__repr__", [](const lsgd::LoopGeometry& g) {
+        std::size_t inliers = 0;
+        for (const std::uint8_t v : g.inliers) inliers += v;
+        return "LoopGeometry(model='" + g.model + "', matches=" + std::to_string(g.matches()) +
+               ", inliers=" + std::to_string(inliers) + ")";
+      });
   py::class_<lsgd::StageVerdict>(m, "StageVerdict")
       .def_readonly("candidate", &lsgd::StageVerdict::candidate)
       .def_readonly("stage", &lsgd::StageVerdict::stage)
@@ -215,6 +247,9 @@ PYBIND11_MODULE(_lsgd, m) {
       .def_readonly("best", &lsgd::Result::best)
       .def_readonly("status", &lsgd::Result::status)
       .def_readonly("evidence", &lsgd::Result::evidence)
+      .def_property_readonly("geometry", [](const lsgd::Result& r) {
+             return std::const_pointer_cast<lsgd::LoopGeometry>(r.geometry);
+           }, "LoopGeometry of the reported candidate when the geometric stage fitted one, else None")
       .def_readonly("ranking", &lsgd::Result::ranking)
       .def_readonly("candidates", &lsgd::Result::candidates)
       .def_readonly("verification", &lsgd::Result::verification)

@@ -248,6 +248,7 @@ Decision LoopDecision::decide(const DecisionQuery& q, const std::vector<Verifica
       const bool is_first = first < n && c.frame == candidates[first].frame;
       bool accepted = true;
       double support = -1;
+      std::shared_ptr<const LoopGeometry> geometry;
       for (std::size_t k = 0; k < confirms.size(); ++k) {
         VerificationStage* stage = confirms[k];
         // The ranking checked the best candidate already (its verdict is
@@ -266,6 +267,7 @@ Decision LoopDecision::decide(const DecisionQuery& q, const std::vector<Verifica
         if (!listed) {
           out.verdicts.push_back({c.frame, stage->name(), check.accepted, check.reason, check.ms});
         }
+        if (check.geometry) geometry = check.geometry;
         if (check.support >= 0) support = support < 0 ? check.support : std::min(support, check.support);
         if (!check.accepted) {
           accepted = false;
@@ -282,6 +284,7 @@ Decision LoopDecision::decide(const DecisionQuery& q, const std::vector<Verifica
       if (out.best.frame < 0 || scored >= d.threshold) {
         out.best = {c.frame, scored};
         out.evidence = {c.score, static_cast<int>(support), true, continuing};
+        out.geometry = geometry;
       }
       // A confirmed candidate below the threshold is reported unless a later
       // one (a lower potential) reaches it.
@@ -303,6 +306,9 @@ Decision LoopDecision::decide(const DecisionQuery& q, const std::vector<Verifica
     out.best = {c.frame, score};
     out.evidence.appearance = c.score;
     out.evidence.inliers = static_cast<int>(first_support);
+    for (const StageCheck& check : first_checks_) {
+      if (check.geometry) out.geometry = check.geometry;
+    }
   }
   out.loop = out.best.frame >= 0 && out.best.score >= d.threshold;
   if (out.loop) {

@@ -319,6 +319,7 @@ void Detector::verify(AppearanceEvidence& evidence, bool store, Result& result) 
   Decision decision = decision_.decide(q, stage_list_);
   result.loop = decision.loop;
   result.status = decision.status;
+  result.geometry = std::move(decision.geometry);
   result.best = decision.best;
   result.evidence = decision.evidence;
   result.ranking = decision.ranking;

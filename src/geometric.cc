@@ -116,6 +116,8 @@ void nearest(const std::uint8_t* q, int qn, const std::uint8_t* c, int cn, Neare
 struct ModelFit {
   int inliers = 0;
   std::string note;  // why a fitted model was discarded, or OpenCV's error
+  cv::Mat model;     // 3x3 CV_64F when inliers > 0
+  cv::Mat mask;      // CV_8U, one per match
 };
 
 bool finite(const cv::Mat& m) { return !m.empty() && cv::checkRange(m, true, nullptr); }
@@ -182,6 +184,8 @@ ModelFit fit_model(bool homography, const std::vector<cv::Point2f>& a,
       return fit;
     }
     fit.inliers = inliers;
+    m.convertTo(fit.model, CV_64F);
+    fit.mask = mask;
   } catch (const cv::Exception& e) {
     fit.note = internal::concat(homography ? "homography" : "fundamental", " failed: ", e.err);
   }
@@ -412,6 +416,20 @@ GeometricCheck GeometricVerifier::verify(std::int64_t query, std::int64_t candid
                                     notes.empty() ? " (degenerate points)" : ": " + notes);
   } else {
     check.model = use_h ? "homography" : "fundamental";
+    // The geometry, for the caller's relative pose: the matches (moved, they
+    // are not needed any more) and the better model.
+    auto g = std::make_shared<LoopGeometry>();
+    g->model = check.model;
+    for (int k = 0; k < 9; ++k) g->matrix[static_cast<std::size_t>(k)] = best.model.at<double>(k / 3, k % 3);
+    g->query_points.reserve(2 * a.size());
+    g->candidate_points.reserve(2 * b.size());
+    for (std::size_t k = 0; k < a.size(); ++k) {
+      g->query_points.insert(g->query_points.end(), {a[k].x, a[k].y});
+      g->candidate_points.insert(g->candidate_points.end(), {b[k].x, b[k].y});
+    }
+    g->inliers.assign(best.mask.ptr<std::uint8_t>(0), best.mask.ptr<std::uint8_t>(0) + best.mask.total());
+    for (std::uint8_t& v : g->inliers) v = v ? 1 : 0;
+    check.geometry = std::move(g);
     check.reason = internal::concat(
         check.model, ": ", check.inliers, " inliers of ", check.matches, " matches ",
         enough ? ">=" : "<", " ", options_.min_inliers,

@@ -651,5 +651,37 @@ TEST(Detector, StatusSaysWhyThereIsALoopOrNone) {
             std::string::npos);
 }
 
+// Result::geometry: the reported candidate's matches and model whenever the
+// geometric stage fitted one, consistent with its inliers; none without it.
+TEST(Detector, ALoopCarriesItsGeometry) {
+  for (const char* stages : {"temporal,geometric", "temporal"}) {
+    DetectorOptions o;
+    o.search.min_gap = 20;
+    parse_verification_stages(stages, o.verification);
+    Detector d(o);
+    int loops = 0;
+    for (std::int64_t i = 0; i < test::world().frames(); ++i) {
+      const Result r = d.process(test::frame(i));
+      SCOPED_TRACE(std::string(stages) + ", frame " + std::to_string(i));
+      if (std::string(stages) == "temporal") {
+        EXPECT_EQ(r.geometry, nullptr);
+        continue;
+      }
+      loops += r.loop ? 1 : 0;
+      if (r.loop) {
+        ASSERT_NE(r.geometry, nullptr);
+      }
+      if (r.geometry == nullptr) continue;
+      EXPECT_GE(r.best.frame, 0);
+      EXPECT_EQ(std::count(r.geometry->inliers.begin(), r.geometry->inliers.end(), 1), r.evidence.inliers);
+      EXPECT_EQ(r.geometry->query_points.size(), 2 * r.geometry->matches());
+      EXPECT_TRUE(r.geometry->model == "fundamental" || r.geometry->model == "homography");
+    }
+    if (std::string(stages) != "temporal") {
+      EXPECT_GT(loops, 10);
+    }
+  }
+}
+
 }  // namespace
 }  // namespace lsgd

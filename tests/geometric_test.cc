@@ -7,6 +7,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <opencv2/core.hpp>
@@ -187,6 +188,56 @@ TEST(GeometricVerifier, PerspectiveViewOfAPlaneIsAccepted) {
   EXPECT_TRUE(c.accepted) << c.reason;
   EXPECT_GE(c.inliers, 50) << c.reason;
   EXPECT_FALSE(c.model.empty());
+}
+
+// The geometry returned with the check: every match, the inlier mask the
+// count comes from, and the model itself (here the warp that made the view).
+TEST(GeometricVerifier, TheGeometryIsTheMatchesAndTheModelThatWasFitted) {
+  const cv::Mat a = texture(320, 240, 5);
+  const cv::Point2f from[] = {{0, 0}, {319, 0}, {319, 239}, {0, 239}};
+  const cv::Point2f to[] = {{20, 10}, {300, 0}, {319, 239}, {10, 220}};
+  const cv::Mat warp = cv::getPerspectiveTransform(from, to);
+  cv::Mat b;
+  cv::warpPerspective(a, b, warp, a.size(), cv::INTER_LINEAR, cv::BORDER_REFLECT);
+  const GeometricCheck c = check_pair(a, b);  // query b, candidate a
+  ASSERT_TRUE(c.accepted) << c.reason;
+  ASSERT_NE(c.geometry, nullptr);
+  const LoopGeometry& g = *c.geometry;
+  EXPECT_EQ(g.model, c.model);
+  ASSERT_EQ(g.matches(), static_cast<std::size_t>(c.matches));
+  ASSERT_EQ(g.query_points.size(), 2 * g.matches());
+  ASSERT_EQ(g.candidate_points.size(), 2 * g.matches());
+  EXPECT_EQ(std::count(g.inliers.begin(), g.inliers.end(), 1), c.inliers);
+  const cv::Matx33d m(g.matrix.data());
+  // A point of the query (b) is warp^-1 of it in the candidate (a).
+  const cv::Matx33d truth = cv::Matx33d(warp).inv();
+  const auto apply = [](const cv::Matx33d& h, double x, double y) {
+    const cv::Vec3d p = h * cv::Vec3d(x, y, 1);
+    return cv::Point2d(p[0] / p[2], p[1] / p[2]);
+  };
+  // The model explains its inliers (H within RANSAC's 3 px, at this size the
+  // working size; F by USAC's Sampson error, a little more one-sided), and
+  // they are the true correspondences, but for a few that F lets slide along
+  // their epipolar line.
+  int true_matches = 0;
+  for (std::size_t k = 0; k < g.matches(); ++k) {
+    if (!g.inliers[k]) continue;
+    const double qx = g.query_points[2 * k], qy = g.query_points[2 * k + 1];
+    const cv::Point2d matched(g.candidate_points[2 * k], g.candidate_points[2 * k + 1]);
+    true_matches += cv::norm(apply(truth, qx, qy) - matched) < 3.0 ? 1 : 0;
+    if (g.model == "homography") {
+      EXPECT_LT(cv::norm(apply(m, qx, qy) - matched), 3.01) << "inlier " << k;
+    } else {
+      // c^T F q = 0: c lies on the epipolar line F q.
+      const cv::Vec3d line = m * cv::Vec3d(qx, qy, 1);
+      EXPECT_LT(std::abs(line.dot(cv::Vec3d(matched.x, matched.y, 1))) / std::hypot(line[0], line[1]), 5.0)
+          << "inlier " << k;
+    }
+  }
+  EXPECT_GE(true_matches, 0.95 * c.inliers) << g.model;
+  // No model, no geometry.
+  const GeometricCheck none = check_pair(texture(320, 240, 10), cv::Mat(240, 320, CV_8UC1, cv::Scalar(7)));
+  EXPECT_EQ(none.geometry, nullptr) << none.reason;
 }
 
 // ---- rejected: other places, nothing to match ------------------------------------------

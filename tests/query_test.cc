@@ -149,7 +149,7 @@ class Remembering final : public VerificationStage {
   const char* name() const override { return "test-remembering"; }
   Role role() const override { return Role::kGate; }
   bool has_state() const override { return true; }
-  StageCheck check(std::int64_t, const Candidate&) override { return {true, -1, "ok", 0}; }
+  StageCheck check(std::int64_t, const Candidate&) override { return {true, -1, "ok", 0, nullptr}; }
   void end(std::int64_t query, const std::vector<Candidate>&) override { seen_.push_back(query); }
   void save_frame(std::int64_t frame, StateWriter& out) const override {
     out.put_i64(seen_.at(static_cast<std::size_t>(frame)));

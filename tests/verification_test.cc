@@ -140,7 +140,7 @@ class FixedSupport final : public VerificationStage {
     ++checks;
     const auto it = inliers_.find(c.frame);
     const int n = it == inliers_.end() ? 0 : it->second;
-    return {n >= 20, static_cast<double>(n), std::to_string(n) + " inliers", 0};
+    return {n >= 20, static_cast<double>(n), std::to_string(n) + " inliers", 0, nullptr};
   }
   int checks = 0;
 
@@ -639,7 +639,7 @@ class EvenFramesOnly final : public VerificationStage {
   StageCheck check(std::int64_t, const Candidate& c) override {
     const bool even = c.frame % 2 == 0;
     if (!even) ++rejected_now_;
-    return {even, -1, even ? "even" : "odd frame", 0.0};
+    return {even, -1, even ? "even" : "odd frame", 0.0, nullptr};
   }
   void end(std::int64_t query, const std::vector<Candidate>&) override {
     rejected_.resize(static_cast<std::size_t>(query));

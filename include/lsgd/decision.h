@@ -34,6 +34,7 @@
 
 #include <cstdint>
 #include <functional>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -170,6 +171,7 @@ struct Decision {
   Candidate best;
   LoopEvidence evidence;
   Ranking ranking;
+  std::shared_ptr<const LoopGeometry> geometry;  // of `best`, when a stage fitted one
   std::vector<StageVerdict> verdicts;  // in the order examined
 };
 

@@ -75,6 +75,10 @@ struct Result {
   // verdicts below say it in words.
   LoopStatus status = LoopStatus::kTooFewFrames;
   LoopEvidence evidence;  // what the score of `best` is made of
+  // The geometry of `best` when a stage fitted one (the geometric stage's
+  // matches, inlier mask and F or H; loop_geometry.h): a loop's relative pose
+  // without matching again (examples/relative_pose.cc). Null otherwise.
+  std::shared_ptr<const LoopGeometry> geometry;
   // The ranking no decision setting changes (decision.h): the candidate
   // appearance ranks first through the gates, scored by appearance (sigma),
   // and whether the confirming stages accept it. lsgd::eval computes R@100P

@@ -21,6 +21,7 @@
 
 #include "lsgd/image.h"
 #include "lsgd/options.h"
+#include "lsgd/loop_geometry.h"
 
 namespace lsgd {
 
@@ -64,6 +65,9 @@ struct GeometricCheck {
   int inliers = 0;     // inliers of the better model
   std::string model;   // "fundamental", "homography" or "" when none was fitted
   std::string reason;  // why it was accepted or rejected, for the Result
+  // The matches and the better model (null when none was fitted): c^T F q = 0
+  // or c ~ H q, q in `query`, c in `candidate`, original pixels.
+  std::shared_ptr<const LoopGeometry> geometry;
   double ms = 0;       // time spent in verify()
 };
 

@@ -19,6 +19,7 @@
 
 #include "lsgd/frame_store.h"
 #include "lsgd/image.h"
+#include "lsgd/loop_geometry.h"
 #include "lsgd/search.h"
 #include "lsgd/state.h"
 #include "lsgd/verification.h"
@@ -43,6 +44,9 @@ struct StageCheck {
   double support = -1;
   std::string reason;  // e.g. "3 of 3 previous queries agree" or "12 inliers < 20"
   double ms = 0;
+  // What the stage fitted, when it fits a model (null otherwise, or when no
+  // model could be fitted); Result::geometry carries the reported candidate's.
+  std::shared_ptr<const LoopGeometry> geometry;
 };
 
 class VerificationStage : public Stateful {

@@ -23,6 +23,7 @@ from ._lsgd import (  # noqa: F401
     InvalidArgument,
     IoError,
     LoopEvidence,
+    LoopGeometry,
     LoopStatus,
     Metrics,
     PrPoint,

@@ -268,6 +268,18 @@ def test_result_fields():
     assert all((x.status == lsgd.LoopStatus.LOOP) == x.loop for x in results)
     assert str(lsgd.LoopStatus.NOT_CONFIRMED) == "not_confirmed"
     assert "status=" in repr(r)
+    # A confirmed report carries its geometry: the matches and the model, as numpy arrays.
+    confirmed = [x for x in results if x.evidence.confirmed]
+    assert confirmed
+    for x in confirmed:
+        g = x.geometry
+        assert g.model in ("fundamental", "homography") and "LoopGeometry(" in repr(g)
+        assert g.matrix.shape == (3, 3) and g.matrix.dtype == np.float64
+        n = len(g.inliers)
+        assert g.query_points.shape == (n, 2) and g.candidate_points.shape == (n, 2)
+        assert g.query_points.dtype == np.float32 and g.inliers.dtype == np.bool_
+        assert int(g.inliers.sum()) == x.evidence.inliers
+    assert lsgd.Detector(search={"min_gap": 5}, verification={"stages": "temporal"}).process(route(1, 1)[0]).geometry is None
 
 
 def test_example_script_evaluates_and_plots(tmp_path):

@@ -24,7 +24,7 @@ class GeometricStage final : public VerificationStage {
 
   StageCheck check(std::int64_t query, const Candidate& candidate) override {
     const GeometricCheck c = verifier_.verify(query, candidate.frame);
-    return {c.accepted, static_cast<double>(c.inliers), c.reason, c.ms};
+    return {c.accepted, static_cast<double>(c.inliers), c.reason, c.ms, c.geometry};
   }
 
   // State, version 1: the frame's n keypoints as n * 2 float32 (x, y in

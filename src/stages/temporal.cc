@@ -79,7 +79,7 @@ class TemporalStage final : public VerificationStage {
   StageCheck check(std::int64_t query, const Candidate& candidate) override {
     const auto start = internal::now_ns();
     const TemporalVerifier::Check c = verifier_.agree(query, candidate);
-    return {c.accepted, -1, c.reason, internal::ms_since(start)};
+    return {c.accepted, -1, c.reason, internal::ms_since(start), nullptr};
   }
 
   // Only end() keeps anything (the query's place): discard() has nothing to forget.

@@ -133,6 +133,20 @@ lsgd::eval::FrameRecord record_of(const lsgd::Result& r) {
 
 }  // namespace
 
+// A Database Python can close before the garbage collector drops it (a
+// second writer on the same file in this process is refused while the first
+// is open): every call on a closed one is an InvalidArgument naming the file.
+struct PyDatabase {
+  explicit PyDatabase(lsgd::io::Database d) : db(std::make_unique<lsgd::io::Database>(std::move(d))), path(db->path()) {}
+  lsgd::io::Database& get() const {
+    if (!db) throw lsgd::InvalidArgument("database " + path + " is closed");
+    return *db;
+  }
+  void close() { db.reset(); }
+  std::unique_ptr<lsgd::io::Database> db;
+  std::string path;
+};
+
 PYBIND11_MODULE(_lsgd, m) {
   m.doc() = "lsgd: training-free visual loop closure detection (LSGDDN-LCD)";
   m.attr("__version__") = lsgd::version();
@@ -241,8 +255,66 @@ PYBIND11_MODULE(_lsgd, m) {
   // Replaces enum_'s own __str__ (a def() would only add an overload after it).
   status.attr("__str__") = py::cpp_function(
       [](lsgd::LoopStatus s) { return std::string(lsgd::to_string(s)); }, py::is_method(status));
+  py::class_<lsgd::Descriptor>(m, "Descriptor",
+      "A frame's descriptor (Detector.describe): one histogram per cell of its grid. "
+      "Descriptor.from_arrays builds one back from numpy arrays.")
+      .def_property_readonly("grid", [](const lsgd::Descriptor& d) { return py::make_tuple(d.grid.rows, d.grid.cols); })
+      .def_property_readonly("storage", [](const lsgd::Descriptor& d) { return std::string(lsgd::to_string(d.storage)); })
+      .def_property_readonly("histograms", [](const lsgd::Descriptor& d) -> py::array {
+             const auto cells = static_cast<py::ssize_t>(d.grid.cells());
+             if (d.storage == lsgd::HistogramStorage::kCompact) {
+               py::array_t<std::uint8_t> out({cells, py::ssize_t{lsgd::kCompactBins}});
+               std::copy(d.compact.begin(), d.compact.end(), out.mutable_data());
+               return out;
+             }
+             py::array_t<std::uint16_t> out({cells, py::ssize_t{lsgd::kBins}});
+             std::copy(d.hist.begin(), d.hist.end(), out.mutable_data());
+             return out;
+           }, "cells x 256 uint16 counts (exact), or cells x 128 uint8 (compact), cell-major")
+      .def_property_readonly("pixels", [](const lsgd::Descriptor& d) {
+             py::array_t<std::uint32_t> out(static_cast<py::ssize_t>(d.pixels.size()));
+             std::copy(d.pixels.begin(), d.pixels.end(), out.mutable_data());
+             return out;
+           }, "pixels per cell (exact; empty when compact)")
+      .def_readonly("cell_pixels", &lsgd::Descriptor::cell_pixels, "mean pixels per cell (compact)")
+      .def_static("from_arrays", [](py::array histograms, const py::object& pixels, py::tuple grid, double cell_pixels) {
+             lsgd::Descriptor d;
+             if (grid.size() != 2) throw lsgd::InvalidArgument("grid is (rows, cols)");
+             d.grid = {grid[0].cast<int>(), grid[1].cast<int>()};
+             if (d.grid.rows <= 0 || d.grid.cols <= 0 || d.grid.cells() > 1 << 20) {
+               throw lsgd::InvalidArgument("grid " + std::to_string(d.grid.rows) + " x " +
+                                           std::to_string(d.grid.cols) + " is not a descriptor's grid");
+             }
+             if (py::isinstance<py::array_t<std::uint8_t>>(histograms)) {
+               const auto h = py::array_t<std::uint8_t, py::array::c_style | py::array::forcecast>::ensure(histograms);
+               d.storage = lsgd::HistogramStorage::kCompact;
+               d.compact.assign(h.data(), h.data() + h.size());
+               d.cell_pixels = cell_pixels;
+             } else {
+               const auto h = py::array_t<std::uint16_t, py::array::c_style | py::array::forcecast>::ensure(histograms);
+               if (!h) throw lsgd::InvalidArgument("histograms is not an array of counts");
+               d.hist.assign(h.data(), h.data() + h.size());
+               const auto p = py::array_t<std::uint32_t, py::array::c_style | py::array::forcecast>::ensure(pixels);
+               if (!p) throw lsgd::InvalidArgument("an exact descriptor needs its pixels per cell");
+               d.pixels.assign(p.data(), p.data() + p.size());
+             }
+             d.check_consistent("Descriptor.from_arrays");
+             return d;
+           }, py::arg("histograms"), py::arg("pixels") = py::none(), py::arg("grid"), py::arg("cell_pixels") = 0.0,
+           "A descriptor from its arrays: uint16 histograms (cells x 256) with uint32 pixels per cell "
+           "(exact), or uint8 histograms (cells x 128) with cell_pixels (compact)");
+  m.def("similarity", [](const lsgd::Descriptor& a, const lsgd::Descriptor& b, const std::string& metric) {
+          if (a.grid != b.grid || a.storage != b.storage) {
+            throw lsgd::InvalidArgument("the descriptors differ in grid or storage");
+          }
+          return lsgd::similarity(a.view(), b.view(), lsgd::parse_similarity_metric(metric.c_str()));
+        }, py::arg("a"), py::arg("b"), py::arg("metric") = std::string(lsgd::to_string(lsgd::SimilarityOptions{}.metric)),
+        "Similarity of two descriptors (the detector's similarity.metric by default).");
   py::class_<lsgd::Result>(m, "Result")
       .def_readonly("frame", &lsgd::Result::frame)
+      .def_readonly("id", &lsgd::Result::id)
+      .def_readonly("stamp", &lsgd::Result::stamp)
+      .def_readonly("loop_id", &lsgd::Result::loop_id)
       .def_readonly("loop", &lsgd::Result::loop)
       .def_readonly("best", &lsgd::Result::best)
       .def_readonly("status", &lsgd::Result::status)
@@ -278,27 +350,29 @@ PYBIND11_MODULE(_lsgd, m) {
            "(nested or dotted), a YAML file name, or keyword arguments per section: "
            "Detector(search={'min_gap': 50, 'mode': 'nodes'}, verification={'stages': 'temporal'}).")
       .def("process",
-           [](lsgd::Detector& d, py::array image) {
+           [](lsgd::Detector& d, py::array image, std::int64_t id, double stamp) {
              // A strided view (a crop with a step, a transposed array) is copied once.
              if (!rows_dense(image)) image = py::array::ensure(image, py::array::c_style);
              if (!image) throw lsgd::InvalidArgument("the image is not a numpy array");
              const lsgd::ImageView view = image_view(image);
              py::gil_scoped_release release;  // other Python threads run meanwhile
-             return d.process(view);
+             return d.process(view, id, stamp);
            },
-           py::arg("image"),
+           py::arg("image"), py::arg("id") = -1, py::arg("stamp") = lsgd::kNoStamp,
            "Processes the next frame (uint8 numpy array: (H, W) gray, (H, W, 3) BGR or "
-           "(H, W, 4) BGRA) and returns its Result. Zero-copy when each row's pixels are "
-           "contiguous; the GIL is released while it runs.")
+           "(H, W, 4) BGRA) and returns its Result. id: the caller's id of the frame (above the "
+           "last; -1: the one after it), stamp: its time stamp (NaN: none); Result.id, .stamp and "
+           ".loop_id carry them. Zero-copy when each row's pixels are contiguous; the GIL is "
+           "released while it runs.")
       .def("query",
-           [](lsgd::Detector& d, py::array image) {
+           [](lsgd::Detector& d, py::array image, std::int64_t id, double stamp) {
              if (!rows_dense(image)) image = py::array::ensure(image, py::array::c_style);
              if (!image) throw lsgd::InvalidArgument("the image is not a numpy array");
              const lsgd::ImageView view = image_view(image);
              py::gil_scoped_release release;
-             return d.query(view);
+             return d.query(view, id, stamp);
            },
-           py::arg("image"),
+           py::arg("image"), py::arg("id") = -1, py::arg("stamp") = lsgd::kNoStamp,
            "The Result process() would give for the frame as the next one, with nothing "
            "stored and nothing changed (relocalisation; a map opened read-only). Result.frame "
            "is the id process() would give it.")
@@ -309,40 +383,70 @@ PYBIND11_MODULE(_lsgd, m) {
       .def("__len__", &lsgd::Detector::size)
       .def_property_readonly("nodes", &lsgd::Detector::nodes)
       .def_property_readonly("options", [](const lsgd::Detector& d) { return options_dict(d.options()); })
+      .def("describe",
+           [](lsgd::Detector& d, py::array image) {
+             if (!rows_dense(image)) image = py::array::ensure(image, py::array::c_style);
+             if (!image) throw lsgd::InvalidArgument("the image is not a numpy array");
+             const lsgd::ImageView view = image_view(image);
+             py::gil_scoped_release release;
+             return d.describe(view);
+           },
+           py::arg("image"), "The image's Descriptor as the detector would store it; nothing stored.")
+      .def("id_of", &lsgd::Detector::id_of, py::arg("frame"), "The caller's id of stored frame `frame`.")
+      .def("stamp_of", &lsgd::Detector::stamp_of, py::arg("frame"), "Its time stamp (NaN: none).")
+      .def("frame_of", &lsgd::Detector::frame_of, py::arg("id"),
+           "The stored frame of caller id `id` (-1: none).")
       .def("similarity", &lsgd::Detector::similarity, py::arg("a"), py::arg("b"),
            "Similarity of two stored frames with the configured metric.");
 
   // ---- the place database
-  py::class_<lsgd::io::Database>(m, "Database")
+  py::class_<PyDatabase>(m, "Database",
+      "The place database. close() (or leaving a `with` block) releases the file; a closed "
+      "Database refuses every call.")
       .def_static("create", [](const std::string& path, const py::object& options, const py::kwargs& kwargs) {
-             return lsgd::io::Database::create(path, make_options(options, kwargs));
+             return PyDatabase(lsgd::io::Database::create(path, make_options(options, kwargs)));
            }, py::arg("path"), py::arg("options") = py::none(),
            "Creates a new, empty database for detectors with these options.")
       .def_static("open", [](const std::string& path, bool writable) {
-             return lsgd::io::Database::open(path, writable ? lsgd::io::Database::Mode::kReadWrite
-                                                            : lsgd::io::Database::Mode::kReadOnly);
+             return PyDatabase(lsgd::io::Database::open(
+                 path, writable ? lsgd::io::Database::Mode::kReadWrite : lsgd::io::Database::Mode::kReadOnly));
            }, py::arg("path"), py::arg("writable") = true)
-      .def("detector", [](const lsgd::io::Database& db, bool rebuild_index) {
-             auto d = std::make_unique<lsgd::Detector>(db.options());
-             db.restore(*d, rebuild_index ? lsgd::io::IndexUse::kRebuild : lsgd::io::IndexUse::kSaved);
+      .def("detector", [](const PyDatabase& db, bool rebuild_index) {
+             auto d = std::make_unique<lsgd::Detector>(db.get().options());
+             db.get().restore(*d, rebuild_index ? lsgd::io::IndexUse::kRebuild : lsgd::io::IndexUse::kSaved);
              return d;
            }, py::arg("rebuild_index") = false,
            "A detector with the stored options and every stored frame restored (and the saved "
            "search index, unless rebuild_index).")
-      .def("restore", [](const lsgd::io::Database& db, lsgd::Detector& d, bool rebuild_index) {
-             db.restore(d, rebuild_index ? lsgd::io::IndexUse::kRebuild : lsgd::io::IndexUse::kSaved);
+      .def("restore", [](const PyDatabase& db, lsgd::Detector& d, bool rebuild_index) {
+             db.get().restore(d, rebuild_index ? lsgd::io::IndexUse::kRebuild : lsgd::io::IndexUse::kSaved);
            }, py::arg("detector"), py::arg("rebuild_index") = false)
-      .def("save_index", &lsgd::io::Database::save_index, py::arg("detector"),
+      .def("save_index", [](PyDatabase& db, const lsgd::Detector& d) { return db.get().save_index(d); },
+           py::arg("detector"),
            "Saves the detector's search index (index mode's graph) so a resume need not rebuild "
            "it; returns the frames it covers.")
-      .def("append", &lsgd::io::Database::append, py::arg("detector"), py::arg("result"),
-           py::arg("session"), py::arg("name") = "", py::arg("frame") = -1,
-           "Stores the detector's last frame (call right after process()).")
-      .def_property_readonly("path", &lsgd::io::Database::path)
-      .def_property_readonly("frames", &lsgd::io::Database::frames)
-      .def_property_readonly("last_session", &lsgd::io::Database::last_session)
-      .def_property_readonly("options", [](const lsgd::io::Database& db) { return options_dict(db.options()); })
-      .def("frame_ids", &lsgd::io::Database::frame_ids);
+      .def("append", [](PyDatabase& db, const lsgd::Detector& d, const lsgd::Result& r, std::int64_t session,
+                        const std::string& name, std::int64_t frame) {
+             db.get().append(d, r, session, name, frame);
+           }, py::arg("detector"), py::arg("result"), py::arg("session"), py::arg("name") = "",
+           py::arg("frame") = -1, "Stores the detector's last frame (call right after process()).")
+      .def("close", &PyDatabase::close,
+           "Checkpoints and releases the file (a writer's lock included); again: nothing.")
+      .def_property_readonly("closed", [](const PyDatabase& db) { return !db.db; })
+      .def("__enter__", [](PyDatabase& db) -> PyDatabase& { return db; }, py::return_value_policy::reference)
+      .def("__exit__", [](PyDatabase& db, const py::object&, const py::object&, const py::object&) {
+             db.close();
+             return false;
+           })
+      .def_property_readonly("path", [](const PyDatabase& db) { return db.path; })
+      .def_property_readonly("frames", [](const PyDatabase& db) { return db.get().frames(); })
+      .def_property_readonly("last_session", [](const PyDatabase& db) { return db.get().last_session(); })
+      .def_property_readonly("options", [](const PyDatabase& db) { return options_dict(db.get().options()); })
+      .def("frame_ids", [](const PyDatabase& db) { return db.get().frame_ids(); })
+      .def("__repr__", [](const PyDatabase& db) {
+        return "Database('" + db.path + "', " +
+               (db.db ? std::to_string(db.db->frames()) + " frames)" : std::string("closed)"));
+      });
 
   // ---- images and sequences
   m.def("read_image", [](const std::string& path) { return mat_to_array(lsgd::io::read_image(path)); },

@@ -7,6 +7,8 @@
 
 #include "internal/check.h"
 #include "internal/clock.h"
+#include "internal/names.h"
+#include "lsgd/limits.h"
 
 namespace lsgd {
 using internal::ms_since;
@@ -40,7 +42,11 @@ const OptionField<DetectorOptions>& field(const std::string& key) {
         known += (known.empty() ? "" : ", ") + g.name;
       }
     }
+    std::vector<std::string> keys;
+    for (const auto& g : DetectorOptions::fields()) keys.push_back(g.name);
+    const std::string guess = internal::nearest(key, keys);
     internal::throw_invalid("unknown option '", key, "'",
+                            guess.empty() ? std::string() : "; did you mean '" + guess + "'?",
                             known.empty() ? std::string(" (see lsgd options)")
                                           : " (" + section + " has " + known + ")");
   }
@@ -126,34 +132,135 @@ class Detector::Exclusive {
   std::atomic<bool>& busy_;
 };
 
-Result Detector::process(const cv::Mat& frame) {
+Result Detector::process(const cv::Mat& frame) { return process(frame, -1, kNoStamp); }
+Result Detector::process(const ImageView& frame) { return process(frame, -1, kNoStamp); }
+Result Detector::query(const cv::Mat& frame) { return query(frame, -1, kNoStamp); }
+Result Detector::query(const ImageView& frame) { return query(frame, -1, kNoStamp); }
+
+Result Detector::process(const cv::Mat& frame, std::int64_t id, double stamp) {
   const Exclusive exclusive(busy_, "process");
   const std::int64_t start = now_ns();
+  const std::int64_t given = next_id(id, stamp);
   to_gray(frame, gray_);
-  return process_gray(ms_since(start), start, true);
+  return process_gray(ms_since(start), start, true, given, stamp);
 }
 
-Result Detector::process(const ImageView& frame) {
+Result Detector::process(const ImageView& frame, std::int64_t id, double stamp) {
   const Exclusive exclusive(busy_, "process");
   const std::int64_t start = now_ns();
+  const std::int64_t given = next_id(id, stamp);
   to_gray(frame, gray_);
-  return process_gray(ms_since(start), start, true);
+  return process_gray(ms_since(start), start, true, given, stamp);
 }
 
-Result Detector::query(const cv::Mat& frame) {
+Result Detector::query(const cv::Mat& frame, std::int64_t id, double stamp) {
   const Exclusive exclusive(busy_, "query");
   check_answers_queries();
   const std::int64_t start = now_ns();
+  const std::int64_t given = next_id(id, stamp);
   to_gray(frame, gray_);
-  return process_gray(ms_since(start), start, false);
+  return process_gray(ms_since(start), start, false, given, stamp);
 }
 
-Result Detector::query(const ImageView& frame) {
+Result Detector::query(const ImageView& frame, std::int64_t id, double stamp) {
   const Exclusive exclusive(busy_, "query");
   check_answers_queries();
   const std::int64_t start = now_ns();
+  const std::int64_t given = next_id(id, stamp);
   to_gray(frame, gray_);
-  return process_gray(ms_since(start), start, false);
+  return process_gray(ms_since(start), start, false, given, stamp);
+}
+
+Descriptor Detector::describe(const cv::Mat& frame) {
+  const Exclusive exclusive(busy_, "describe");
+  to_gray(frame, gray_);
+  return describe_gray();
+}
+
+Descriptor Detector::describe(const ImageView& frame) {
+  const Exclusive exclusive(busy_, "describe");
+  to_gray(frame, gray_);
+  return describe_gray();
+}
+
+Descriptor Detector::describe_gray() {
+  if (store_.size() > 0 && (gray_.width != width_ || gray_.height != height_)) {
+    internal::throw_invalid("the frame is ", gray_.width, "x", gray_.height,
+                            " but the stored frames are ", width_, "x", height_,
+                            ": every frame must have the same size");
+  }
+  segment_and_describe(segmenter_, gray_, segmentation_, exact_, describe_scratch_);
+  if (options_.descriptor.storage == HistogramStorage::kCompact) {
+    Descriptor out;
+    compact(exact_, out);
+    return out;
+  }
+  return exact_;
+}
+
+std::int64_t Detector::next_id(std::int64_t id, double stamp) const {
+  if (std::isinf(stamp)) internal::throw_invalid("the frame's time stamp is ", stamp, ": give a finite one, or none");
+  const std::int64_t last = tags_.last();
+  if (id < 0) {
+    if (id != -1) internal::throw_invalid("frame id ", id, " is negative (-1: the one after the last)");
+    if (last >= kMaxFrameId) internal::throw_invalid("frame ids are exhausted (the last is ", last, ")");
+    return last + 1;
+  }
+  if (id <= last || id > kMaxFrameId) {
+    internal::throw_invalid("frame id ", id, " must be above the last frame's id ", last,
+                            " and at most ", kMaxFrameId);
+  }
+  return id;
+}
+
+std::int64_t Detector::id_of(std::int64_t frame) const {
+  if (frame < 0 || frame >= store_.size()) {
+    internal::throw_invalid("id_of: frame ", frame, " is not stored (", store_.size(), " frames)");
+  }
+  return tags_.ids[static_cast<std::size_t>(frame)];
+}
+
+double Detector::stamp_of(std::int64_t frame) const {
+  if (frame < 0 || frame >= store_.size()) {
+    internal::throw_invalid("stamp_of: frame ", frame, " is not stored (", store_.size(), " frames)");
+  }
+  return tags_.stamps[static_cast<std::size_t>(frame)];
+}
+
+std::int64_t Detector::frame_of(std::int64_t id) const {
+  const auto at = std::lower_bound(tags_.ids.begin(), tags_.ids.end(), id);
+  return at != tags_.ids.end() && *at == id ? static_cast<std::int64_t>(at - tags_.ids.begin()) : -1;
+}
+
+void Detector::FrameTags::save_frame(std::int64_t frame, StateWriter& out) const {
+  out.put_i64(ids.at(static_cast<std::size_t>(frame)));
+  out.put_f64(stamps.at(static_cast<std::size_t>(frame)));
+}
+
+void Detector::FrameTags::check_frame(std::int64_t, int, int, std::uint32_t version,
+                                      StateReader in) const {
+  if (!in.present()) return;
+  check_state_version(in.what(), name(), version, 1);
+  const std::int64_t id = in.get_i64();
+  const double stamp = in.get_f64();
+  in.finish();
+  if (id <= last() || id > kMaxFrameId) {
+    internal::throw_invalid(in.what(), ": id ", id, " is not above the last frame's id ", last());
+  }
+  if (given_id >= 0 && id != given_id) {
+    internal::throw_invalid(in.what(), ": id ", id, ", but its row says ", given_id);
+  }
+  if (std::isinf(stamp)) internal::throw_invalid(in.what(), ": time stamp ", stamp);
+}
+
+void Detector::FrameTags::restore_frame(std::int64_t, int, int, std::uint32_t, StateReader in) {
+  if (in.present()) {
+    ids.push_back(in.get_i64());
+    stamps.push_back(in.get_f64());
+    return;
+  }
+  ids.push_back(given_id >= 0 ? given_id : last() + 1);
+  stamps.push_back(kNoStamp);
 }
 
 void Detector::check_answers_queries() const {
@@ -177,7 +284,8 @@ double Detector::similarity(std::int64_t a, std::int64_t b) const {
   return lsgd::similarity(store_.view(a), store_.view(b), options_.similarity.metric);
 }
 
-Result Detector::process_gray(double convert_ms, std::int64_t start_ns, bool store) {
+Result Detector::process_gray(double convert_ms, std::int64_t start_ns, bool store, std::int64_t id,
+                               double stamp) {
   if (store_.size() > 0 && (gray_.width != width_ || gray_.height != height_)) {
     internal::throw_invalid("the frame is ", gray_.width, "x", gray_.height,
                             " but the first frame was ", width_, "x", height_,
@@ -185,6 +293,8 @@ Result Detector::process_gray(double convert_ms, std::int64_t start_ns, bool sto
   }
   Result result;
   result.frame = store_.size();
+  result.id = id;
+  result.stamp = stamp;
   result.timings.convert_ms = convert_ms;
 
   // The histograms are counted during the segmentation's last pass, so
@@ -226,6 +336,7 @@ Result Detector::process_gray(double convert_ms, std::int64_t start_ns, bool sto
   t = now_ns();
   verify(evidence, store, result);
   result.timings.verify_ms = ms_since(t);
+  result.loop_id = result.best.frame >= 0 ? tags_.ids[static_cast<std::size_t>(result.best.frame)] : -1;
   if (!store) {
     result.timings.total_ms = ms_since(start_ns);
     return result;
@@ -236,6 +347,8 @@ Result Detector::process_gray(double convert_ms, std::int64_t start_ns, bool sto
   // gets a new one rather than an error.
   store_.add(descriptor_, std::clamp<std::int64_t>(result.node, 0, store_.groups()));
   search_->end(result.frame, places_);
+  tags_.ids.push_back(id);
+  tags_.stamps.push_back(stamp);
   if (result.frame == 0) width_ = gray_.width, height_ = gray_.height;
 
   result.timings.total_ms = ms_since(start_ns);
@@ -336,6 +449,7 @@ std::vector<Stateful*> Detector::stateful() const {
     if (stage->has_state()) out.push_back(stage.get());
   }
   out.push_back(const_cast<LoopDecision*>(&decision_));
+  out.push_back(const_cast<FrameTags*>(&tags_));
   return out;
 }
 
@@ -360,7 +474,7 @@ void Detector::restore_index(const std::uint8_t* data, std::size_t size) {
 }
 
 void Detector::restore_frame(int width, int height, const Descriptor& descriptor,
-                             const std::vector<std::uint8_t>& state) {
+                             const std::vector<std::uint8_t>& state, std::int64_t id) {
   const Exclusive exclusive(busy_, "restore_frame");
   const std::int64_t frame = store_.size();
   if (width <= 0 || height <= 0 || (frame > 0 && (width != width_ || height != height_))) {
@@ -418,6 +532,11 @@ void Detector::restore_frame(int width, int height, const Descriptor& descriptor
     }
     return c->state_version();
   };
+  if (id < -1 || id > kMaxFrameId || (id >= 0 && id <= tags_.last())) {
+    internal::throw_invalid("restore_frame: frame ", frame, "'s id ", id, " is not above the last frame's id ",
+                            tags_.last());
+  }
+  tags_.given_id = id;
   for (const Stateful* c : components) c->check_frame(frame, width, height, version(c), reader(c));
   for (Stateful* c : components) c->restore_frame(frame, width, height, version(c), reader(c));
   // The search's group places the frame beside the group's other frames.

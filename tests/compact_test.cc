@@ -293,7 +293,8 @@ TEST(CompactDetector, RestoreFramePlacesFramesByNode) {
   EXPECT_EQ(d.size(), 9);
   for (std::int64_t f = 0; f < 9; ++f) {
     // Saved as restored: the node, then the decision (no loop, no ranking
-    // track: version 2 writes both).
+    // track: version 2 writes both), then the frame's id (its number: none
+    // was given) and no time stamp.
     StateWriter w;
     w.put_i64(d.search().group_of(f));
     StateWriter loop;
@@ -301,7 +302,11 @@ TEST(CompactDetector, RestoreFramePlacesFramesByNode) {
     loop.put_f64(0);
     loop.put_i64(-1);
     loop.put_f64(0);
-    EXPECT_EQ(d.frame_state(f), records({{kNodesSearch, 1, w.bytes()}, {"decision", 2, loop.bytes()}}));
+    StateWriter tag;
+    tag.put_i64(f);
+    tag.put_f64(kNoStamp);
+    EXPECT_EQ(d.frame_state(f), records({{kNodesSearch, 1, w.bytes()}, {"decision", 2, loop.bytes()},
+                                         {"frame", 1, tag.bytes()}}));
   }
   EXPECT_THROW(d.frame_state(9), InvalidArgument);
   EXPECT_THROW(d.search().members(3), InvalidArgument);

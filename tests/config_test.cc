@@ -170,7 +170,10 @@ TEST(ParseConfig, PartialConfigKeepsTheBase) {
 
 TEST(ParseConfig, UnknownKeysAreFormatErrors) {
   expect_error<FormatError>("segmentaton:\n  iterations: 3\n",
-                            {kSource, "unknown key 'segmentaton'", "segmentation, descriptor, similarity"});
+                            {kSource, "unknown key 'segmentaton'; did you mean 'segmentation'?",
+                             "segmentation, descriptor, similarity"});
+  expect_error<FormatError>("search:\n  min_gapp: 3\n",
+                            {kSource, "unknown key 'search.min_gapp'; did you mean 'search.min_gap'?"});
   expect_error<FormatError>("search:\n  foo: 1\n",
                             {kSource, "unknown key 'search.foo'", "mode, min_gap, top_n, nodes"});
   expect_error<FormatError>("search:\n  nodes: {gamma: 1}\n",

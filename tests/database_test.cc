@@ -8,10 +8,12 @@
 
 #include <gtest/gtest.h>
 #include <sqlite3.h>
+#include <sys/wait.h>
 #include <unistd.h>
 #include <zlib.h>
 
 #include <algorithm>
+#include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
@@ -861,7 +863,8 @@ TEST(Database, Format2IsReadAndUpgradedInPlace) {
     EXPECT_EQ(db.info().format_version, kDatabaseFormatVersion);
     Detector d(db.options());
     db.restore(d);
-    const Result r = d.process(frame(12));
+    EXPECT_EQ(d.id_of(11), 11);  // the row's id: format 2 kept no ids in the state
+    const Result r = d.process(frame(12), 40);
     db.append(d, r, 1, "later", 40);
   }
   const Database again = Database::open(path, Database::Mode::kReadOnly);
@@ -1064,26 +1067,87 @@ TEST(DatabaseWal, ALostOrCutLogOpensWhatRemainsAndSaysSo) {
   EXPECT_NO_THROW(db.restore(d));
 }
 
-// One writer at a time; readers beside it.
+// One writer at a time, in this process or another; readers beside it.
 TEST(DatabaseWal, ASecondWriterIsToldAnotherProcessIsWriting) {
   const std::string path = temp_path("two_writers");
   DetectorOptions o = options(kExhaustiveSearch, "none");
   Database first = Database::create(path, o);
-  const std::string m = [&] {
+  const auto refusal = [&] {
     try {
       Database::open(path);
       return std::string();
     } catch (const IoError& e) {
       return std::string(e.what());
     }
-  }();
-  EXPECT_NE(m.find("another process is writing to it"), std::string::npos) << m;
+  };
+  const std::string here = refusal();
+  EXPECT_NE(here.find("is already open for writing in this process"), std::string::npos) << here;
+  // Another process: exit status 0 when it was told so.
+  const pid_t child = ::fork();
+  ASSERT_GE(child, 0);
+  if (child == 0) {
+    const std::string there = refusal();
+    ::_exit(there.find("another process is writing to it") != std::string::npos ? 0 : 1);
+  }
+  int status = -1;
+  ASSERT_EQ(::waitpid(child, &status, 0), child);
+  EXPECT_TRUE(WIFEXITED(status) && WEXITSTATUS(status) == 0);
+  {
+    // Closed, it opens again in this process.
+    const std::string again = temp_path("closed_writer");
+    { Database closed = Database::create(again, o); }
+    EXPECT_NO_THROW(Database::open(again));
+  }
   Detector d(o);
   run(d, 0, 5, &first);
   const Database reader = Database::open(path, Database::Mode::kReadOnly);
   EXPECT_EQ(reader.frames(), 5);
   EXPECT_NE(reader.note().find("a writer has it open"), std::string::npos) << reader.note();
   EXPECT_NO_THROW(reader.verify());
+}
+
+// The caller's ids (with gaps) and time stamps survive the database, and a
+// frame appended under another id than the detector's is refused.
+TEST(Database, CallersIdsAndStampsAreKept) {
+  const std::string path = temp_path("ids_and_stamps");
+  const DetectorOptions o = options(kExhaustiveSearch, "temporal,geometric");
+  Detector writer(o);
+  std::vector<Result> expected;
+  {
+    Database db = Database::create(path, o);
+    for (std::int64_t i = 0; i < 60; ++i) {
+      const std::int64_t id = 1000 + 3 * i;  // keyframe ids with gaps
+      const Result r = writer.process(frame(i), id, 0.25 * static_cast<double>(i));
+      EXPECT_EQ(r.id, id);
+      EXPECT_EQ(r.stamp, 0.25 * static_cast<double>(i));
+      EXPECT_EQ(r.loop_id, r.best.frame >= 0 ? 1000 + 3 * r.best.frame : -1);
+      db.append(writer, r, 0, "frame");
+    }
+    const Result other = writer.process(frame(60), 2000);
+    EXPECT_NE(message_of<InvalidArgument>([&] { db.append(writer, other, 0, "frame", 2001); })
+                  .find("frame id 2001 is not the detector's id 2000"),
+              std::string::npos);
+    for (std::int64_t i = 61; i < 90; ++i) expected.push_back(writer.process(frame(i)));
+  }
+  const Database db = Database::open(path, Database::Mode::kReadOnly);
+  EXPECT_EQ(db.frame_ids().front(), 1000);
+  EXPECT_EQ(db.frame_ids().back(), 1177);
+  Detector restored(o);
+  db.restore(restored);
+  for (std::int64_t f = 0; f < 60; ++f) {
+    EXPECT_EQ(restored.id_of(f), 1000 + 3 * f);
+    EXPECT_EQ(restored.stamp_of(f), 0.25 * static_cast<double>(f));
+    EXPECT_EQ(restored.frame_of(1000 + 3 * f), f);
+  }
+  EXPECT_EQ(restored.frame_of(1001), -1);
+  // The frame the writer did not store goes in again, and the rest follows as before.
+  restored.process(frame(60), 2000);
+  for (std::int64_t i = 61; i < 90; ++i) {
+    const Result r = restored.process(frame(i));
+    expect_same(r, expected[static_cast<std::size_t>(i - 61)]);
+    EXPECT_EQ(r.id, 2000 + (i - 60));
+    EXPECT_TRUE(std::isnan(r.stamp));
+  }
 }
 
 // ---- the command line

@@ -193,5 +193,40 @@ TEST_F(DetectionsTest, EmptyOrMissingFilesAreErrors) {
             std::string::npos);
 }
 
+// A top-k file (lsgd match): a query's rows are its candidates by rank, rank
+// 1 the reported match, in any row order; a repeated rank or a query without
+// rank 1 is refused by file and line.
+TEST_F(DetectionsTest, TopKRowsAreTheCandidatesByRank) {
+  const std::string path = write("topk.csv",
+                                 "query,match,score,similarity,rank\n"
+                                 "5,2,1.5,0.9,2\n"
+                                 "5,1,2.5,0.95,1\n"
+                                 "5,0,0.5,0.8,3\n"
+                                 "6,-1,,0,1\n");
+  const std::vector<FrameRecord> r = read_detections(path, 7);
+  EXPECT_EQ(r[5].reported.frame, 1);
+  EXPECT_EQ(r[5].reported.score, 2.5);
+  ASSERT_EQ(r[5].candidates.size(), 3u);
+  EXPECT_EQ(r[5].candidates[1].frame, 2);
+  EXPECT_EQ(r[5].candidates[2].frame, 0);
+  EXPECT_EQ(r[6].reported.frame, -1);
+  EXPECT_TRUE(r[6].candidates.empty());
+  const std::string twice = write("twice.csv", "query,match,score,rank\n5,1,1,1\n5,2,1,1\n");
+  EXPECT_NE(test::message_of<FormatError>([&] { read_detections(twice, 7); })
+                .find(twice + ":3: query 5 already has rank 1 on line 2"),
+            std::string::npos);
+  const std::string no_first = write("nofirst.csv", "query,match,score,rank\n5,1,1,2\n");
+  EXPECT_NE(test::message_of<FormatError>([&] { read_detections(no_first, 7); })
+                .find("query 5 has ranks from 2 but no rank 1"),
+            std::string::npos);
+  const std::string bad = write("badrank.csv", "query,match,score,rank\n5,1,1,0\n");
+  EXPECT_NE(test::message_of<FormatError>([&] { read_detections(bad, 7); }).find("rank '0' is not a rank"),
+            std::string::npos);
+  // Without a rank column a repeated query stays an error.
+  const std::string plain = write("plain.csv", "query,match,score\n5,1,1\n5,2,1\n");
+  EXPECT_NE(test::message_of<FormatError>([&] { read_detections(plain, 7); }).find("already has a row on line 2"),
+            std::string::npos);
+}
+
 }  // namespace
 }  // namespace lsgd::eval

@@ -9,7 +9,9 @@
 #include <cmath>
 #include <cstdint>
 #include <atomic>
+#include <limits>
 #include <map>
+#include <utility>
 #include <string>
 #include <thread>
 #include <vector>
@@ -680,6 +682,75 @@ TEST(Detector, ALoopCarriesItsGeometry) {
     if (std::string(stages) != "temporal") {
       EXPECT_GT(loops, 10);
     }
+  }
+}
+
+// The caller's ids and stamps: carried into the Result, mapped both ways,
+// continued when not given, and refused (detector unchanged) when not
+// increasing or not finite.
+TEST(Detector, CallersIdsAndStamps) {
+  DetectorOptions o;
+  o.search.min_gap = 20;
+  Detector d(o);
+  std::int64_t loops = 0;
+  for (std::int64_t i = 0; i < test::world().frames(); ++i) {
+    const bool given = i < 150;
+    const Result r = given ? d.process(test::frame(i), 10 * i + 7, 0.1 * static_cast<double>(i))
+                           : d.process(test::frame(i));
+    const std::int64_t id = given ? 10 * i + 7 : 10 * 149 + 7 + (i - 149);
+    EXPECT_EQ(r.frame, i);
+    EXPECT_EQ(r.id, id);
+    EXPECT_EQ(d.id_of(i), id);
+    EXPECT_EQ(d.frame_of(id), i);
+    if (given) {
+      EXPECT_EQ(r.stamp, 0.1 * static_cast<double>(i));
+    } else {
+      EXPECT_TRUE(std::isnan(r.stamp));
+    }
+    EXPECT_EQ(r.loop_id, r.best.frame >= 0 ? d.id_of(r.best.frame) : -1);
+    loops += r.loop ? 1 : 0;
+  }
+  EXPECT_GT(loops, 0);
+  const std::int64_t n = d.size(), last = d.id_of(n - 1);
+  for (const auto& [id, stamp] : {std::pair<std::int64_t, double>{last, 0.0}, {last - 5, 0.0}, {-2, 0.0},
+                                  {last + 1, std::numeric_limits<double>::infinity()}}) {
+    EXPECT_THROW(d.process(test::frame(0), id, stamp), InvalidArgument) << id;
+    EXPECT_EQ(d.size(), n);
+  }
+  EXPECT_NE(test::message_of<InvalidArgument>([&] { d.process(test::frame(0), last); })
+                .find("frame id " + std::to_string(last) + " must be above the last frame's id"),
+            std::string::npos);
+  EXPECT_EQ(d.frame_of(-1), -1);
+  EXPECT_THROW(d.id_of(n), InvalidArgument);
+  // A query carries the id it was given, and changes nothing.
+  const Result q = d.query(test::frame(5), last + 100, 9.5);
+  EXPECT_EQ(q.id, last + 100);
+  EXPECT_EQ(q.stamp, 9.5);
+  EXPECT_EQ(d.process(test::frame(5)).id, last + 1);
+}
+
+// describe(): the descriptor process() stores, with nothing stored, in both storages.
+TEST(Detector, DescribeGivesTheStoredDescriptorAndStoresNothing) {
+  for (const HistogramStorage storage : {HistogramStorage::kExact, HistogramStorage::kCompact}) {
+    DetectorOptions o = small_options();
+    o.descriptor.storage = storage;
+    Detector d(o);
+    for (int i = 0; i < 5; ++i) {
+      const cv::Mat f = random_frame(900 + i);
+      const Descriptor x = d.describe(f);
+      EXPECT_EQ(d.size(), i);
+      d.process(f);
+      const DescriptorView stored = d.store().view(i), own = x.view();
+      ASSERT_EQ(own.cells, stored.cells);
+      if (storage == HistogramStorage::kCompact) {
+        EXPECT_TRUE(std::equal(own.compact, own.compact + own.cells * kCompactBins, stored.compact));
+      } else {
+        EXPECT_TRUE(std::equal(own.hist, own.hist + own.cells * kBins, stored.hist));
+        EXPECT_TRUE(std::equal(own.pixels, own.pixels + own.cells, stored.pixels));
+      }
+      EXPECT_EQ(similarity(own, stored, o.similarity.metric), similarity(stored, stored, o.similarity.metric));
+    }
+    EXPECT_THROW(d.describe(random_frame(1, CV_8UC3, kW * 2, kH)), InvalidArgument);
   }
 }
 

@@ -89,6 +89,60 @@ fs::path ShortStreet::dir_;
 std::int64_t ShortStreet::frames_ = 0;
 lsgd::eval::GroundTruth ShortStreet::gt_;
 
+// lsgd match: the street's revisits (frames 90 on) as a query traverse
+// against its first 90 frames; the top-k file scores with lsgd eval
+// --detections, its ranks giving R@N; another frame size is refused.
+TEST_F(ShortStreet, MatchOneTraverseAgainstAnother) {
+  std::ifstream all(dir_ / "sequence.txt");
+  std::ofstream ref(kTmp / "ref.txt"), query(kTmp / "query.txt");
+  std::string line;
+  for (int i = 0; std::getline(all, line); ++i) {
+    // Relative image paths are the list's own: written absolute here.
+    const std::string image = fs::path(line).is_absolute() ? line : (dir_ / line).string();
+    (i < 90 ? ref : query) << image << "\n";
+  }
+  ref.close();
+  query.close();
+  const CmdResult r = lsgd("match --reference " + q(kTmp / "ref.txt") + " --query " + q(kTmp / "query.txt") +
+                           " --top-k 5 --output " + q(kTmp / "match.csv"));
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_NE(r.err.find("query ids from 90"), std::string::npos) << r.err;
+  std::ifstream rows(kTmp / "match.csv");
+  std::getline(rows, line);
+  EXPECT_EQ(line, "query,match,score,similarity,rank");
+  std::int64_t n = 0;
+  for (; std::getline(rows, line); ++n) {
+    if (n == 0) {
+      EXPECT_EQ(line.rfind("90,", 0), 0u) << line;
+    }
+  }
+  EXPECT_EQ(n, 5 * (frames_ - 90));
+  // The ground truth between the traverses: query frames 90 on, reference frames before 90.
+  {
+    std::ifstream in(dir_ / "groundtruth.txt");
+    std::ofstream out(kTmp / "between.txt");
+    for (std::string pair; std::getline(in, pair);) {
+      std::int64_t a = -1, b = -1;
+      if (pair.empty() || pair[0] == '#' || !(std::istringstream(pair) >> a >> b)) continue;
+      if (a >= 90 && b < 90) out << a << " " << b << "\n";
+    }
+  }
+  const fs::path json = kTmp / "match.json";
+  const CmdResult e = lsgd("eval --detections " + q(kTmp / "match.csv") + " --gt " + q(kTmp / "between.txt") +
+                           " --frames " + std::to_string(frames_) + " --min-gap 0 --json " + q(json));
+  ASSERT_EQ(e.code, 0) << e.err;
+  const auto j = read_json(json);
+  EXPECT_GT(j["recall_at_1"].get<double>(), 0.3);
+  EXPECT_GT(j["recall_at_5"].get<double>(), j["recall_at_1"].get<double>());
+  // A query traverse of another size is refused, naming the image.
+  const fs::path small = kTmp / "small";
+  fs::create_directories(small);
+  write_image(small / "a.png", 1);
+  const CmdResult other = lsgd("match --reference " + q(kTmp / "ref.txt") + " --query " + q(small));
+  EXPECT_EQ(other.code, 1);
+  EXPECT_NE(other.err.find("is 64x48, the first reference image 160x120"), std::string::npos) << other.err;
+}
+
 TEST_F(ShortStreet, RunCsvScoredAsDetectionsMatchesEval) {
   const fs::path online = kTmp / "online.json", offline = kTmp / "offline.json";
   const CmdResult a = lsgd("eval --sequence " + q(dir_ / "sequence.txt") + common(online));

@@ -361,8 +361,25 @@ TEST(Report, DeclaredLoopsAndWarningsAreShown) {
   EXPECT_EQ(tag_balance_error(html), "");
   EXPECT_EQ(count(html, "<circle class='fp'"), 1u);
   EXPECT_EQ(count(html, "<circle class='tp'"), 1u);
-  EXPECT_NE(html.find("loops declared by the system"), std::string::npos);
+  EXPECT_NE(html.find("<th>Loops marked</th><td>the loops the system declared with its own settings "
+                      "(no ground truth involved): "),
+            std::string::npos);
   EXPECT_NE(html.find("false loops declared"), std::string::npos);
+  // Issue 33's wording: the phrase fits each sentence it is in ...
+  EXPECT_EQ(html.find("at the loops declared"), std::string::npos);
+  EXPECT_EQ(html.find("at the the"), std::string::npos);
+  EXPECT_NE(html.find("the ground-truth loops (outlined) and the loops the system declared"),
+            std::string::npos);
+  // ... the dashed line is a score, not "the loops declared" ...
+  EXPECT_NE(html.find("dashed: the lowest loop score declared, "), std::string::npos);
+  EXPECT_EQ(html.find("dashed: the loops"), std::string::npos);
+  // ... the histogram of every report does not call a report below the line a false positive ...
+  EXPECT_EQ(html.find("false positive</text>"), std::string::npos);
+  EXPECT_NE(html.find("a wrong place scored below the loops marked is no false loop"), std::string::npos);
+  // ... the cards say what they are, and a missed revisit shows its score.
+  EXPECT_NE(html.find("P@100R: the precision at 100 % recall"), std::string::npos);
+  EXPECT_NE(html.find("PRT: AP / (1 + 10 t)"), std::string::npos);
+
   EXPECT_NE(html.find("1x1 grid &lt;&amp;&gt;"), std::string::npos);
   EXPECT_NE(html.find("class='warning'"), std::string::npos);
 }
@@ -397,6 +414,7 @@ TEST(Report, TrajectoryOnlyWithPoses) {
   EXPECT_EQ(count(svg, "<line class='tp'"), loops - wrong) << "one line per loop found";
   EXPECT_EQ(count(svg, "<line class='fp'"), wrong);
   EXPECT_EQ(tag_balance_error(html), "");
+  EXPECT_NE(html.find("lines join each of the reports scoring at least"), std::string::npos);
 }
 
 // Without poses the scores over the run stand in for the trajectory: one
@@ -458,6 +476,10 @@ TEST(Report, ExampleThumbnailsAndWhatMadeTheRun) {
   EXPECT_GE(thumbs, 6u);                                 // 3 true loops, 2 frames each
   EXPECT_LE(thumbs, 3u * 2 + 3 * 3 + 3 * 3);            // at most 3 of each kind
   EXPECT_NE(html.find("Missed revisits ("), std::string::npos);
+  // A missed revisit shows the score it reached and whether it was the right place.
+  const std::size_t missed = html.find("Missed revisits (");
+  EXPECT_NE(html.find("score ", missed), std::string::npos) << "a missed revisit without its score";
+  EXPECT_NE(html.find(" place", missed), std::string::npos);
   const std::size_t jpeg = html.find("src='data:image/jpeg;base64,") + 28;
   const std::vector<uchar> bytes = decode_base64(html.substr(jpeg, html.find('\'', jpeg) - jpeg));
   const cv::Mat thumb = cv::imdecode(bytes, cv::IMREAD_UNCHANGED);

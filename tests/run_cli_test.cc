@@ -435,6 +435,31 @@ TEST_F(RunCli, ACsvOfAnOlderVersionResumesInItsColumns) {
   }
 }
 
+// Images of another size than the map's are refused once, up front, naming
+// both sizes, with or without --localize; nothing is stored or written.
+TEST_F(RunCli, ImagesOfAnotherSizeAreRefusedOnceUpFront) {
+  ASSERT_EQ(lsgd(run_args("a.db", "a.csv", " --last 29")).code, 0);
+  const std::vector<std::string> stored = database_rows(kTmp / "a.db");
+  const fs::path big = kTmp / "big";
+  fs::create_directories(big);
+  cv::Mat image(240, 320, CV_8UC1);
+  for (int i = 0; i < 12; ++i) {
+    cv::randu(image, 0, 255);
+    ASSERT_TRUE(cv::imwrite((big / (std::to_string(i) + ".png")).string(), image));
+  }
+  for (const char* extra : {"", " --localize"}) {
+    const CmdResult r = lsgd("run --sequence " + q(big) + " --min-gap 20 --database " + q(kTmp / "a.db") +
+                             " --output " + q(kTmp / "big.csv") + extra);
+    EXPECT_EQ(r.code, 1) << extra;
+    EXPECT_NE(r.err.find("holds 160x120 frames, but " + (big / "0.png").string() +
+                         " is 320x240: a map keeps one frame size"),
+              std::string::npos) << r.err;
+    EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << r.err;
+    EXPECT_FALSE(fs::exists(kTmp / "big.csv"));
+  }
+  EXPECT_EQ(database_rows(kTmp / "a.db"), stored);
+}
+
 // The status column: why each frame has a loop or none (LoopStatus's names),
 // "loop" exactly on the rows with a loop.
 TEST_F(RunCli, EveryRowSaysWhyThereIsALoopOrNone) {
@@ -461,7 +486,8 @@ TEST_F(RunCli, EveryRowSaysWhyThereIsALoopOrNone) {
 // Messages that say what happened (issue 15, class 10).
 TEST_F(RunCli, MessagesNameWhatHappened) {
   ASSERT_EQ(lsgd(run_args("a.db", "a.csv", " --last 9")).code, 0);
-  // A new session whose frames all have another size stores nothing: exit 1.
+  // A new session whose frames all have another size stores nothing: exit 1,
+  // refused up front (ImagesOfAnotherSizeAreRefusedOnceUpFront).
   const fs::path small = kTmp / "small";
   fs::create_directories(small);
   for (int i = 0; i < 3; ++i) {
@@ -470,9 +496,8 @@ TEST_F(RunCli, MessagesNameWhatHappened) {
   }
   CmdResult r = lsgd("run --sequence " + q(small) + " --database " + q(kTmp / "a.db"));
   EXPECT_EQ(r.code, 1);
-  EXPECT_NE(r.err.find("no frame was processed: all 3 images were skipped"), std::string::npos)
-      << r.err;
-  EXPECT_NE(r.err.find("64x48"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("holds 160x120 frames, but "), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("is 64x48"), std::string::npos) << r.err;
   EXPECT_EQ(database_rows(kTmp / "a.db").size(), 10u);
   // A full disk under the CSV names the file.
   r = lsgd("run --sequence " + q(small) + " --output /dev/full");
@@ -523,7 +548,8 @@ TEST_F(RunCli, OptionFlagSetsAnyOptionAndIsCheckedOnResume) {
   EXPECT_NE(r.out.find("    beta: 1.25\n"), std::string::npos) << r.out;
   r = lsgd("options --option search.nodes.bta=1");
   EXPECT_EQ(r.code, 1);
-  EXPECT_NE(r.err.find("unknown option 'search.nodes.bta'"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("unknown option 'search.nodes.bta'; did you mean 'search.nodes.beta'?"),
+            std::string::npos) << r.err;
   r = lsgd("options --option search.top_n");
   EXPECT_EQ(r.code, 1);
   EXPECT_NE(r.err.find("expected KEY=VALUE"), std::string::npos) << r.err;

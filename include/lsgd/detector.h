@@ -5,6 +5,7 @@
 
 #include <atomic>
 #include <cstdint>
+#include <limits>
 #include <memory>
 #include <vector>
 
@@ -59,8 +60,15 @@ struct Timings {
   double total_ms = 0;     // the whole process() call
 };
 
+// Result::stamp of a frame given none.
+inline constexpr double kNoStamp = std::numeric_limits<double>::quiet_NaN();
+
 struct Result {
-  std::int64_t frame = -1;  // id of the processed frame (0, 1, 2, ...)
+  std::int64_t frame = -1;  // the detector's number of the processed frame (0, 1, 2, ...)
+  std::int64_t id = -1;     // the caller's id of it (process(frame, id, stamp); else its number
+                            // counted on from the last id given)
+  double stamp = kNoStamp;  // its time stamp as given (NaN: none)
+  std::int64_t loop_id = -1;  // the caller's id of best.frame (-1: none), for a loop
   // The loop decision: best.frame >= 0 and best.score >= decision.threshold.
   bool loop = false;
   // The reported candidate: the first one (best first, up to
@@ -112,6 +120,14 @@ class Detector {
   // detector unchanged.
   Result process(const cv::Mat& frame);
   Result process(const ImageView& frame);
+  // The same, with the caller's id of the frame (above every earlier one's,
+  // at most kMaxFrameId: keyframe ids, image indices with gaps) and its
+  // time stamp (any finite value, seconds by convention; NaN: none). Result
+  // carries them (id, stamp, loop_id), id_of() / frame_of() map between
+  // them and the detector's frame numbers, and the database keeps them.
+  // Without an id a frame gets the one after the last (0 first).
+  Result process(const cv::Mat& frame, std::int64_t id, double stamp = kNoStamp);
+  Result process(const ImageView& frame, std::int64_t id, double stamp = kNoStamp);
 
   // The answer process() would give for the frame as the next one, with
   // nothing stored and nothing changed: relocalisation, or localising in a
@@ -123,6 +139,23 @@ class Detector {
   // or a search mode or stage that cannot answer without storing.
   Result query(const cv::Mat& frame);
   Result query(const ImageView& frame);
+  Result query(const cv::Mat& frame, std::int64_t id, double stamp = kNoStamp);
+  Result query(const ImageView& frame, std::int64_t id, double stamp = kNoStamp);
+
+  // The frame's descriptor as the detector would store it (its options'
+  // segmentation and descriptor.storage), nothing stored: place recognition
+  // between traverses (lsgd match), descriptors for one's own index. Compare
+  // two with lsgd::similarity(a.view(), b.view(), options().similarity.metric).
+  // Throws InvalidArgument for a frame process() would refuse (bad format;
+  // a size other than the stored frames').
+  Descriptor describe(const cv::Mat& frame);
+  Descriptor describe(const ImageView& frame);
+
+  // The caller's id and time stamp of stored frame `frame` (InvalidArgument
+  // for one not stored), and the stored frame of caller id `id` (-1: none).
+  std::int64_t id_of(std::int64_t frame) const;
+  double stamp_of(std::int64_t frame) const;
+  std::int64_t frame_of(std::int64_t id) const;
 
   // The next frame starts a new sequence (a new session of a map, a robot
   // put down elsewhere, the next place of a map of several): it continues no
@@ -165,8 +198,11 @@ class Detector {
   // detector unchanged, for another frame size, a descriptor whose grid or
   // sizes do not match, a damaged blob, a record of a component these options
   // do not have, or a record its component refuses.
+  // `id`: the caller's id of the frame as its store knows it (the database's
+  // row), for a state saved before ids were kept in it (-1: the one after the
+  // last); a state that holds another id is refused.
   void restore_frame(int width, int height, const Descriptor& descriptor,
-                     const std::vector<std::uint8_t>& state);
+                     const std::vector<std::uint8_t>& state, std::int64_t id = -1);
   // The search mode's index as one blob (CandidateSearch::save_index: index
   // mode's graph), so that a restored detector need not rebuild it; returns
   // the frames it covers (0 and an empty blob for a mode without one).
@@ -177,9 +213,14 @@ class Detector {
   void restore_index(const std::uint8_t* data, std::size_t size);
 
  private:
-  // store: process(), else query() (nothing stored or changed).
-  Result process_gray(double convert_ms, std::int64_t start_ns, bool store);
+  // store: process(), else query() (nothing stored or changed); id -1: the next.
+  Result process_gray(double convert_ms, std::int64_t start_ns, bool store, std::int64_t id,
+                      double stamp);
+  // The id a frame given `id` gets (-1: the one after the last); InvalidArgument
+  // for one not above the last or a stamp that is infinite.
+  std::int64_t next_id(std::int64_t id, double stamp) const;
   void check_answers_queries() const;
+  Descriptor describe_gray();
   // every_frame: the search scored every frame for this query (row_ written),
   // so its places are ranked over every diagonal; else its shortlist is realigned.
   void score_candidates(AppearanceEvidence& evidence, bool every_frame, Result& result);
@@ -198,6 +239,25 @@ class Detector {
   std::vector<std::unique_ptr<VerificationStage>> stages_;  // made from options_.verification
   std::vector<VerificationStage*> stage_list_;              // the same, for the decision
   LoopDecision decision_;
+  // The caller's id and time stamp of every stored frame, kept with the
+  // frame's state as the component "frame" (record version 1: id int64,
+  // stamp float64; a frame saved without it gets the id the database row
+  // holds, or the one after the last, and no stamp).
+  class FrameTags final : public Stateful {
+   public:
+    const char* name() const override { return "frame"; }
+    bool has_state() const override { return true; }
+    void save_frame(std::int64_t frame, StateWriter& out) const override;
+    void check_frame(std::int64_t frame, int width, int height, std::uint32_t version,
+                     StateReader in) const override;
+    void restore_frame(std::int64_t frame, int width, int height, std::uint32_t version,
+                       StateReader in) override;
+    std::int64_t last() const { return ids.empty() ? -1 : ids.back(); }
+    std::vector<std::int64_t> ids;  // increasing
+    std::vector<double> stamps;     // NaN: none
+    std::int64_t given_id = -1;     // restore_frame()'s id for a frame without a record
+  };
+  FrameTags tags_;
   // Scratch reused across frames (no allocation per frame once warm).
   GrayImage gray_;
   Segmentation segmentation_;

@@ -16,6 +16,7 @@ library's messages.
 from ._lsgd import (  # noqa: F401
     Candidate,
     Database,
+    Descriptor,
     Detector,
     Error,
     FormatError,
@@ -39,6 +40,7 @@ from ._lsgd import (  # noqa: F401
     open_sequence,
     options,
     read_image,
+    similarity,
 )
 
 
@@ -48,3 +50,40 @@ def run(detector, images):
     A path that cannot be read raises lsgd.Error naming it.
     """
     return [detector.process(read_image(i) if isinstance(i, str) else i) for i in images]
+
+
+def _plain(value):
+    """A value of a result as plain Python (dicts, lists, numbers, strings)."""
+    if hasattr(value, "to_dict"):
+        return value.to_dict()
+    if isinstance(value, LoopStatus):
+        return str(value)
+    if hasattr(value, "tolist"):  # numpy arrays
+        return value.tolist()
+    if isinstance(value, (list, tuple)):
+        return [_plain(v) for v in value]
+    return value
+
+
+def _to_dict(self):
+    """Every field as plain Python values (nested results too): json.dumps takes it."""
+    kind = type(self)
+    return {name: _plain(getattr(self, name)) for name in dir(kind)
+            if not name.startswith("_") and isinstance(getattr(kind, name), property)}
+
+
+def _repr(*shown):
+    def __repr__(self):
+        fields = ", ".join(f"{name}={getattr(self, name)!r}" for name in shown)
+        return f"{type(self).__name__}({fields})"
+    return __repr__
+
+
+for _kind in (Candidate, LoopEvidence, LoopGeometry, Metrics, PrPoint, Ranking, Result, StageVerdict, Timings):
+    _kind.to_dict = _to_dict
+Metrics.__repr__ = _repr("declared_loops", "declared_true", "declared_false", "recall_at_decision",
+                         "recall_at_100_precision", "average_precision", "recall_at_1")
+LoopEvidence.__repr__ = _repr("appearance", "inliers", "confirmed", "continues")
+StageVerdict.__repr__ = _repr("candidate", "stage", "accepted", "reason")
+Timings.__repr__ = _repr("total_ms", "segment_ms", "search_ms", "verify_ms")
+PrPoint.__repr__ = _repr("threshold", "precision", "recall")

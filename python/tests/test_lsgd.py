@@ -298,3 +298,89 @@ def test_example_script_evaluates_and_plots(tmp_path):
                          env=dict(os.environ, MPLCONFIGDIR=str(tmp_path))).stdout
     assert "declared" in out and "R@100P" in out
     assert figure.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+
+
+def test_readable_objects_closable_database_and_did_you_mean(tmp_path):
+    frames = route(20, 3)
+    d = lsgd.Detector(search={"min_gap": 5})
+    results = [d.process(f) for f in frames]
+    gt = lsgd.GroundTruth(len(frames))
+    for q in range(20, len(frames)):
+        gt.add(q, q % 20)
+    m = lsgd.evaluate(results, gt, min_gap=5)
+    assert repr(m).startswith("Metrics(declared_loops=") and "0x" not in repr(m)
+    for r in results:
+        assert "0x" not in repr(r.evidence) + repr(r.timings) + "".join(repr(v) for v in r.verification)
+    as_dict = m.to_dict()
+    assert as_dict["declared_loops"] == m.declared_loops and isinstance(as_dict["curve"], list)
+    json.dumps(as_dict)
+    loop = next(r for r in results if r.loop)
+    row = loop.to_dict()
+    assert row["status"] == "loop" and row["best"]["frame"] == loop.best.frame
+    assert len(row["geometry"]["inliers"]) == len(loop.geometry.inliers)
+    json.dumps([r.to_dict() for r in results])
+
+    # A database closes when asked (or at the end of a with block); a second
+    # writer on it in this process is told so while the first is open.
+    path = str(tmp_path / "map.db")
+    with lsgd.Database.create(path, search={"min_gap": 5}) as db:
+        w = lsgd.Detector(db.options)
+        for f in frames[:10]:
+            db.append(w, w.process(f), session=0)
+        with pytest.raises(lsgd.IoError, match="already open for writing in this process"):
+            lsgd.Database.open(path)
+        assert repr(db) == f"Database('{path}', 10 frames)"
+    assert db.closed and repr(db) == f"Database('{path}', closed)"
+    with pytest.raises(lsgd.InvalidArgument, match="is closed"):
+        db.frames
+    again = lsgd.Database.open(path)
+    assert again.frames == 10
+    again.close()
+    again.close()  # twice: nothing
+
+    with pytest.raises(lsgd.InvalidArgument, match="did you mean 'search.min_gap'"):
+        lsgd.Detector(serch={"min_gap": 5})
+    with pytest.raises(lsgd.InvalidArgument, match="did you mean 'search.min_gap'"):
+        lsgd.Detector(search={"min_gapp": 5})
+
+
+def test_callers_ids_and_stamps(tmp_path):
+    frames = route(20, 3)
+    d = lsgd.Detector(search={"min_gap": 5})
+    results = [d.process(f, id=100 + 2 * i, stamp=0.5 * i) for i, f in enumerate(frames)]
+    assert [r.id for r in results] == [100 + 2 * i for i in range(len(frames))]
+    assert results[3].stamp == 1.5
+    assert all(r.loop_id == (d.id_of(r.best.frame) if r.best.frame >= 0 else -1) for r in results)
+    assert d.frame_of(104) == 2 and d.frame_of(105) == -1 and d.stamp_of(2) == 1.0
+    with pytest.raises(lsgd.InvalidArgument, match="must be above the last frame's id"):
+        d.process(frames[0], id=100)
+    assert d.process(frames[0]).id == 100 + 2 * (len(frames) - 1) + 1
+    path = str(tmp_path / "ids.db")
+    with lsgd.Database.create(path, search={"min_gap": 5}) as db:
+        w = lsgd.Detector(db.options)
+        for i, f in enumerate(frames[:10]):
+            db.append(w, w.process(f, id=50 + 10 * i, stamp=float(i)), session=0)
+    with lsgd.Database.open(path, writable=False) as db:
+        assert db.frame_ids() == [50 + 10 * i for i in range(10)]
+        r = db.detector()
+        assert [r.id_of(k) for k in range(10)] == db.frame_ids() and r.stamp_of(9) == 9.0
+
+
+def test_describe_to_numpy_and_back():
+    frames = route(5, 1)
+    d = lsgd.Detector(search={"min_gap": 5})
+    x = d.describe(frames[0])
+    assert len(d) == 0
+    assert x.histograms.dtype == np.uint16 and x.histograms.shape == (x.grid[0] * x.grid[1], 256)
+    assert x.pixels.dtype == np.uint32 and int(x.pixels.sum()) == frames[0].size
+    y = lsgd.Descriptor.from_arrays(x.histograms, x.pixels, grid=x.grid)
+    assert lsgd.similarity(x, y) == lsgd.similarity(x, x)
+    assert lsgd.similarity(x, d.describe(frames[1])) < lsgd.similarity(x, x)
+    c = lsgd.Detector(descriptor={"storage": "compact"}).describe(frames[0])
+    assert c.storage == "compact" and c.histograms.dtype == np.uint8 and c.cell_pixels > 0
+    back = lsgd.Descriptor.from_arrays(c.histograms, grid=c.grid, cell_pixels=c.cell_pixels)
+    assert lsgd.similarity(c, back) == lsgd.similarity(c, c)
+    with pytest.raises(lsgd.InvalidArgument):
+        lsgd.Descriptor.from_arrays(x.histograms[:-1], x.pixels, grid=x.grid)
+    with pytest.raises(lsgd.InvalidArgument, match="differ in grid or storage"):
+        lsgd.similarity(x, c)

@@ -87,11 +87,14 @@ std::optional<double> parse_double(const std::string& s) {
 // systems' files have none and every reported match counts as declared.
 // `ranked_*`: lsgd run's ranking (Result::ranking); the ranking is then read
 // from them, not from the match.
+// `rank`: top-k files (lsgd match): a query's rows are its candidates, rank 1
+// its reported match.
 struct Columns {
   int query = 0, match = 1, score = 2, ms = -1, loop = -1;
   int ranked_frame = -1, ranked_score = -1, ranked_confirmed = -1;
+  int rank = -1;
   int needed() const {
-    return std::max({query, match, score, ms, loop, ranked_frame, ranked_score, ranked_confirmed}) + 1;
+    return std::max({query, match, score, ms, loop, ranked_frame, ranked_score, ranked_confirmed, rank}) + 1;
   }
 };
 
@@ -126,6 +129,7 @@ Columns columns_from_header(std::vector<std::string> header) {
     if (q >= 0) c.query = q;
     if (m >= 0) c.match = m;
     if (s >= 0) c.score = s;
+    c.rank = find_column(header, {"rank"});
   }
   return c;
 }
@@ -181,6 +185,7 @@ struct Row {
   double ms = 0;
   bool declared = false;
   std::optional<Ranking> ranking;  // lsgd run's ranking columns
+  std::int64_t rank = 1;           // a top-k file's rank (1: the reported match)
 };
 
 Row parse_row(const std::vector<std::string>& f, const Columns& c, const std::string& where) {
@@ -230,6 +235,17 @@ Row parse_row(const std::vector<std::string>& f, const Columns& c, const std::st
                                "' is not a time in milliseconds"));
     }
     row.ms = *ms;
+  }
+  if (c.rank >= 0) {
+    const auto rank = parse_int(f[static_cast<std::size_t>(c.rank)]);
+    if (!rank || *rank < 1 || *rank > 1000000) {
+      throw FormatError(concat(where, ": rank '", f[static_cast<std::size_t>(c.rank)],
+                               "' is not a rank (1 for the reported match, 2, 3, ...)"));
+    }
+    row.rank = *rank;
+    if (row.match < 0 && row.rank > 1) {
+      throw FormatError(concat(where, ": rank ", row.rank, " has no match (only rank 1 may be -1)"));
+    }
   }
   if (c.ranked_frame >= 0) {
     const std::string& frame = f[static_cast<std::size_t>(c.ranked_frame)];
@@ -283,6 +299,9 @@ std::vector<FrameRecord> read_detections(const std::string& path, std::int64_t f
   }
   std::vector<FrameRecord> records(static_cast<std::size_t>(frames));
   std::vector<std::int64_t> line_of(static_cast<std::size_t>(frames), 0);
+  // Top-k files: each query's (rank, (candidate, line)).
+  std::vector<std::vector<std::pair<std::int64_t, std::pair<Candidate, std::int64_t>>>> ranks_of(
+      columns.rank >= 0 ? static_cast<std::size_t>(frames) : 0);
   for (std::int64_t i = 0; i < frames; ++i) records[static_cast<std::size_t>(i)].frame = i;
   for (const Row& r : rows) {
     const std::string where = concat(path, ":", r.line);
@@ -297,19 +316,46 @@ std::vector<FrameRecord> read_detections(const std::string& path, std::int64_t f
       throw FormatError(concat(where, ": ranked_frame ", r.ranking->best.frame, " is outside the ",
                                frames, " frames"));
     }
-    std::int64_t& seen = line_of[static_cast<std::size_t>(r.query)];
-    if (seen != 0) {
-      throw FormatError(concat(where, ": query ", r.query, " already has a row on line ", seen,
-                               " (one reported loop per query)"));
-    }
-    seen = r.line;
     FrameRecord& out = records[static_cast<std::size_t>(r.query)];
+    if (columns.rank >= 0) {
+      // A top-k file: the query's candidates by rank, rank 1 reported.
+      auto& ranks = ranks_of[static_cast<std::size_t>(r.query)];
+      const auto twice = std::find_if(ranks.begin(), ranks.end(),
+                                      [&](const auto& k) { return k.first == r.rank; });
+      if (twice != ranks.end()) {
+        throw FormatError(concat(where, ": query ", r.query, " already has rank ", r.rank, " on line ",
+                                 twice->second.second));
+      }
+      ranks.push_back({r.rank, {Candidate{r.match, r.score}, r.line}});
+      if (r.rank != 1) continue;
+    } else {
+      std::int64_t& seen = line_of[static_cast<std::size_t>(r.query)];
+      if (seen != 0) {
+        throw FormatError(concat(where, ": query ", r.query, " already has a row on line ", seen,
+                                 " (one reported loop per query; top-k files have a rank column)"));
+      }
+      seen = r.line;
+    }
     out.timings.total_ms = r.ms;
     out.ranking = r.ranking;
     if (r.match >= 0) {
       out.reported = Candidate{r.match, r.score};
       out.candidates = {out.reported};
       out.loop = r.declared;
+    }
+  }
+  for (std::size_t q = 0; q < ranks_of.size(); ++q) {
+    auto& ranks = ranks_of[q];
+    if (ranks.empty()) continue;
+    std::sort(ranks.begin(), ranks.end(), [](const auto& a, const auto& b) { return a.first < b.first; });
+    if (ranks.front().first != 1) {
+      throw FormatError(concat(path, ":", ranks.front().second.second, ": query ", q,
+                               " has ranks from ", ranks.front().first, " but no rank 1 (its reported match)"));
+    }
+    FrameRecord& out = records[q];
+    out.candidates.clear();
+    for (const auto& k : ranks) {
+      if (k.second.first.frame >= 0) out.candidates.push_back(k.second.first);
     }
   }
   return records;

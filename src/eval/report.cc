@@ -49,7 +49,7 @@ void header(std::ostream& html, const ReportInput& in, const Operating& op) {
        << "<tr><th>Frames</th><td>" << m.frames << " evaluated of " << in.gt->frames() << "; "
        << m.positives << " positives (queries with a GT loop outside the window); "
        << in.gt->pairs() << " GT pairs</td></tr>"
-       << "<tr><th>Loops marked</th><td>at the " << op.label << ": <b style='color:" << kTpColour
+       << "<tr><th>Loops marked</th><td>" << op.marked << ": <b style='color:" << kTpColour
        << "'>" << op.tp << " TP</b>, <b style='color:" << kFpColour << "'>" << op.fp
        << " FP</b></td></tr></table>\n";
   for (const std::string& w : in.warnings) {
@@ -73,7 +73,12 @@ void header(std::ostream& html, const ReportInput& in, const Operating& op) {
     html << "<div class='card'><div class='value'>" << value << "</div><div class='name'>" << name
          << "</div></div>";
   }
-  html << "</div></header>\n";
+  html << "</div><p class='caption'>Declared: the loops the system declared with its own "
+       << "settings. R@100P: the recall at 100 % precision, P@100R: the precision at 100 % "
+       << "recall, AP: the average precision, all three over the ranking no decision setting "
+       << "changes (docs/evaluation.md). R@N: queries with a true match among their N best "
+       << "candidates, of the positives. PRT: AP / (1 + 10 t), t the mean seconds per frame "
+       << "(the paper's Sec. IV-D).</p></header>\n";
 }
 
 void pr_curve(std::ostream& html, const ReportInput& in, const Operating& op) {
@@ -197,14 +202,13 @@ void score_histogram(std::ostream& html, const ReportInput& in, const Operating&
     svg << "<line x1='" << x(op.threshold) << "' y1='" << y.p0 << "' x2='" << x(op.threshold)
         << "' y2='" << y.p1 << "' stroke='#111' stroke-width='1.5' stroke-dasharray='5 3'/>";
   }
-  legend(svg,
-         {{"dot", kTpColour, "true positive"},
-          {"dot", kFpColour, "false positive"},
-          {"line", "#111", "operating threshold"}},
-         kLegendX, kLegendY, kLegendWidth);
+  std::vector<LegendItem> entries = {{"dot", kTpColour, "right place"}, {"dot", kFpColour, "wrong place"}};
+  if (!op.line.empty()) entries.push_back({"line", "#111", "operating threshold"});
+  legend(svg, entries, kLegendX, kLegendY, kLegendWidth);
   html << svg.str() << "</svg><figcaption>The best verified candidate of each query that "
-       << "reported one (" << h.reports << " queries), stacked; dashed: the " << op.label
-       << ".</figcaption></figure>\n";
+       << "reported one (" << h.reports << " queries), stacked by whether it is the right place, "
+       << "loop or not: a wrong place scored below the loops marked is no false loop"
+       << (op.line.empty() ? std::string() : "; dashed: " + op.line) << ".</figcaption></figure>\n";
 }
 
 // Uniform sample of n of the `frames` frame ids, and the map back.
@@ -357,7 +361,7 @@ void matrix_section(std::ostream& html, const ReportInput& in, const Operating& 
        << "), symmetric; colour from the 1st percentile (" << num(lo, 3) << ") to the maximum ("
        << num(hi, 3)
        << ") of the off-diagonal values. Above the diagonal, column i and row j &lt; i: "
-       << "the ground-truth loops (outlined) and the loop each query i reported at the " << op.label
+       << "the ground-truth loops (outlined) and " << op.marked
        << " (dots); below it the similarity alone.</p></section>\n";
 }
 
@@ -423,8 +427,8 @@ void trajectory_section(std::ostream& html, const ReportInput& in, const Operati
          kLegendX, kLegendY, kLegendWidth);
   svg << "</svg>";
   html << "<figure class='chart'><h2>Trajectory</h2>" << svg.str()
-       << "<figcaption>Camera positions (x, z), equal scale; lines join each loop found at the "
-       << op.label << " to its match.</figcaption></figure>\n";
+       << "<figcaption>Camera positions (x, z), equal scale; lines join each of "
+       << op.marked << " to its match.</figcaption></figure>\n";
 }
 
 void timing_section(std::ostream& html, const ReportInput& in) {

@@ -69,7 +69,11 @@ void examples_section(std::ostream& html, const ReportInput& in, const Operating
   std::vector<bool> found(static_cast<std::size_t>(in.gt->frames()), false);
   for (const Loop& l : right) found[static_cast<std::size_t>(l.query)] = true;
   std::vector<std::int64_t> reported(static_cast<std::size_t>(in.gt->frames()), -1);
-  for (const FrameRecord& r : *in.records) reported[static_cast<std::size_t>(r.frame)] = r.reported.frame;
+  std::vector<double> reported_score(static_cast<std::size_t>(in.gt->frames()), 0.0);
+  for (const FrameRecord& r : *in.records) {
+    reported[static_cast<std::size_t>(r.frame)] = r.reported.frame;
+    reported_score[static_cast<std::size_t>(r.frame)] = r.reported.score;
+  }
   std::vector<std::int64_t> missed;
   for (const FrameRecord& r : *in.records) {
     if (!found[static_cast<std::size_t>(r.frame)] && in.gt->has_loop(r.frame, m.min_gap)) missed.push_back(r.frame);
@@ -77,7 +81,7 @@ void examples_section(std::ostream& html, const ReportInput& in, const Operating
   std::sort(missed.begin(), missed.end());
 
   html << "<section class='examples'><h2>Example loops</h2><p class='caption'>Query on the left, "
-       << "the frame it was matched with on the right (" << op.label << "). Up to " << n
+       << "the frame it was matched with on the right (loops: " << op.marked << "). Up to " << n
        << " of each kind: declared true loops spread over the run, the highest-scored false "
        << "ones, and missed revisits spread over the run.</p>";
   html << "<h3>True loops (" << right.size() << ")</h3><div class='gallery'>";
@@ -107,7 +111,14 @@ void examples_section(std::ostream& html, const ReportInput& in, const Operating
         {q, "query " + std::to_string(q)}, {truth, "true match " + std::to_string(truth)}};
     const std::int64_t rep = reported[static_cast<std::size_t>(q)];
     if (rep >= 0 && rep != truth) frames.push_back({rep, "reported " + std::to_string(rep)});
-    pair(html, in, kGtFrameColour, frames, rep >= 0 ? "reported, not declared" : "nothing reported");
+    // Its score, against the loops marked: how far from a loop it was.
+    const std::string score = rep >= 0 ? "score " + num(reported_score[static_cast<std::size_t>(q)], 2) +
+                                             (rep == truth ? ", the right place" : ", another place")
+                                       : "nothing reported";
+    pair(html, in, kGtFrameColour, frames,
+         score + (rep >= 0 && op.threshold < std::numeric_limits<double>::infinity()
+                      ? " (loops from " + num(op.threshold, 2) + ")"
+                      : std::string()));
   }
   html << "</div></section>\n";
 }
@@ -158,8 +169,8 @@ void timeline_section(std::ostream& html, const ReportInput& in, const Operating
          kLegendX, kLegendY, kLegendWidth);
   svg << "</svg>";
   html << "<figure class='chart'><h2>Scores over the run</h2>" << svg.str()
-       << "<figcaption>The score of each frame's reported candidate; dashed: " << op.label
-       << ".</figcaption></figure>\n";
+       << "<figcaption>The score of each frame's reported candidate"
+       << (op.line.empty() ? std::string() : "; dashed: " + op.line) << ".</figcaption></figure>\n";
 }
 
 }  // namespace lsgd::eval::report

@@ -220,7 +220,11 @@ struct Loop {
 // The reported loops at the operating threshold, with how the threshold was chosen.
 struct Operating {
   double threshold = std::numeric_limits<double>::infinity();
-  std::string label;  // HTML: what the threshold is
+  // HTML noun phrases for sentences: the loops the charts mark ("the loops
+  // the system declared ...", "the reports scoring at least ..."), and what
+  // the dashed line is ("" when there is none).
+  std::string marked;
+  std::string line;
   std::vector<Loop> loops;
   std::int64_t tp = 0, fp = 0;
 };
@@ -234,16 +238,18 @@ inline Operating operating_point(const ReportInput& in) {
   Operating op;
   const Metrics& m = *in.metrics;
   if (in.declared) {
-    op.label = "loops declared by the system with its own settings (no ground truth involved)";
+    op.marked = "the loops the system declared with its own settings (no ground truth involved)";
   } else if (in.threshold) {
     op.threshold = *in.threshold;
-    op.label = escape(in.threshold_name) + " " + num(op.threshold, 4);
+    op.line = escape(in.threshold_name) + " " + num(op.threshold, 4);
+    op.marked = "the reports scoring at least " + op.line;
   } else if (m.decision_recall_at_100_precision > 0) {
     // The loops are the decision's (their loop scores): its own R@100P threshold.
     op.threshold = m.decision_threshold_at_100_precision;
-    op.label = "the loop score's R@100P threshold " + num(op.threshold, 4);
+    op.line = "the loop score's R@100P threshold " + num(op.threshold, 4);
+    op.marked = "the reports scoring at least " + op.line;
   } else {
-    op.label = "none (no threshold reaches precision 1, so no loop is marked)";
+    op.marked = "no loop (no threshold reaches precision 1)";
   }
   for (const FrameRecord& r : *in.records) {
     if (r.reported.frame < 0) continue;
@@ -255,6 +261,7 @@ inline Operating operating_point(const ReportInput& in) {
   // Declared loops: the charts mark the lowest score declared.
   if (in.declared) {
     for (const Loop& l : op.loops) op.threshold = std::min(op.threshold, l.score);
+    if (!op.loops.empty()) op.line = "the lowest loop score declared, " + num(op.threshold, 4);
   }
   return op;
 }

@@ -97,7 +97,8 @@ std::vector<FrameRecord> run_detector(Detector& detector, const FrameSource& sou
     internal::throw_invalid("run_detector: first frame ", options.first, " is outside the ",
                             source.frames, " frames of the source");
   }
-  // The run's id of every frame the detector holds (its own ids are dense).
+  // The run's id of every frame the detector holds (the detector's frame
+  // numbers are dense; its ids, Detector::id_of, are these).
   std::vector<std::int64_t> ids = options.stored_ids;
   if (static_cast<std::int64_t>(ids.size()) != detector.size()) {
     internal::throw_invalid("run_detector: ", ids.size(), " stored ids for a detector holding ",
@@ -108,6 +109,11 @@ std::vector<FrameRecord> run_detector(Detector& detector, const FrameSource& sou
     if (ids[k] < 0 || ids[k] >= bound) {
       internal::throw_invalid("run_detector: stored id ", ids[k], " is negative or not below ",
                               "the next id ", bound);
+    }
+    // The detector keeps the ids it was given (Detector::id_of): the same.
+    if (ids[k] != detector.id_of(static_cast<std::int64_t>(k))) {
+      internal::throw_invalid("run_detector: stored id ", ids[k], " of frame ", k, " is not the detector's ",
+                              detector.id_of(static_cast<std::int64_t>(k)));
     }
   }
   if (options.first_id < 0 || options.first_id > kMaxFrameId - source.frames) {
@@ -133,7 +139,7 @@ std::vector<FrameRecord> run_detector(Detector& detector, const FrameSource& sou
           std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start)
               .count();
       const double cpu_start = thread_cpu_ms();
-      result = detector.process(image);
+      result = detector.process(image, id);
       times.process_cpu_ms = thread_cpu_ms() - cpu_start;
     } catch (const Error& e) {
       const std::string name = source.name ? source.name(i) : std::to_string(i);

@@ -17,6 +17,7 @@
 #include <vector>
 
 #include "internal/check.h"
+#include "internal/names.h"
 #include "internal/numbers.h"
 #include "lsgd/error.h"
 #include "lsgd/io/sequence.h"
@@ -162,8 +163,12 @@ void read_map(const YAML::Node& node, const std::string& source, const std::stri
       if (key_node.Scalar() == f.name) field = &f;
     }
     if (field == nullptr) {
-      throw FormatError(concat(source, ": unknown key '", key, "' (known: ", known_names(fields),
-                               ")", at_line(key_node)));
+      std::vector<std::string> names;
+      for (const Field& f : fields) names.push_back(f.name);
+      const std::string guess = internal::nearest(key_node.Scalar(), names);
+      throw FormatError(concat(source, ": unknown key '", key, "'",
+                               guess.empty() ? std::string() : "; did you mean '" + join_key(prefix, guess) + "'?",
+                               " (known: ", known_names(fields), ")", at_line(key_node)));
     }
     field->read(entry.second, key);
   }

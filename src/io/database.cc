@@ -13,6 +13,7 @@
 #include <cstring>
 #include <limits>
 #include <map>
+#include <mutex>
 #include <set>
 #include <type_traits>
 
@@ -285,6 +286,20 @@ const std::vector<std::string> kIntegerMeta = {"format_version", "width",     "h
 
 }  // namespace
 
+namespace {
+// The databases open for writing in this process, by file identity.
+std::mutex& writers_mutex() {
+  static std::mutex m;
+  return m;
+}
+// The process that registered each (a child made by fork() inherits the
+// table but is another process).
+std::map<std::pair<dev_t, ino_t>, pid_t>& writers() {
+  static std::map<std::pair<dev_t, ino_t>, pid_t> open;
+  return open;
+}
+}  // namespace
+
 struct Database::Impl {
   std::string path;
   sqlite3* db = nullptr;
@@ -308,7 +323,15 @@ struct Database::Impl {
   // Scratch of append(), reused between frames.
   std::vector<std::uint8_t> hist_bytes, pixel_bytes;
 
+  std::pair<dev_t, ino_t> writer_key{0, 0};  // registered in writers() while open for writing
+  bool registered = false;
+
   ~Impl() {
+    if (registered) {
+      const std::lock_guard<std::mutex> lock(writers_mutex());
+      const auto open = writers().find(writer_key);
+      if (open != writers().end() && open->second == ::getpid()) writers().erase(open);
+    }
     if (db && writable && opened) {
       try {
         checkpoint("closed");
@@ -551,6 +574,21 @@ Database Database::open(const std::string& path, Mode mode) {
   if (impl->lock_fd < 0) io_error(path, "cannot be opened (", std::strerror(errno), ")");
   bool writer_active = false;
   if (writable) {
+    // A writer in this very process holds the lock already: say so, rather
+    // than the "another process" of the flock below.
+    struct stat id {};
+    if (::fstat(impl->lock_fd, &id) == 0) {
+      const std::lock_guard<std::mutex> lock(writers_mutex());
+      const std::pair<dev_t, ino_t> key{id.st_dev, id.st_ino};
+      const auto open = writers().find(key);
+      if (open != writers().end() && open->second == ::getpid()) {
+        io_error(path, "is already open for writing in this process (close that Database first: "
+                       "C++ destroys it, Python's db.close() or a `with` block closes it)");
+      }
+      writers()[key] = ::getpid();
+      impl->writer_key = key;
+      impl->registered = true;
+    }
     // A reader holds a shared lock for a moment (below): wait up to 2 s.
     int tries = 0;
     while (::flock(impl->lock_fd, LOCK_EX | LOCK_NB) != 0) {
@@ -1002,7 +1040,7 @@ void Database::restore(Detector& detector, IndexUse index) const {
       state = encode_records(records);
     }
     try {
-      detector.restore_frame(m.width, m.height, descriptor, state);
+      detector.restore_frame(m.width, m.height, descriptor, state, last_frame);
     } catch (const InvalidArgument& e) {
       bad(e.what());
     }
@@ -1172,7 +1210,14 @@ void Database::append(const Detector& detector, const Result& /*result*/, std::i
                             detector.size(), " frames, but the database holds ", m.frames,
                             " (append each frame right after process())");
   }
-  if (frame < 0) frame = m.last_frame + 1;
+  // The frame's id is the detector's (Detector::process(frame, id)): a
+  // different one would be refused when the frame is restored.
+  const std::int64_t own = detector.id_of(detector.size() - 1);
+  if (frame >= 0 && frame != own) {
+    internal::throw_invalid("database ", m.path, ": frame id ", frame, " is not the detector's id ", own,
+                            " of its last frame (give the id to Detector::process)");
+  }
+  frame = own;
   if (frame <= m.last_frame || frame > kMaxFrameId) {
     internal::throw_invalid("database ", m.path, ": frame id ", frame, " must be above the last ",
                             "stored id ", m.last_frame, " and at most ", kMaxFrameId);
@@ -1227,6 +1272,10 @@ void Database::append_all(const Detector& detector, std::int64_t session) {
   if (detector.size() == m.frames) return;
   check_compatible(detector.options());
   const std::int64_t first = m.frames;
+  if (detector.id_of(first) <= m.last_frame) {
+    internal::throw_invalid("database ", m.path, ": the detector's frame ", first, " has id ",
+                            detector.id_of(first), ", not above the last stored id ", m.last_frame);
+  }
   transaction(m.db, m.path, [&] {
     const std::map<std::string, std::string> saved = m.meta;
     try {
@@ -1238,7 +1287,7 @@ void Database::append_all(const Detector& detector, std::int64_t session) {
         m.write_meta();
       }
       for (std::int64_t f = first; f < detector.size(); ++f) {
-        m.insert_frame(detector, f, session, "", m.last_frame + 1 + (f - first));
+        m.insert_frame(detector, f, session, "", detector.id_of(f));
       }
     } catch (...) {
       m.meta = saved;
@@ -1250,7 +1299,7 @@ void Database::append_all(const Detector& detector, std::int64_t session) {
     m.height = detector.height();
     m.grid = detector.store().grid();
   }
-  m.last_frame += detector.size() - first;
+  m.last_frame = detector.id_of(detector.size() - 1);
   m.frames = detector.size();
   m.last_session = session;
   m.sessions.insert(session);

@@ -233,6 +233,27 @@ std::unique_ptr<CsvWriter> continue_csv(const RunArgs& args, const SessionPlan& 
   return std::make_unique<CsvWriter>(args.output, CsvWriter::kAppend, trim.version);
 }
 
+// Frames of another size than the stored ones are refused up front, once,
+// rather than skipped one by one: the first image of the run that can be read
+// decides (a map keeps one frame size).
+void check_frame_size(const std::string& database, const Detector& detector,
+                      const eval::FrameSource& source, std::int64_t first) {
+  if (detector.size() == 0) return;
+  for (std::int64_t i = first; i < source.frames; ++i) {
+    cv::Mat image;
+    try {
+      image = source.load(i);
+    } catch (const Error&) {
+      continue;  // the run reports it in its place
+    }
+    if (image.cols == detector.width() && image.rows == detector.height()) return;
+    throw InvalidArgument("database " + database + " holds " + std::to_string(detector.width()) + "x" +
+                          std::to_string(detector.height()) + " frames, but " + source.name(i) + " is " +
+                          std::to_string(image.cols) + "x" + std::to_string(image.rows) +
+                          ": a map keeps one frame size (resize the images, or give another --database)");
+  }
+}
+
 void run_database(const RunArgs& args, const io::Sequence& sequence) {
   check_files(args, sequence);
   const DetectorFlags& flags = args.detector;
@@ -281,6 +302,7 @@ void run_database(const RunArgs& args, const io::Sequence& sequence) {
                 << "): nothing to do" << kNewSessionHint << "\n";
       return;
     }
+    check_frame_size(args.database, detector, source, plan.first);
     std::cerr << (exists ? "resumed " : "created ") << args.database << ": " << detector.size()
               << " frames stored; "
               << (plan.resume ? "continuing session " : "appending session ") << plan.session
@@ -352,9 +374,10 @@ void run_localize(const RunArgs& args, const io::Sequence& sequence) {
   if (detector.size() == 0) {
     throw InvalidArgument("--localize: database " + args.database + " holds no frame to localise against");
   }
+  const eval::FrameSource source = eval::sequence_source(sequence);
+  check_frame_size(args.database, detector, source, 0);
   // A new session: nothing continues across it.
   detector.cut();
-  const eval::FrameSource source = eval::sequence_source(sequence);
   CsvWriter csv(args.output);
   eval::RunOptions run_options;
   run_options.skip_bad_frames = !args.layout.strict;

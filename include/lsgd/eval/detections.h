@@ -9,6 +9,10 @@
 //                             are ignored; the header line is optional and,
 //                             when present, may name the columns in any order
 //                             (query or frame, match, score)
+//   query,match,score,rank    top-k (lsgd match): up to k rows per query, its
+//                             candidates by rank; rank 1 is the reported match
+//                             (a header naming `rank` is required), so R@N
+//                             counts a true match among the N best
 //   lsgd run's CSV            frame,image,loop_frame,candidate_frame,score,ms:
 //                             recognised by its header; candidate_frame is the
 //                             match (the reported candidate whatever its score,
@@ -32,11 +36,13 @@ namespace lsgd::eval {
 // Reads `path` and returns one record per frame 0 .. frames-1, in order: a
 // frame without a row, or with match -1, reports no loop. A reported match is
 // also the record's only candidate, so Recall@1/5/10 of detections read from
-// a file are all the recall of the reported match. frames = -1 takes the
+// a file are all the recall of the reported match, unless the file ranks
+// several candidates per query (a rank column). frames = -1 takes the
 // largest query + 1. Throws IoError when the file cannot be read, and
 // FormatError naming file:line for a malformed row, a non-integer id, a
 // non-finite score, a query outside [0, frames), a match outside
-// [-1, frames), a query given twice, or a file with no row.
+// [-1, frames), a query given twice (a query and rank, in a top-k file; a
+// query without rank 1), or a file with no row.
 std::vector<FrameRecord> read_detections(const std::string& path, std::int64_t frames = -1);
 
 }  // namespace lsgd::eval

@@ -202,15 +202,16 @@ class Database {
   // kept in the signature for callers: everything stored is read from the
   // detector, Detector::frame_state()), in one transaction. `session`: 0 .. kMaxSession, either the last
   // session or one without frames (a session's frames stay together).
-  // `name` is free text (the image path). `frame`: the caller's id of the
-  // frame, above every stored one (-1: one past the last). Throws
-  // InvalidArgument for misuse, IoError when the file cannot be written.
+  // `name` is free text (the image path). The frame's id is the detector's
+  // (Detector::process(frame, id), id_of()), above every stored one; `frame`,
+  // when given (>= 0), must be that id. Throws InvalidArgument for misuse,
+  // IoError when the file cannot be written.
   void append(const Detector& detector, const Result& result, std::int64_t session,
               const std::string& name = "", std::int64_t frame = -1);
 
   // Appends every frame of `detector` not stored yet (ids frames() ..
-  // detector.size() - 1) in one transaction, with empty names and caller ids
-  // continuing after last_frame(). Node
+  // detector.size() - 1) in one transaction, with empty names and the
+  // detector's ids (above last_frame()). Node
   // membership comes from the detector; temporal places are known only for
   // its last max(agree, 1) frames (earlier rows get NULL, which restore()
   // never reads).

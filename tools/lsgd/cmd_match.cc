@@ -1,0 +1,163 @@
+// lsgd match --reference R --query Q [--top-k K] [--output FILE] [--query-offset N]
+//
+// Place recognition between two traverses (winter against summer, a second
+// drive against a map): each query image is described as the detector would
+// (its options' segmentation and descriptor) and scored against every
+// reference image; its K best are written, one row each:
+//   query,match,score,similarity,rank
+// query: N + the query image's index (N = --query-offset, default the number
+// of reference images, so that one ground truth numbers both traverses in
+// one sequence: reference 0 .. N-1, then the queries); match: the reference
+// image's index; score: the similarity in standard deviations of the query's
+// similarities to the whole reference (comparable across queries, as the
+// detector's single-frame evidence); similarity: the metric's raw value;
+// rank: 1 for the best. `lsgd eval --detections FILE --gt GT --min-gap 0`
+// scores it (R@N from the ranks).
+#include <CLI/CLI.hpp>
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <fstream>
+#include <iomanip>
+#include <iostream>
+#include <memory>
+#include <numeric>
+#include <opencv2/core.hpp>
+#include <optional>
+#include <vector>
+
+#include "commands.h"
+#include "common.h"
+#include "files.h"
+#include "lsgd/detector.h"
+#include "lsgd/error.h"
+#include "lsgd/eval/runner.h"
+#include "lsgd/io/layouts.h"
+#include "lsgd/limits.h"
+#include "lsgd/similarity.h"
+
+namespace lsgd::cli {
+namespace {
+
+struct MatchArgs {
+  std::string reference, query, output;
+  int top_k = 1;
+  std::optional<std::int64_t> query_offset;
+  DetectorFlags detector;
+  SequenceFlags layout;
+};
+
+// Every image's descriptor; an image that cannot be read, or has another
+// size than the first, is an error naming it (a traverse is one camera).
+std::vector<Descriptor> describe_all(Detector& detector, const io::Sequence& sequence,
+                                     const char* flag, int& width, int& height) {
+  std::vector<Descriptor> out;
+  out.reserve(sequence.images.size());
+  const eval::FrameSource source = eval::sequence_source(sequence);
+  for (std::int64_t i = 0; i < source.frames; ++i) {
+    cv::Mat image;
+    try {
+      image = source.load(i);
+    } catch (const Error& e) {
+      throw InvalidArgument(std::string(flag) + " image " + std::to_string(i) + ": " + e.what());
+    }
+    if (width == 0) width = image.cols, height = image.rows;
+    if (image.cols != width || image.rows != height) {
+      throw InvalidArgument(std::string(flag) + " image " + std::to_string(i) + " (" + source.name(i) +
+                            ") is " + std::to_string(image.cols) + "x" + std::to_string(image.rows) +
+                            ", the first reference image " + std::to_string(width) + "x" +
+                            std::to_string(height) + ": the traverses must have one frame size "
+                            "(the descriptor's grid follows it)");
+    }
+    out.push_back(detector.describe(image));
+  }
+  return out;
+}
+
+void match(const MatchArgs& args) {
+  const DetectorOptions options = args.detector.resolve();
+  const io::Sequence reference = io::open_sequence(args.reference, args.layout.resolve());
+  const io::Sequence query = io::open_sequence(args.query, args.layout.resolve());
+  CommandFiles files;
+  files.input(args.detector.config, "--config");
+  files.input(args.reference, "--reference");
+  files.input(args.query, "--query");
+  files.inputs(reference.images, "--reference", "reference image");
+  files.inputs(query.images, "--query", "query image");
+  files.output(args.output, "--output");
+  files.check();
+  if (reference.images.empty()) throw InvalidArgument("--reference " + args.reference + " holds no image");
+  if (query.images.empty()) throw InvalidArgument("--query " + args.query + " holds no image");
+  const auto references = static_cast<std::int64_t>(reference.images.size());
+  const std::int64_t offset = args.query_offset.value_or(references);
+  if (offset > kMaxFrameId - static_cast<std::int64_t>(query.images.size())) {
+    throw InvalidArgument("--query-offset " + std::to_string(offset) + " leaves no room for the query ids");
+  }
+  const auto start = std::chrono::steady_clock::now();
+  Detector detector(options);
+  int width = 0, height = 0;
+  const std::vector<Descriptor> refs = describe_all(detector, reference, "--reference", width, height);
+  const std::vector<Descriptor> queries = describe_all(detector, query, "--query", width, height);
+  std::vector<DescriptorView> views;
+  for (const Descriptor& d : refs) views.push_back(d.view());
+
+  std::unique_ptr<std::ofstream> file;
+  std::ostream* out = &std::cout;
+  if (!args.output.empty()) {
+    file = std::make_unique<std::ofstream>(args.output, std::ios::trunc);
+    if (!*file) throw IoError("cannot write output file '" + args.output + "'");
+    out = file.get();
+  }
+  *out << "query,match,score,similarity,rank\n";
+  const auto k = static_cast<std::size_t>(std::min<std::int64_t>(args.top_k, references));
+  std::vector<double> scores(refs.size());
+  std::vector<std::size_t> order(refs.size());
+  for (std::size_t q = 0; q < queries.size(); ++q) {
+    similarities(queries[q].view(), views.data(), views.size(), options.similarity.metric, scores.data());
+    // Standardised against the query's own distribution over the reference.
+    const double mean = std::accumulate(scores.begin(), scores.end(), 0.0) / static_cast<double>(scores.size());
+    double var = 0;
+    for (const double v : scores) var += (v - mean) * (v - mean);
+    const double sd = std::sqrt(var / static_cast<double>(scores.size()));
+    std::iota(order.begin(), order.end(), std::size_t{0});
+    std::partial_sort(order.begin(), order.begin() + static_cast<std::ptrdiff_t>(k), order.end(),
+                      [&](std::size_t a, std::size_t b) { return scores[a] > scores[b] || (scores[a] == scores[b] && a < b); });
+    for (std::size_t r = 0; r < k; ++r) {
+      const std::size_t j = order[r];
+      *out << offset + static_cast<std::int64_t>(q) << ',' << j << ',' << std::setprecision(9)
+           << (sd > 0 ? (scores[j] - mean) / sd : 0.0) << ',' << scores[j] << ',' << r + 1 << '\n';
+    }
+  }
+  out->flush();
+  if (!*out) throw IoError("error while writing " + (args.output.empty() ? std::string("standard output") : "'" + args.output + "'"));
+  std::cerr << "matched " << queries.size() << " query images against " << references
+            << " reference images (" << width << "x" << height << "), top " << k << " each, in "
+            << std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count() << " s"
+            << (args.output.empty() ? "" : "; rows in " + args.output) << "; query ids from " << offset
+            << "\n";
+}
+
+}  // namespace
+
+void register_match(CLI::App& app) {
+  auto args = std::make_shared<MatchArgs>();
+  CLI::App* cmd = app.add_subcommand(
+      "match", "place recognition between two traverses: the top-k reference images of each query image, as CSV");
+  cmd->add_option("--reference", args->reference, "the reference traverse: folder of images, list file or layout")
+      ->required()
+      ->check(kNonEmptyPath);
+  cmd->add_option("--query", args->query, "the query traverse, the same way")->required()->check(kNonEmptyPath);
+  cmd->add_option("--top-k", args->top_k, "reference images written per query image")
+      ->check(CLI::Range(1, 1000))
+      ->capture_default_str();
+  cmd->add_option("--query-offset", args->query_offset,
+                  "id of the first query image (default: the number of reference images, so one "
+                  "ground truth numbers both traverses)")
+      ->check(CLI::Range(std::int64_t{0}, kMaxFrameId));
+  cmd->add_option("--output", args->output, "CSV file to write (default: standard output)")->check(kNonEmptyPath);
+  args->detector.add_to(*cmd);
+  args->layout.add_to(*cmd);
+  cmd->callback([args] { match(*args); });
+}
+
+}  // namespace lsgd::cli

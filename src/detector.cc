@@ -137,38 +137,28 @@ Result Detector::process(const ImageView& frame) { return process(frame, -1, kNo
 Result Detector::query(const cv::Mat& frame) { return query(frame, -1, kNoStamp); }
 Result Detector::query(const ImageView& frame) { return query(frame, -1, kNoStamp); }
 
+// process() (store) and query(), from either kind of image.
+template <typename Image>
+Result Detector::run_frame(const Image& frame, bool store, std::int64_t id, double stamp) {
+  const Exclusive exclusive(busy_, store ? "process" : "query");
+  if (!store) check_answers_queries();
+  const std::int64_t start = now_ns();
+  const std::int64_t given = next_id(id, stamp);
+  to_gray(frame, gray_);
+  return process_gray(ms_since(start), start, store, given, stamp);
+}
+
 Result Detector::process(const cv::Mat& frame, std::int64_t id, double stamp) {
-  const Exclusive exclusive(busy_, "process");
-  const std::int64_t start = now_ns();
-  const std::int64_t given = next_id(id, stamp);
-  to_gray(frame, gray_);
-  return process_gray(ms_since(start), start, true, given, stamp);
+  return run_frame(frame, true, id, stamp);
 }
-
 Result Detector::process(const ImageView& frame, std::int64_t id, double stamp) {
-  const Exclusive exclusive(busy_, "process");
-  const std::int64_t start = now_ns();
-  const std::int64_t given = next_id(id, stamp);
-  to_gray(frame, gray_);
-  return process_gray(ms_since(start), start, true, given, stamp);
+  return run_frame(frame, true, id, stamp);
 }
-
 Result Detector::query(const cv::Mat& frame, std::int64_t id, double stamp) {
-  const Exclusive exclusive(busy_, "query");
-  check_answers_queries();
-  const std::int64_t start = now_ns();
-  const std::int64_t given = next_id(id, stamp);
-  to_gray(frame, gray_);
-  return process_gray(ms_since(start), start, false, given, stamp);
+  return run_frame(frame, false, id, stamp);
 }
-
 Result Detector::query(const ImageView& frame, std::int64_t id, double stamp) {
-  const Exclusive exclusive(busy_, "query");
-  check_answers_queries();
-  const std::int64_t start = now_ns();
-  const std::int64_t given = next_id(id, stamp);
-  to_gray(frame, gray_);
-  return process_gray(ms_since(start), start, false, given, stamp);
+  return run_frame(frame, false, id, stamp);
 }
 
 Descriptor Detector::describe(const cv::Mat& frame) {

@@ -41,6 +41,9 @@ inline void expect_same(const Result& a, const Result& b) {
   SCOPED_TRACE("frame " + std::to_string(a.frame));
   EXPECT_EQ(a.frame, b.frame);
   EXPECT_EQ(a.loop, b.loop);
+  EXPECT_EQ(a.status, b.status);
+  EXPECT_EQ(a.id, b.id);
+  EXPECT_EQ(a.loop_id, b.loop_id);
   EXPECT_EQ(a.best.frame, b.best.frame);
   EXPECT_EQ(a.best.score, b.best.score);
   // NaN (no appearance) equals NaN.

@@ -220,6 +220,8 @@ class Detector {
   // for one not above the last or a stamp that is infinite.
   std::int64_t next_id(std::int64_t id, double stamp) const;
   void check_answers_queries() const;
+  template <typename Image>
+  Result run_frame(const Image& frame, bool store, std::int64_t id, double stamp);
   Descriptor describe_gray();
   // every_frame: the search scored every frame for this query (row_ written),
   // so its places are ranked over every diagonal; else its shortlist is realigned.

@@ -134,6 +134,13 @@ TEST_F(ShortStreet, MatchOneTraverseAgainstAnother) {
   const auto j = read_json(json);
   EXPECT_GT(j["recall_at_1"].get<double>(), 0.3);
   EXPECT_GT(j["recall_at_5"].get<double>(), j["recall_at_1"].get<double>());
+  // Flags that would be ignored are errors.
+  for (const char* flag : {" --min-gap 5", " --verify none", " --option search.top_n=3"}) {
+    const CmdResult ignored = lsgd("match --reference " + q(kTmp / "ref.txt") + " --query " +
+                                   q(kTmp / "query.txt") + flag);
+    EXPECT_EQ(ignored.code, 1) << flag;
+    EXPECT_NE(ignored.err.find("has no effect on lsgd match"), std::string::npos) << ignored.err;
+  }
   // A query traverse of another size is refused, naming the image.
   const fs::path small = kTmp / "small";
   fs::create_directories(small);

@@ -74,7 +74,28 @@ std::vector<Descriptor> describe_all(Detector& detector, const io::Sequence& seq
   return out;
 }
 
+// Only the description's options matter here: a flag that would be ignored
+// is an error rather than a silent no-op.
+void check_flags(const DetectorFlags& flags) {
+  const auto refuse = [](const std::string& flag) {
+    throw InvalidArgument(flag + " has no effect on lsgd match: it describes and compares frames "
+                          "(segmentation, descriptor and similarity options), with no search or decision");
+  };
+  if (!flags.mode.empty()) refuse("--mode");
+  if (flags.min_gap) refuse("--min-gap");
+  if (flags.threshold) refuse("--threshold");
+  if (!flags.verify.empty()) refuse("--verify");
+  for (const std::string& o : flags.options) {
+    const std::string key = o.substr(0, o.find('='));
+    if (key.rfind("segmentation.", 0) != 0 && key.rfind("descriptor.", 0) != 0 &&
+        key.rfind("similarity.", 0) != 0) {
+      refuse("--option " + key);
+    }
+  }
+}
+
 void match(const MatchArgs& args) {
+  check_flags(args.detector);
   const DetectorOptions options = args.detector.resolve();
   const io::Sequence reference = io::open_sequence(args.reference, args.layout.resolve());
   const io::Sequence query = io::open_sequence(args.query, args.layout.resolve());

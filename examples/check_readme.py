@@ -12,6 +12,7 @@ if "```cpp\n" + example + "```\n" not in readme:
     sys.exit("README.md does not show examples/slam_loop.cc as it is: copy the file into its cpp block")
 
 for name, intro in (("localize.cc", "`examples/localize.cc` does both:"),
+                    ("localize.cc", "ends by forgetting the map's\noldest frames:"),
                     ("relative_pose.cc", "`examples/relative_pose.cc` does it")):
     start = readme.index(intro)
     begin = readme.index("```cpp\n", start) + 7

@@ -7,7 +7,9 @@
 // The first image is a relocalisation: Detector::query() answers as
 // process() would, storing nothing. The images after it are a new session:
 // process() keeps them in the detector's memory (each then has the sequence
-// of the session's frames before it), and the file never changes.
+// of the session's frames before it), and the file never changes. Last, the
+// map's oldest frames are forgotten (a working memory of bounded size).
+#include <cstdint>
 #include <cstdio>
 #include <cstdlib>
 #include <string>
@@ -53,6 +55,13 @@ int main(int argc, char** argv) {
     }
     std::printf("%d of %zu images localised in the map of %lld frames (%d loops in all)\n",
                 localised, sequence.images.size() - first, static_cast<long long>(mapped), loops);
+
+    // A working memory of bounded size: the oldest frames go, by their ids
+    // (the kept frames keep theirs; their frame numbers close up).
+    const std::int64_t forgotten = detector.forget(0, detector.id_of(49));  // the map's first 50 frames
+    std::printf("forgot %lld frames: %lld kept, ids %lld .. %lld\n", static_cast<long long>(forgotten),
+                static_cast<long long>(detector.size()), static_cast<long long>(detector.id_of(0)),
+                static_cast<long long>(detector.id_of(detector.size() - 1)));
     return 0;
   } catch (const lsgd::Error& e) {  // IoError, FormatError, InvalidArgument, each naming the file
     std::fprintf(stderr, "error: %s\n", e.what());

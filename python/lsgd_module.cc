@@ -376,6 +376,10 @@ PYBIND11_MODULE(_lsgd, m) {
            "The Result process() would give for the frame as the next one, with nothing "
            "stored and nothing changed (relocalisation; a map opened read-only). Result.frame "
            "is the id process() would give it.")
+      .def("forget", &lsgd::Detector::forget, py::arg("first_id"), py::arg("last_id"),
+           "Forgets the stored frames whose ids lie in [first_id, last_id] and returns how many: "
+           "they are never candidates again; the kept frames keep their ids (their frame numbers "
+           "close up), and the detector is the one restoring only them would give.")
       .def("cut", &lsgd::Detector::cut,
            "The next frame starts a new sequence (a new session, another place): it "
            "continues no loop declared for the frame before it.")
@@ -430,6 +434,14 @@ PYBIND11_MODULE(_lsgd, m) {
              db.get().append(d, r, session, name, frame);
            }, py::arg("detector"), py::arg("result"), py::arg("session"), py::arg("name") = "",
            py::arg("frame") = -1, "Stores the detector's last frame (call right after process()).")
+      .def("forget", [](PyDatabase& db, std::int64_t first_id, std::int64_t last_id) {
+             return db.get().forget(first_id, last_id);
+           }, py::arg("first_id"), py::arg("last_id"),
+           "Forgets the frames whose ids lie in [first_id, last_id], in one transaction (as "
+           "Detector.forget); returns how many.")
+      .def("forget_session", [](PyDatabase& db, std::int64_t session) {
+             return db.get().forget_session(session);
+           }, py::arg("session"), "Forgets every frame of the session; returns how many.")
       .def("close", &PyDatabase::close,
            "Checkpoints and releases the file (a writer's lock included); again: nothing.")
       .def_property_readonly("closed", [](const PyDatabase& db) { return !db.db; })

@@ -263,6 +263,89 @@ void Detector::check_answers_queries() const {
   }
 }
 
+std::int64_t Detector::forget(std::int64_t first_id, std::int64_t last_id) {
+  const Exclusive exclusive(busy_, "forget");
+  if (first_id > last_id) {
+    internal::throw_invalid("Detector::forget: the first id ", first_id, " is above the last ",
+                            last_id);
+  }
+  for (const Stateful* c : stateful()) {
+    if (!c->forgets()) {
+      internal::throw_invalid("Detector::forget: ", c->name(), " keeps per-frame state and cannot "
+                              "forget frames (Stateful::forgets())");
+    }
+  }
+  const auto first = std::lower_bound(tags_.ids.begin(), tags_.ids.end(), first_id);
+  const auto last = std::upper_bound(first, tags_.ids.end(), last_id);
+  const std::int64_t forgotten = last - first;
+  if (forgotten == 0) return 0;
+  std::vector<std::int64_t> after(static_cast<std::size_t>(size()));
+  const auto from = static_cast<std::int64_t>(first - tags_.ids.begin());
+  for (std::int64_t f = 0; f < size(); ++f) {
+    after[static_cast<std::size_t>(f)] = f < from ? f : f < from + forgotten ? -1 : f - forgotten;
+  }
+  const bool last_kept = after.back() >= 0;
+  const bool cut_pending = continuity().loop < 0 && decision_.ranking_track().loop < 0;
+  auto kept = std::make_unique<Detector>(options_);
+  kept->restore_kept(*this, FrameRenumbering(std::move(after)));
+  // A cut() since the last frame still holds for the next one.
+  if (last_kept && cut_pending) kept->decision_.cut();
+  // Everything allocated: nothing below throws.
+  std::swap(store_, kept->store_);
+  std::swap(search_, kept->search_);
+  std::swap(evidence_, kept->evidence_);
+  std::swap(query_evidence_, kept->query_evidence_);
+  std::swap(stages_, kept->stages_);
+  std::swap(stage_list_, kept->stage_list_);
+  std::swap(decision_, kept->decision_);
+  std::swap(tags_, kept->tags_);
+  return forgotten;
+}
+
+namespace {
+
+// A stored frame's descriptor as one to store again.
+Descriptor copy_of(const DescriptorView& v, const GridSize& grid) {
+  Descriptor d;
+  d.grid = grid;
+  const auto cells = static_cast<std::size_t>(v.cells);
+  if (v.storage() == HistogramStorage::kCompact) {
+    d.storage = HistogramStorage::kCompact;
+    d.compact.assign(v.compact, v.compact + cells * kCompactBins);
+    d.cell_pixels = v.cell_pixels;
+  } else {
+    d.hist.assign(v.hist, v.hist + cells * kBins);
+    d.pixels.assign(v.pixels, v.pixels + cells);
+  }
+  return d;
+}
+
+}  // namespace
+
+void Detector::restore_kept(const Detector& from, const FrameRenumbering& renumbered) {
+  const std::vector<Stateful*> mine = stateful(), theirs = from.stateful();
+  StateWriter writer;
+  std::int64_t frame = 0;
+  for (std::int64_t f = 0; f < from.size(); ++f) {
+    if (renumbered.after(f) < 0) continue;
+    for (std::size_t c = 0; c < mine.size(); ++c) {
+      writer.clear();
+      theirs[c]->save_frame(f, writer);
+      const std::string what =
+          internal::concat("forget: frame ", f, "'s ", theirs[c]->name(), " state");
+      mine[c]->restore_renumbered(frame, from.width_, from.height_, theirs[c]->state_version(),
+                                  StateReader(writer.bytes().data(), writer.bytes().size(), what),
+                                  renumbered);
+    }
+    const std::int64_t group = search_->has_groups() ? search_->group_of(frame) : 0;
+    store_.add(copy_of(from.store_.view(f), from.store_.grid()),
+               std::clamp<std::int64_t>(group, 0, store_.groups()));
+    ++frame;
+  }
+  width_ = from.width_;
+  height_ = from.height_;
+}
+
 void Detector::cut() {
   const Exclusive exclusive(busy_, "cut");
   decision_.cut();

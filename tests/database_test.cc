@@ -1235,6 +1235,69 @@ TEST(DatabaseCli, RunResumesAndDbInfo) {
   EXPECT_NE(run_cli("db info " + dir + "/bad.db"), 0);
 }
 
+// lsgd db forget: a range of ids in the middle of the last session, then
+// the session before it; lsgd run --database resumes the last session at its
+// next image, its rows as a detector that forgot the same frames gives them.
+TEST(DatabaseCli, ForgetThenResume) {
+  const std::string dir = write_split_sequence("cli_forget_frames");
+  const std::string db = temp_path("cli_forget.db");
+  fs::remove(db);
+  const std::string flags = " --min-gap 20 --mode nodes";
+  {
+    std::ofstream first(dir + "/first.txt");
+    std::ifstream all(dir + "/all.txt");
+    std::string line;
+    for (int i = 0; i < 120 && std::getline(all, line); ++i) first << line << "\n";
+  }
+  ASSERT_EQ(run_cli("run --sequence " + dir + "/a --database " + db + flags), 0);
+  ASSERT_EQ(run_cli("run --sequence " + dir + "/first.txt --layout list --database " + db +
+                    " --session 1"),
+            0);
+  ASSERT_EQ(run_cli("db forget " + db + " --frames 110:114", dir + "/forget.txt"), 0);
+  EXPECT_EQ(read_bytes(dir + "/forget.txt"),
+            "forgot 5 frames (ids 110 .. 114) of " + db + ": it holds 215 frames in 2 sessions, " +
+                std::to_string(fs::file_size(db)) + " bytes\n");
+  ASSERT_EQ(run_cli("run --sequence " + dir + "/all.txt --layout list --database " + db +
+                    " --output " + dir + "/rest.csv"),
+            0);
+  // The same frames forgotten by a detector, then the rest processed.
+  DetectorOptions o;
+  o.search.min_gap = 20;
+  o.search.mode = kNodesSearch;
+  Detector d(o);
+  for (std::int64_t i = 0; i < 100; ++i) d.process(frame(i));
+  d.cut();
+  for (std::int64_t i = 0; i < 120; ++i) d.process(frame(i));
+  EXPECT_EQ(d.forget(110, 114), 5);
+  auto rows = csv_columns(dir + "/rest.csv", {0, 2, 3});
+  ASSERT_EQ(rows.size(), 31u);  // images 120 .. 149 as ids 220 .. 249
+  for (std::int64_t i = 120; i < 150; ++i) {
+    const Result r = d.process(frame(i));
+    EXPECT_EQ(rows[static_cast<std::size_t>(i - 119)],
+              std::to_string(r.id) + "," + std::to_string(r.loop ? d.id_of(r.best.frame) : -1) + "," +
+                  std::to_string(r.best.frame >= 0 ? d.id_of(r.best.frame) : -1) + ",")
+        << "image " << i;
+  }
+  ASSERT_EQ(run_cli("db forget " + db + " --session 0", dir + "/forget.txt"), 0);
+  ASSERT_EQ(run_cli("db info " + db + " --json", dir + "/info.json"), 0);
+  std::ifstream in(dir + "/info.json");
+  const nlohmann::json info = nlohmann::json::parse(in);
+  EXPECT_EQ(info["frames"], 145);
+  EXPECT_EQ(info["rows_verified"], true);
+  ASSERT_EQ(info["sessions"].size(), 1u);
+  EXPECT_EQ(info["sessions"][0]["first_frame"], 100);
+  // Nothing left to do: every image of the session is stored.
+  ASSERT_EQ(run_cli("run --sequence " + dir + "/all.txt --layout list --database " + db), 0);
+  ASSERT_EQ(run_cli("db info " + db + " --json", dir + "/info.json"), 0);
+  EXPECT_EQ(nlohmann::json::parse(std::ifstream(dir + "/info.json"))["frames"], 145);
+  // Refused: no selection, both, a backward or malformed range, an unknown session.
+  EXPECT_NE(run_cli("db forget " + db), 0);
+  EXPECT_NE(run_cli("db forget " + db + " --session 1 --frames 0:5"), 0);
+  EXPECT_NE(run_cli("db forget " + db + " --frames 9:3"), 0);
+  EXPECT_NE(run_cli("db forget " + db + " --frames 3-9"), 0);
+  EXPECT_NE(run_cli("db forget " + db + " --session 0"), 0);
+}
+
 // lsgd run --database in index mode saves the graph when it ends and the
 // next run resumes from it (or rebuilds it with --rebuild-index): both equal
 // to the uninterrupted run.

@@ -458,9 +458,17 @@ TEST(SearchIndex, FollowsThePreviousFramesPlacesAndKeepsThemAsState) {
   index->end(29, {{11, 0.0}, {20, 0.0}, {5, 0.0}, {8, 0.0}, {27, 0.0}});
   StateWriter w;
   index->save_frame(29, w);
-  StateWriter none;
-  index->save_frame(28, none);
-  EXPECT_TRUE(none.empty());  // only the last frame's places are read on restore
+  // Every frame keeps its own (a forget may make any of them the last):
+  // frame 28 ranked none.
+  StateWriter earlier;
+  index->save_frame(28, earlier);
+  EXPECT_EQ(earlier.bytes(), std::vector<std::uint8_t>(8, 0));
+  // A frame restored without them (a row of an older lsgd) has none known.
+  const std::unique_ptr<CandidateSearch> older = make_search(o);
+  older->restore_frame(0, 1, 1, 1, StateReader(nullptr, 0, "x"));
+  StateWriter unknown;
+  older->save_frame(0, unknown);
+  EXPECT_TRUE(unknown.empty());
   const std::unique_ptr<CandidateSearch> restored = make_search(o);
   EXPECT_NO_THROW(restored->check_frame(29, 1, 1, 1, StateReader(w.bytes().data(), w.bytes().size(), "x")));
   // Restored, it follows the same places.

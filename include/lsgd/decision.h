@@ -217,6 +217,10 @@ class LoopDecision final : public Stateful {
                    StateReader in) const override;
   void restore_frame(std::int64_t frame, int width, int height, std::uint32_t version,
                      StateReader in) override;
+  // A loop or track to a forgotten frame is none.
+  bool forgets() const override { return true; }
+  void restore_renumbered(std::int64_t frame, int width, int height, std::uint32_t version,
+                          StateReader in, const FrameRenumbering& renumbered) override;
 
  private:
   void record(std::int64_t frame, std::int64_t loop, int inliers, bool continued);

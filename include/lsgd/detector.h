@@ -157,6 +157,25 @@ class Detector {
   double stamp_of(std::int64_t frame) const;
   std::int64_t frame_of(std::int64_t id) const;
 
+  // Forgets the stored frames whose caller ids lie in [first_id, last_id]
+  // (bounded working memory; a session a map no longer needs); returns how
+  // many. They are never candidates again, and the detector is the one that
+  // restoring the kept frames' state gives (io::Database::restore), each
+  // component's records renumbered (Stateful::restore_renumbered):
+  //  - kept frames keep their ids and stamps; their frame numbers close up
+  //    (Result::frame, candidates), so keep ids, not numbers, across a forget;
+  //  - a dynamic node keeps its kept frames (its first kept frame leads it;
+  //    nodes left empty are gone); temporal places and declared loops that
+  //    were forgotten frames are none;
+  //  - the appearance statistics are computed again from the kept frames at
+  //    the next frame, index mode's graph at the next query;
+  //  - forgetting the last frames gives the detector as it was before it
+  //    processed them.
+  // Costs a copy of the kept frames (and index mode's graph rebuilt).
+  // Throws InvalidArgument, detector unchanged, for first_id > last_id or a
+  // component that cannot forget (Stateful::forgets()).
+  std::int64_t forget(std::int64_t first_id, std::int64_t last_id);
+
   // The next frame starts a new sequence (a new session of a map, a robot
   // put down elsewhere, the next place of a map of several): it continues no
   // loop declared for the frame before it (decision.h, continuity). `lsgd run
@@ -229,6 +248,8 @@ class Detector {
   void verify(AppearanceEvidence& evidence, bool store, Result& result);
   // The components with per-frame state, in the order their records are saved.
   std::vector<Stateful*> stateful() const;
+  // Restores this (new) detector from `from`'s frames for which after(f) >= 0.
+  void restore_kept(const Detector& from, const FrameRenumbering& renumbered);
 
   DetectorOptions options_;
   int width_ = 0;  // size of the first frame; every later frame must match
@@ -254,6 +275,7 @@ class Detector {
                      StateReader in) const override;
     void restore_frame(std::int64_t frame, int width, int height, std::uint32_t version,
                        StateReader in) override;
+    bool forgets() const override { return true; }  // its records name no frame
     std::int64_t last() const { return ids.empty() ? -1 : ids.back(); }
     std::vector<std::int64_t> ids;  // increasing
     std::vector<double> stamps;     // NaN: none

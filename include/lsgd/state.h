@@ -86,6 +86,22 @@ std::vector<StateRecord> decode_records(const std::uint8_t* data, std::size_t si
 void check_state_version(const std::string& what, const char* component, std::uint32_t version,
                          std::uint32_t newest);
 
+// The frames' numbers before and after some are forgotten: after(f) is old
+// frame f's new number, -1 for a forgotten frame or for -1 (none).
+class FrameRenumbering {
+ public:
+  explicit FrameRenumbering(std::vector<std::int64_t> after) : after_(std::move(after)) {}
+  std::int64_t after(std::int64_t frame) const {
+    return frame < 0 || frame >= static_cast<std::int64_t>(after_.size())
+               ? -1
+               : after_[static_cast<std::size_t>(frame)];
+  }
+  std::int64_t frames_before() const { return static_cast<std::int64_t>(after_.size()); }
+
+ private:
+  std::vector<std::int64_t> after_;
+};
+
 // A component with per-frame state (see the top of this file).
 class Stateful {
  public:
@@ -118,6 +134,24 @@ class Stateful {
   virtual void restore_frame(std::int64_t frame, int width, int height, std::uint32_t version,
                              StateReader in) {
     (void)frame, (void)width, (void)height, (void)version, (void)in;
+  }
+
+  // Forgetting frames (Detector::forget, io::Database::forget): the
+  // detector's components are made anew and each kept frame's record, as
+  // save_frame() wrote it, is handed in order to restore_renumbered() with
+  // the frames' numbers before and after (`renumbered`). A record that names
+  // other frames (a place, a loop, a group's members) names them by their
+  // new numbers afterwards, or by none when they were forgotten.
+  // forgets(): whether the component can; by default one without state.
+  // Detector::forget refuses (InvalidArgument naming it) one that cannot.
+  virtual bool forgets() const { return !has_state(); }
+  // Restores kept frame `frame` (its new number) from its record; by default
+  // restore_frame(), right for records that name no frame (features, ids).
+  virtual void restore_renumbered(std::int64_t frame, int width, int height,
+                                  std::uint32_t version, StateReader in,
+                                  const FrameRenumbering& renumbered) {
+    (void)renumbered;
+    restore_frame(frame, width, height, version, in);
   }
 };
 

@@ -211,6 +211,31 @@ def test_query_answers_as_process_and_stores_nothing(tmp_path):
         m.query(np.zeros((10, 10), np.uint8))
 
 
+def test_forget_a_session_and_frames(tmp_path):
+    frames = route(20, 3)
+    path = str(tmp_path / "forget.db")
+    db = lsgd.Database.create(path, search={"min_gap": 5})
+    d = lsgd.Detector(db.options)
+    for i, f in enumerate(frames):
+        db.append(d, d.process(f, id=100 + i), session=i // 20)
+    assert db.forget_session(2) == 20
+    assert d.forget(140, 159) == 20
+    assert db.forget(105, 109) == 5 and d.forget(105, 109) == 5
+    assert db.forget(0, 99) == 0
+    assert d.size == db.frames == 35
+    assert db.frame_ids() == [i for i in range(100, 140) if not 105 <= i <= 109]
+    restored = db.detector()
+    for i, f in enumerate(frames[:20]):  # the first lap again: its places are kept
+        r, e = restored.process(f, id=200 + i), d.process(f, id=200 + i)
+        assert (r.frame, r.best.frame, r.loop, r.loop_id, r.best.score) == \
+            (e.frame, e.best.frame, e.loop, e.loop_id, e.best.score)
+        assert not 105 <= r.loop_id <= 109
+    with pytest.raises(lsgd.InvalidArgument, match=r"session 2 has no frames \(sessions: 0, 1\)"):
+        db.forget_session(2)
+    with pytest.raises(lsgd.InvalidArgument, match="the first id 9 is above the last 1"):
+        d.forget(9, 1)
+
+
 def test_index_mode_graph_saved_and_restored(tmp_path):
     path = str(tmp_path / "index.db")
     frames = route(20, 3)

@@ -10,11 +10,13 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <cstring>
 #include <limits>
 #include <map>
 #include <mutex>
 #include <set>
+#include <sstream>
 #include <type_traits>
 
 #include "internal/check.h"
@@ -313,6 +315,9 @@ struct Database::Impl {
   std::int64_t last_session = -1;
   std::int64_t last_frame = -1;     // the caller's id of the last row
   std::set<std::int64_t> sessions;  // sessions with frames
+  // Meta session_first_ids (written by forget()): the first id of sessions
+  // whose frames before them were forgotten (SessionFrames::first_id).
+  std::map<std::int64_t, std::int64_t> session_first;
   int format = kDatabaseFormatVersion;
   int lock_fd = -1;                 // holds the writer's lock (flock) while open
   std::int64_t since_checkpoint = 0;
@@ -503,6 +508,20 @@ void Database::Impl::load_header() {
                    sqlite3_column_int64(count.get(), 2), ")");
     }
     if (frames > 0 && !sized) format_error(path, frames, " frames but no frame size in meta");
+  }
+  if (const auto first = meta.find("session_first_ids"); first != meta.end()) {
+    // "session=first_id" pairs separated by spaces.
+    std::istringstream in(first->second);
+    std::string pair;
+    while (in >> pair) {
+      long long s = -1, f = -1;
+      char end = 0;
+      if (std::sscanf(pair.c_str(), "%lld=%lld%c", &s, &f, &end) != 2 || s < 0 || f < 0 ||
+          s > kMaxSession || f > kMaxFrameId) {
+        format_error(path, "meta session_first_ids '", first->second, "' is not session=first_id pairs");
+      }
+      session_first[s] = f;
+    }
   }
   if (frames > 0) {
     Statement last(db, path,
@@ -777,6 +796,10 @@ SessionFrames Database::session_frames(std::int64_t session) const {
     sqlite3_bind_int64(before.get(), 1, session);
     if (step_read(m.db, before.get(), m.path)) {
       out.first_id = sqlite3_column_int64(before.get(), 0) + 1;
+    }
+    // Frames before it were forgotten: the first id it had.
+    if (const auto kept = m.session_first.find(session); kept != m.session_first.end()) {
+      out.first_id = kept->second;
     }
   }
   Statement rows(m.db, m.path,
@@ -1304,6 +1327,115 @@ void Database::append_all(const Detector& detector, std::int64_t session) {
   m.last_session = session;
   m.sessions.insert(session);
   m.checkpoint("open");
+}
+
+std::int64_t Database::forget(std::int64_t first_id, std::int64_t last_id) {
+  Impl& m = *impl_;
+  m.check_writable();
+  if (first_id > last_id) {
+    internal::throw_invalid("database ", m.path, ": forget: the first id ", first_id,
+                            " is above the last ", last_id);
+  }
+  struct Row {
+    std::int64_t session;
+    std::string name;
+    std::int64_t id;
+  };
+  std::vector<Row> rows;
+  {
+    Statement stmt(m.db, m.path,
+                   concat("SELECT session, name, ", frame_column(m.format), " FROM frames ORDER BY id")
+                       .c_str());
+    while (step_read(m.db, stmt.get(), m.path)) {
+      rows.push_back({sqlite3_column_int64(stmt.get(), 0), column_text(stmt.get(), 1),
+                      sqlite3_column_int64(stmt.get(), 2)});
+    }
+  }
+  const auto from = std::find_if(rows.begin(), rows.end(), [&](const Row& r) { return r.id >= first_id; });
+  const auto to = std::find_if(from, rows.end(), [&](const Row& r) { return r.id > last_id; });
+  const std::int64_t forgotten = to - from;
+  if (forgotten == 0) return 0;
+  const auto dense = static_cast<std::int64_t>(from - rows.begin());  // the first forgotten frame
+  // The first id of every session as lsgd run numbered it, before any of
+  // its earlier frames are gone.
+  std::map<std::int64_t, std::int64_t> first_ids = m.session_first;
+  for (std::size_t k = 0; k < rows.size(); ++k) {
+    if (k == 0 || rows[k].session != rows[k - 1].session) {
+      first_ids.emplace(rows[k].session, k == 0 ? 0 : rows[k - 1].id + 1);
+    }
+  }
+  // The kept frames' state: what the detector keeps when it forgets them.
+  Detector detector(m.options);
+  restore(detector, IndexUse::kRebuild);
+  if (detector.forget(first_id, last_id) != forgotten) {
+    format_error(m.path, "the rows' ids do not match their frames' state");
+  }
+  rows.erase(from, to);
+  std::set<std::int64_t> sessions;
+  for (const Row& r : rows) sessions.insert(r.session);
+  // Those the frames before them no longer give.
+  std::map<std::int64_t, std::int64_t> session_first;
+  std::string kept_first;
+  for (const auto& [session, id] : first_ids) {
+    if (sessions.count(session) == 0) continue;
+    const auto at = std::find_if(rows.begin(), rows.end(), [&](const Row& r) { return r.session == session; });
+    const std::int64_t before = at == rows.begin() ? 0 : std::prev(at)->id + 1;
+    if (before == id) continue;
+    session_first[session] = id;
+    kept_first += concat(kept_first.empty() ? "" : " ", session, "=", id);
+  }
+  transaction(m.db, m.path, [&] {
+    const std::map<std::string, std::string> saved = m.meta;
+    try {
+      Statement drop(m.db, m.path, "DELETE FROM frames WHERE id >= ?1");
+      sqlite3_bind_int64(drop.get(), 1, dense);
+      if (sqlite3_step(drop.get()) != SQLITE_DONE) io_error(m.path, "cannot write (", sqlite3_errmsg(m.db), ")");
+      // The saved graph numbers the forgotten frames: the next resume builds it again.
+      exec_write(m.db, m.path, "DELETE FROM indexes");
+      for (std::int64_t f = dense; f < detector.size(); ++f) {
+        const Row& r = rows[static_cast<std::size_t>(f)];
+        m.insert_frame(detector, f, r.session, r.name, r.id);
+      }
+      if (kept_first.empty()) {
+        m.meta.erase("session_first_ids");
+        exec_write(m.db, m.path, "DELETE FROM meta WHERE key = 'session_first_ids'");
+      } else {
+        m.meta["session_first_ids"] = kept_first;
+      }
+      if (rows.empty()) {  // the next frame sets the size again
+        for (const char* key : {"width", "height", "grid_rows", "grid_cols"}) m.meta[key] = "0";
+      }
+      m.write_meta();
+    } catch (...) {
+      m.meta = saved;
+      throw;
+    }
+  });
+  m.frames = detector.size();
+  m.sessions = sessions;
+  m.last_session = rows.empty() ? -1 : rows.back().session;
+  m.last_frame = rows.empty() ? -1 : rows.back().id;
+  m.session_first = std::move(session_first);
+  if (rows.empty()) m.width = m.height = 0, m.grid = GridSize{0, 0};
+  m.checkpoint("open");
+  // The freed pages go back to the file system.
+  exec_write(m.db, m.path, "VACUUM");
+  m.checkpoint("open");
+  return forgotten;
+}
+
+std::int64_t Database::forget_session(std::int64_t session) {
+  Impl& m = *impl_;
+  m.check_writable();
+  if (m.sessions.count(session) == 0) {
+    std::string known;
+    for (const std::int64_t s : m.sessions) known += concat(known.empty() ? "" : ", ", s);
+    internal::throw_invalid("database ", m.path, ": session ", session, " has no frames (sessions: ",
+                            known.empty() ? "none" : known, ")");
+  }
+  const SessionFrames frames = session_frames(session);
+  // A session's frames are consecutive: the range of its ids holds no other.
+  return forget(frames.frames.front().frame, frames.frames.back().frame);
 }
 
 std::int64_t Database::save_index(const Detector& detector) {

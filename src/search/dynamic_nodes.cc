@@ -1,6 +1,7 @@
 #include "lsgd/search/dynamic_nodes.h"
 
 #include <algorithm>
+#include <unordered_map>
 
 #include "internal/check.h"
 #include "search/scoring.h"
@@ -156,11 +157,27 @@ class NodesSearch final : public CandidateSearch {
     nodes_.add_member(node, frame);
     node_of_.push_back(node);
   }
+  // A node keeps its kept frames, the first of them its first frame; a node
+  // left without frames is gone, and the nodes are numbered again in the
+  // order of their first frames (as assign() would have created them).
+  bool forgets() const override { return true; }
+  void restore_renumbered(std::int64_t frame, int, int, std::uint32_t, StateReader in,
+                          const FrameRenumbering&) override {
+    if (frame == 0) renumbered_nodes_.clear();
+    const std::int64_t before = in.get_i64();
+    const std::int64_t node =
+        renumbered_nodes_.emplace(before, static_cast<std::int64_t>(renumbered_nodes_.size()))
+            .first->second;
+    nodes_.add_member(node, frame);
+    node_of_.push_back(node);
+  }
 
  private:
   SearchOptions options_;
   DynamicNodes nodes_;
   std::vector<std::int64_t> node_of_;  // node of each stored frame
+  // restore_renumbered(): the new number of each node numbered before.
+  std::unordered_map<std::int64_t, std::int64_t> renumbered_nodes_;
   std::vector<Candidate> scratch_;
 };
 

@@ -56,6 +56,8 @@ class GeometricStage final : public VerificationStage {
     read(in);
     verifier_.add_features(points_, orb_, width, height);
   }
+  // Its records name no other frame: restore_frame() restores them after a forget.
+  bool forgets() const override { return true; }
 
   const GeometricVerifier& verifier() const { return verifier_; }
 

@@ -115,6 +115,13 @@ class TemporalStage final : public VerificationStage {
     const std::int64_t place = in.present() ? in.get_i64() : -1;
     end(frame, {Candidate{place, 0.0}});
   }
+  // A forgotten place is no place (-1).
+  bool forgets() const override { return true; }
+  void restore_renumbered(std::int64_t frame, int, int, std::uint32_t, StateReader in,
+                          const FrameRenumbering& renumbered) override {
+    const std::int64_t place = in.present() ? renumbered.after(in.get_i64()) : -1;
+    end(frame, {Candidate{place, 0.0}});
+  }
 
  private:
   TemporalVerifier verifier_;

@@ -1,6 +1,9 @@
 // lsgd db info FILE [--json]: what a detector database (lsgd run --database) holds.
+// lsgd db forget FILE (--session S | --frames FIRST:LAST): removes frames from it.
 #include <CLI/CLI.hpp>
+#include <cstdint>
 #include <iostream>
+#include <optional>
 #include <memory>
 #include <nlohmann/json.hpp>
 #include <sstream>
@@ -9,6 +12,7 @@
 #include "common.h"
 #include "lsgd/error.h"
 #include "lsgd/io/database.h"
+#include "lsgd/limits.h"
 
 namespace lsgd::cli {
 namespace {
@@ -84,10 +88,80 @@ void db_info(const DbInfoArgs& args) {
   if (!damage.empty()) throw FormatError(damage);
 }
 
+struct DbForgetArgs {
+  std::string path;
+  std::optional<std::int64_t> session;
+  std::string frames;  // FIRST:LAST, caller ids, either end may be left out
+};
+
+// "FIRST:LAST", "FIRST:" or ":LAST" as an inclusive range of frame ids.
+std::pair<std::int64_t, std::int64_t> parse_id_range(const std::string& text) {
+  const auto colon = text.find(':');
+  const auto bad = [&](const std::string& why) {
+    return InvalidArgument("--frames '" + text + "': " + why +
+                           " (FIRST:LAST, frame ids as lsgd run numbered them; FIRST: or :LAST for "
+                           "an open end)");
+  };
+  if (colon == std::string::npos || text.find(':', colon + 1) != std::string::npos) {
+    throw bad("not FIRST:LAST");
+  }
+  const auto number = [&](const std::string& part, std::int64_t open) {
+    if (part.empty()) return open;
+    std::size_t used = 0;
+    long long v = 0;
+    try {
+      v = std::stoll(part, &used);
+    } catch (const std::exception&) {
+      used = 0;
+    }
+    if (used != part.size() || v < 0 || v > kMaxFrameId) {
+      throw bad("'" + part + "' is not a frame id in [0, " + std::to_string(kMaxFrameId) + "]");
+    }
+    return static_cast<std::int64_t>(v);
+  };
+  const std::int64_t first = number(text.substr(0, colon), 0);
+  const std::int64_t last = number(text.substr(colon + 1), kMaxFrameId);
+  if (first > last) throw bad("the first id is above the last");
+  return {first, last};
+}
+
+void db_forget(const DbForgetArgs& args) {
+  if (args.session.has_value() == !args.frames.empty()) {
+    throw InvalidArgument("lsgd db forget: give --session S or --frames FIRST:LAST (one of them)");
+  }
+  io::Database db = io::Database::open(args.path);
+  const bool had_index = db.info().index_frames > 0;
+  std::int64_t forgotten = 0;
+  std::string what;
+  if (args.session) {
+    forgotten = db.forget_session(*args.session);
+    what = "session " + std::to_string(*args.session);
+  } else {
+    const auto [first, last] = parse_id_range(args.frames);
+    forgotten = db.forget(first, last);
+    what = last == kMaxFrameId ? "ids from " + std::to_string(first)
+           : first == 0       ? "ids up to " + std::to_string(last)
+                              : "ids " + std::to_string(first) + " .. " + std::to_string(last);
+  }
+  const io::DatabaseInfo info = db.info();
+  if (forgotten == 0) {
+    std::cout << args.path << ": no frame has " << what << ": nothing forgotten\n";
+    return;
+  }
+  std::cout << "forgot " << forgotten << " frames (" << what << ") of " << args.path << ": it holds "
+            << info.frames << " frames in " << info.sessions.size() << " sessions, " << info.bytes
+            << " bytes"
+            << (had_index ? "; its saved search index was dropped (the next lsgd run --database "
+                            "builds it again)"
+                          : "")
+            << "\n";
+}
+
 }  // namespace
 
 void register_db(CLI::App& app) {
-  CLI::App* cmd = app.add_subcommand("db", "inspect a detector database (lsgd run --database)");
+  CLI::App* cmd = app.add_subcommand(
+      "db", "inspect a detector database (lsgd run --database), or forget frames of it");
   cmd->require_subcommand(1);
   auto args = std::make_shared<DbInfoArgs>();
   CLI::App* info = cmd->add_subcommand(
@@ -99,6 +173,21 @@ void register_db(CLI::App& app) {
       ->check(kNonEmptyPath);
   info->add_flag("--json", args->json, "print JSON instead of text");
   info->callback([args] { db_info(*args); });
+
+  auto forget_args = std::make_shared<DbForgetArgs>();
+  CLI::App* forget = cmd->add_subcommand(
+      "forget",
+      "removes a session or a range of frame ids from a database, in place, in one transaction: "
+      "the kept frames keep their ids, their nodes and state as if the forgotten frames had never "
+      "been part of the map; lsgd run --database resumes it as before");
+  forget->add_option("FILE", forget_args->path, "database written by lsgd run --database")
+      ->required()
+      ->check(kNonEmptyPath);
+  forget->add_option("--session", forget_args->session, "forget every frame of this session");
+  forget->add_option("--frames", forget_args->frames,
+                     "forget the frames whose ids lie in FIRST:LAST (inclusive; FIRST: or :LAST "
+                     "for an open end), ids as lsgd run numbered them (the CSV's frame column)");
+  forget->callback([forget_args] { db_forget(*forget_args); });
 }
 
 }  // namespace lsgd::cli

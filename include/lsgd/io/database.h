@@ -14,6 +14,9 @@
 //     writer           "open" while a writer has the file, "closed" after it
 //                      closed it (absent in older files)
 //     checkpoint_frames  frames in the file at the writer's last checkpoint
+//     session_first_ids  "session=first_id ..." (absent when none): the id a
+//                      session's numbering started from, for sessions whose
+//                      earlier frames forget() removed (SessionFrames::first_id)
 //     checksum         CRC-32 of every other "key=value\n", keys in order
 //   frames(id INTEGER PRIMARY KEY,  -- detector frame id: 0, 1, 2, ... dense
 //          session INTEGER NOT NULL, -- 0 .. kMaxSession, chosen by the writer;
@@ -97,7 +100,9 @@ struct StoredFrame {
 struct SessionFrames {
   std::int64_t session = -1;
   // One past the id of the frame stored just before the session (0 for the
-  // first): lsgd run numbers a session's frames first_id + image index.
+  // first), or, when frames before it were forgotten (Database::forget),
+  // the id it was then: lsgd run numbers a session's frames first_id + image
+  // index.
   std::int64_t first_id = 0;
   std::vector<StoredFrame> frames;  // in order; empty for an unknown session
 };
@@ -187,6 +192,23 @@ class Database {
   // frames stored after it are indexed at the next query. A damaged saved
   // index is a FormatError (kRebuild ignores it).
   void restore(Detector& detector, IndexUse index = IndexUse::kSaved) const;
+
+  // Forgets the frames whose caller ids lie in [first_id, last_id], in one
+  // transaction (bounded working memory; a session the map no longer needs);
+  // returns how many (0: none there, nothing changed). Afterwards restore()
+  // gives the detector Detector::forget() leaves (the kept frames' records
+  // renumbered: nodes keep their kept frames, places and loops that were
+  // forgotten are none), the kept frames keep their ids, names and
+  // sessions, the saved index is dropped (the next resume rebuilds it) and
+  // the file gives the freed space back (VACUUM). Rows before the first
+  // forgotten frame stay as written; every later one is written again.
+  // lsgd run still resumes the last session at its next image. Throws
+  // InvalidArgument for first_id > last_id or a database opened read-only,
+  // FormatError (nothing changed) for a damaged row.
+  std::int64_t forget(std::int64_t first_id, std::int64_t last_id);
+  // Forgets every frame of `session`; InvalidArgument naming the sessions
+  // there are when it has none.
+  std::int64_t forget_session(std::int64_t session);
 
   // Saves the detector's search index (Detector::save_index) in place of the
   // one saved before, in one transaction, in parts of at most 64 MiB; the

@@ -7,6 +7,8 @@
 #include <pybind11/stl.h>
 
 #include <cstring>
+#include <fstream>
+#include <iomanip>
 #include <opencv2/core.hpp>
 #include <string>
 #include <vector>
@@ -14,6 +16,7 @@
 #include "lsgd/detector.h"
 #include "lsgd/error.h"
 #include "lsgd/eval/dataset.h"
+#include "lsgd/eval/detections.h"
 #include "lsgd/eval/gt_formats.h"
 #include "lsgd/eval/groundtruth.h"
 #include "lsgd/eval/metrics.h"
@@ -310,6 +313,57 @@ PYBIND11_MODULE(_lsgd, m) {
           return lsgd::similarity(a.view(), b.view(), lsgd::parse_similarity_metric(metric.c_str()));
         }, py::arg("a"), py::arg("b"), py::arg("metric") = std::string(lsgd::to_string(lsgd::SimilarityOptions{}.metric)),
         "Similarity of two descriptors (the detector's similarity.metric by default).");
+  m.def("match",
+        [](const std::vector<lsgd::Descriptor>& reference, const std::vector<lsgd::Descriptor>& query,
+           int top_k, const std::string& metric, std::int64_t query_offset, const py::object& output) {
+          std::vector<lsgd::DescriptorView> refs, queries;
+          for (const lsgd::Descriptor& d : reference) refs.push_back(d.view());
+          for (const lsgd::Descriptor& d : query) queries.push_back(d.view());
+          std::vector<lsgd::TopMatch> found;
+          {
+            py::gil_scoped_release release;
+            found = lsgd::match_top_k(refs, queries, top_k,
+                                      lsgd::parse_similarity_metric(metric.c_str()), query_offset);
+          }
+          if (!output.is_none()) {  // the CSV lsgd match writes
+            const std::string path = py::str(output);
+            std::ofstream out(path, std::ios::trunc);
+            if (!out) throw lsgd::IoError("cannot write output file '" + path + "'");
+            out << "query,match,score,similarity,rank\n";
+            for (const lsgd::TopMatch& t : found) {
+              out << t.query << ',' << t.match << ',' << std::setprecision(9) << t.score << ','
+                  << t.similarity << ',' << t.rank << '\n';
+            }
+            out.flush();
+            if (!out) throw lsgd::IoError("error while writing '" + path + "'");
+          }
+          const auto n = static_cast<py::ssize_t>(found.size());
+          py::array_t<std::int64_t> q(n), j(n), rank(n);
+          py::array_t<double> score(n), sim(n);
+          for (py::ssize_t i = 0; i < n; ++i) {
+            const lsgd::TopMatch& t = found[static_cast<std::size_t>(i)];
+            q.mutable_at(i) = t.query;
+            j.mutable_at(i) = t.match;
+            score.mutable_at(i) = t.score;
+            sim.mutable_at(i) = t.similarity;
+            rank.mutable_at(i) = t.rank;
+          }
+          py::dict d;
+          d["query"] = q;
+          d["match"] = j;
+          d["score"] = score;
+          d["similarity"] = sim;
+          d["rank"] = rank;
+          return d;
+        },
+        py::arg("reference"), py::arg("query"), py::arg("top_k") = 1,
+        py::arg("metric") = std::string(lsgd::to_string(lsgd::SimilarityOptions{}.metric)),
+        py::arg("query_offset") = 0, py::arg("output") = py::none(),
+        "Place recognition between two traverses, as lsgd match: the top_k reference "
+        "descriptors of every query descriptor (Detector.describe), as numpy arrays query "
+        "(query_offset + index), match (reference index), score (sigma of the query's "
+        "similarities to the reference), similarity and rank (1: best); output: also write "
+        "lsgd match's CSV there (lsgd.evaluate_detections reads it).");
   py::class_<lsgd::Result>(m, "Result")
       .def_readonly("frame", &lsgd::Result::frame)
       .def_readonly("id", &lsgd::Result::id)
@@ -522,4 +576,10 @@ PYBIND11_MODULE(_lsgd, m) {
         }, py::arg("results"), py::arg("groundtruth"), py::arg("min_gap"),
         "Scores Detector results (one per frame, ids as the ground truth's) under the strict "
         "protocol (docs/evaluation.md): the declared loops (operating point), R@100P, AP, R@N.");
+  m.def("evaluate_detections", [](const std::string& path, const lsgd::eval::GroundTruth& gt,
+                                  std::int64_t min_gap) {
+          return lsgd::eval::evaluate(lsgd::eval::read_detections(path, gt.frames()), gt, min_gap);
+        }, py::arg("path"), py::arg("groundtruth"), py::arg("min_gap"),
+        "Scores a detections CSV (query,match,score[,rank]: lsgd match, lsgd.match, another "
+        "system's output) as lsgd eval --detections does.");
 }

@@ -216,4 +216,37 @@ void similarities(const DescriptorView& query, const DescriptorView* frames, std
   }
 }
 
+std::vector<TopMatch> match_top_k(const std::vector<DescriptorView>& reference,
+                                  const std::vector<DescriptorView>& queries, int top_k,
+                                  SimilarityMetric metric, std::int64_t query_offset) {
+  if (top_k < 1) internal::throw_invalid("match: top_k ", top_k, " must be at least 1");
+  if (reference.empty()) internal::throw_invalid("match: the reference holds no frame");
+  const std::size_t k = std::min(static_cast<std::size_t>(top_k), reference.size());
+  std::vector<TopMatch> out;
+  out.reserve(k * queries.size());
+  std::vector<double> scores(reference.size());
+  std::vector<std::size_t> order(reference.size());
+  for (std::size_t q = 0; q < queries.size(); ++q) {
+    similarities(queries[q], reference.data(), reference.size(), metric, scores.data());
+    // Standardised against the query's own distribution over the reference.
+    double mean = 0;
+    for (const double v : scores) mean += v;
+    mean /= static_cast<double>(scores.size());
+    double var = 0;
+    for (const double v : scores) var += (v - mean) * (v - mean);
+    const double sd = std::sqrt(var / static_cast<double>(scores.size()));
+    for (std::size_t j = 0; j < order.size(); ++j) order[j] = j;
+    std::partial_sort(order.begin(), order.begin() + static_cast<std::ptrdiff_t>(k), order.end(),
+                      [&](std::size_t a, std::size_t b) {
+                        return scores[a] > scores[b] || (scores[a] == scores[b] && a < b);
+                      });
+    for (std::size_t r = 0; r < k; ++r) {
+      const std::size_t j = order[r];
+      out.push_back({query_offset + static_cast<std::int64_t>(q), static_cast<std::int64_t>(j),
+                     sd > 0 ? (scores[j] - mean) / sd : 0.0, scores[j], static_cast<int>(r + 1)});
+    }
+  }
+  return out;
+}
+
 }  // namespace lsgd

@@ -338,5 +338,41 @@ TEST(SimilarityOptions, DefaultIsReference) {
   }
 }
 
+// match_top_k (lsgd match, Python lsgd.match): each query's best reference
+// frames by similarity, ties by lower index, scored in sigma of the query's
+// similarities to the whole reference.
+TEST(MatchTopK, BestFirstTiesByIndexScoresInSigma) {
+  std::vector<Descriptor> refs;
+  for (int i = 0; i < 6; ++i) refs.push_back(random_descriptor(8, 500 + i));
+  refs.push_back(refs[2]);  // a tie with frame 2
+  const std::vector<Descriptor> queries = {refs[2], refs[4]};
+  std::vector<DescriptorView> r, q;
+  for (const Descriptor& d : refs) r.push_back(d.view());
+  for (const Descriptor& d : queries) q.push_back(d.view());
+  const std::vector<TopMatch> m = match_top_k(r, q, 3, SimilarityMetric::kReference, 100);
+  ASSERT_EQ(m.size(), 6u);
+  EXPECT_EQ(m[0].query, 100);
+  EXPECT_EQ(m[0].match, 2);
+  EXPECT_EQ(m[1].match, 6);  // the same similarity: after the lower index
+  EXPECT_EQ(m[0].similarity, 1.0);
+  EXPECT_EQ(m[1].similarity, 1.0);
+  EXPECT_EQ(m[2].rank, 3);
+  EXPECT_GE(m[1].similarity, m[2].similarity);
+  EXPECT_EQ(m[3].query, 101);
+  EXPECT_EQ(m[3].match, 4);
+  std::vector<double> s;
+  for (const DescriptorView& v : r) s.push_back(similarity(q[1], v, SimilarityMetric::kReference));
+  double mean = 0, var = 0;
+  for (const double v : s) mean += v / static_cast<double>(s.size());
+  for (const double v : s) var += (v - mean) * (v - mean) / static_cast<double>(s.size());
+  EXPECT_NEAR(m[3].score, (1.0 - mean) / std::sqrt(var), 1e-12);
+  // k beyond the reference: every frame once.
+  EXPECT_EQ(match_top_k(r, q, 50, SimilarityMetric::kReference).size(), 2 * r.size());
+  EXPECT_THROW(match_top_k(r, q, 0, SimilarityMetric::kReference), InvalidArgument);
+  EXPECT_THROW(match_top_k({}, q, 1, SimilarityMetric::kReference), InvalidArgument);
+  const Descriptor other = random_descriptor(4, 9);
+  EXPECT_THROW(match_top_k(r, {other.view()}, 1, SimilarityMetric::kReference), InvalidArgument);
+}
+
 }  // namespace
 }  // namespace lsgd

@@ -4,6 +4,8 @@
 #pragma once
 
 #include <cstddef>
+#include <cstdint>
+#include <vector>
 
 #include "lsgd/descriptor.h"
 
@@ -53,5 +55,26 @@ double similarity(const DescriptorView& a, const DescriptorView& b, SimilarityMe
 // a frame does not match the query (before writing anything).
 void similarities(const DescriptorView& query, const DescriptorView* frames, std::size_t count,
                   SimilarityMetric metric, double* out);
+
+// One of a query's best reference frames (match_top_k).
+struct TopMatch {
+  std::int64_t query = 0;  // query_offset + the query's index
+  std::int64_t match = 0;  // the reference frame's index
+  // The similarity in standard deviations of the query's similarities to the
+  // whole reference (comparable across queries, as the detector's
+  // single-frame evidence; 0 when they are all equal).
+  double score = 0;
+  double similarity = 0;  // the metric's own value
+  int rank = 1;           // 1 for the best
+};
+
+// Place recognition between two traverses (lsgd match, Python lsgd.match):
+// the top_k (at most the reference's size) reference frames of every query,
+// best first, equal similarities by lower index; queries in order.
+// InvalidArgument for top_k < 1, an empty reference or descriptors that do
+// not match (grid, storage).
+std::vector<TopMatch> match_top_k(const std::vector<DescriptorView>& reference,
+                                  const std::vector<DescriptorView>& queries, int top_k,
+                                  SimilarityMetric metric, std::int64_t query_offset = 0);
 
 }  // namespace lsgd

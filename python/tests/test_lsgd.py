@@ -391,6 +391,39 @@ def test_callers_ids_and_stamps(tmp_path):
         assert [r.id_of(k) for k in range(10)] == db.frame_ids() and r.stamp_of(9) == 9.0
 
 
+def test_match_one_traverse_against_another(tmp_path):
+    places = 12
+    reference = [place(p, 0) for p in range(places)]
+    query = [place(p, 3) for p in range(places)]  # the same places, moved
+    d = lsgd.Detector()
+    refs = [d.describe(f) for f in reference]
+    queries = [d.describe(f) for f in query]
+    out = tmp_path / "pairs.csv"
+    m = lsgd.match(refs, queries, top_k=3, query_offset=places, output=str(out))
+    assert m["query"].dtype == np.int64 and m["score"].dtype == np.float64
+    assert list(m["rank"]) == [1, 2, 3] * places
+    assert list(m["query"][::3]) == list(range(places, 2 * places))
+    assert list(m["match"][::3]) == list(range(places))  # each place finds itself first
+    assert np.all(m["similarity"][::3] >= m["similarity"][1::3])
+    gt = tmp_path / "gt.txt"
+    gt.write_text("".join(f"{places + p} {p}\n" for p in range(places)))
+    metrics = lsgd.evaluate_detections(str(out), lsgd.load_groundtruth(str(gt), frames=2 * places), min_gap=0)
+    assert metrics.recall_at_1 == 1.0
+    if CLI:  # lsgd match writes the same file from the images
+        for name, frames in (("r", reference), ("q", query)):
+            (tmp_path / name).mkdir()
+            for i, f in enumerate(frames):
+                write_pgm(tmp_path / name / f"{i:03d}.pgm", f)
+        cli = tmp_path / "cli.csv"
+        subprocess.run([CLI, "match", "--reference", str(tmp_path / "r"), "--query", str(tmp_path / "q"),
+                        "--top-k", "3", "--output", str(cli)], check=True, capture_output=True)
+        assert cli.read_text() == out.read_text()
+    with pytest.raises(lsgd.InvalidArgument, match="top_k 0 must be at least 1"):
+        lsgd.match(refs, queries, top_k=0)
+    with pytest.raises(lsgd.InvalidArgument, match="the reference holds no frame"):
+        lsgd.match([], queries)
+
+
 def test_describe_to_numpy_and_back():
     frames = route(5, 1)
     d = lsgd.Detector(search={"min_gap": 5})

@@ -21,7 +21,6 @@
 #include <iomanip>
 #include <iostream>
 #include <memory>
-#include <numeric>
 #include <opencv2/core.hpp>
 #include <optional>
 #include <vector>
@@ -131,23 +130,11 @@ void match(const MatchArgs& args) {
   }
   *out << "query,match,score,similarity,rank\n";
   const auto k = static_cast<std::size_t>(std::min<std::int64_t>(args.top_k, references));
-  std::vector<double> scores(refs.size());
-  std::vector<std::size_t> order(refs.size());
-  for (std::size_t q = 0; q < queries.size(); ++q) {
-    similarities(queries[q].view(), views.data(), views.size(), options.similarity.metric, scores.data());
-    // Standardised against the query's own distribution over the reference.
-    const double mean = std::accumulate(scores.begin(), scores.end(), 0.0) / static_cast<double>(scores.size());
-    double var = 0;
-    for (const double v : scores) var += (v - mean) * (v - mean);
-    const double sd = std::sqrt(var / static_cast<double>(scores.size()));
-    std::iota(order.begin(), order.end(), std::size_t{0});
-    std::partial_sort(order.begin(), order.begin() + static_cast<std::ptrdiff_t>(k), order.end(),
-                      [&](std::size_t a, std::size_t b) { return scores[a] > scores[b] || (scores[a] == scores[b] && a < b); });
-    for (std::size_t r = 0; r < k; ++r) {
-      const std::size_t j = order[r];
-      *out << offset + static_cast<std::int64_t>(q) << ',' << j << ',' << std::setprecision(9)
-           << (sd > 0 ? (scores[j] - mean) / sd : 0.0) << ',' << scores[j] << ',' << r + 1 << '\n';
-    }
+  std::vector<DescriptorView> query_views;
+  for (const Descriptor& d : queries) query_views.push_back(d.view());
+  for (const TopMatch& m : match_top_k(views, query_views, args.top_k, options.similarity.metric, offset)) {
+    *out << m.query << ',' << m.match << ',' << std::setprecision(9) << m.score << ',' << m.similarity
+         << ',' << m.rank << '\n';
   }
   out->flush();
   if (!*out) throw IoError("error while writing " + (args.output.empty() ? std::string("standard output") : "'" + args.output + "'"));

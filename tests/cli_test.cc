@@ -122,7 +122,7 @@ TEST_F(SyntheticCli, RunWritesOneRowPerFrame) {
   ASSERT_EQ(r.code, 0) << r.err;
   const std::string text = slurp(csv);
   EXPECT_EQ(text.rfind("frame,image,loop_frame,candidate_frame,score,ms,appearance,inliers,"
-                       "ranked_frame,ranked_score,ranked_confirmed,status\n", 0),
+                       "ranked_frame,ranked_score,ranked_confirmed,status,stamp\n", 0),
             0u);
   EXPECT_EQ(lines_of(text), frames_ + 1);
   EXPECT_NE(text.find("\n0,"), std::string::npos);

@@ -20,6 +20,7 @@
 #include "lsgd/eval/groundtruth.h"
 #include "lsgd/eval/gt_formats.h"
 #include "lsgd/eval/gt_remap.h"
+#include "lsgd/io/database.h"
 #include "synthetic/synthetic.h"
 
 namespace fs = std::filesystem;
@@ -407,6 +408,40 @@ TEST_F(ShortStreet, KittiLayoutWithGroundTruthFromPoses) {
   EXPECT_EQ(j["ground_truth_pairs"], gt.pairs());
   EXPECT_GT(positives, 20);
   EXPECT_GT(j["recall_at_1"].get<double>(), 0.2);  // the detector finds the revisits
+
+  // lsgd run gives every frame its times.txt stamp: in the CSV's stamp
+  // column and in the database, a selection keeping its frames' stamps; the
+  // CSV is read back by eval --detections.
+  const fs::path csv = kTmp / "kitti-run.csv", db = kTmp / "kitti-run.lsgd";
+  fs::remove(db);
+  const CmdResult run = lsgd("run --sequence " + q(kTmp / "kitti") +
+                             " --layout kitti --kitti-sequence 0 --first 3 --every 2 --output " +
+                             q(csv) + " --database " + q(db));
+  ASSERT_EQ(run.code, 0) << run.err;
+  std::istringstream rows(slurp(csv));
+  std::string row;
+  std::getline(rows, row);
+  EXPECT_EQ(row.substr(row.rfind(',') + 1), "stamp");
+  std::int64_t checked = 0;
+  for (std::int64_t i = 3; std::getline(rows, row); i += 2, ++checked) {
+    std::ostringstream stamp;
+    stamp << 0.1 * static_cast<double>(i);  // as times.txt was written
+    EXPECT_EQ(std::stod(row.substr(row.rfind(',') + 1)), std::stod(stamp.str())) << row;
+    EXPECT_EQ(row.substr(0, row.find(',')), std::to_string((i - 3) / 2)) << row;
+  }
+  EXPECT_EQ(checked, (frames_ - 3 + 1) / 2);
+  const CmdResult read = lsgd("eval --detections " + q(csv) + " --gt " + q(kTmp / "poses00.txt") +
+                              " --gt-format kitti-poses --first 3 --every 2 --min-gap 50 --json " + q(kTmp / "kitti-run.json"));
+  EXPECT_EQ(read.code, 0) << read.err;
+  const lsgd::io::Database stored = lsgd::io::Database::open(db.string(), lsgd::io::Database::Mode::kReadOnly);
+  lsgd::Detector restored(stored.options());
+  stored.restore(restored);
+  ASSERT_EQ(restored.size(), checked);
+  EXPECT_EQ(restored.stamp_of(1), std::stod([] {
+              std::ostringstream s;
+              s << 0.1 * 5.0;
+              return s.str();
+            }()));
 }
 
 // ---------------------------------------------------------------- detections files, layouts

@@ -192,6 +192,16 @@ TEST_F(LayoutTest, KittiSequenceFolderIsDetectedAutomatically) {
     EXPECT_EQ(fs::path(s.images[static_cast<std::size_t>(i)]), seq / "image_0" / kitti_name(i));
   }
   EXPECT_EQ(s.source, (seq / "image_0").string());
+  // times.txt gives each frame its stamp; a selection keeps its frames' stamps.
+  ASSERT_EQ(s.stamps.size(), 12u);
+  EXPECT_EQ(s.stamps[11], std::stod(std::to_string(0.1 * 11)));
+  SequenceOptions every;
+  every.selection = {1, -1, 5};
+  const Sequence picked = open_sequence(seq.string(), every);
+  EXPECT_EQ(picked.stamps, (std::vector<double>{s.stamps[1], s.stamps[6], s.stamps[11]}));
+  SequenceOptions folder;
+  folder.layout = Layout::kFolder;
+  EXPECT_TRUE(open_sequence((seq / "image_0").string(), folder).stamps.empty());
 }
 
 TEST_F(LayoutTest, KittiImageFolderItselfNamesTheCamera) {

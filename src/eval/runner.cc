@@ -39,6 +39,10 @@ FrameSource sequence_source(const io::Sequence& sequence) {
   const auto images = std::make_shared<std::vector<std::string>>(sequence.images);
   source.load = [images](std::int64_t i) { return io::read_image(images->at(i)); };
   source.name = [images](std::int64_t i) { return images->at(i); };
+  if (!sequence.stamps.empty()) {
+    const auto stamps = std::make_shared<std::vector<double>>(sequence.stamps);
+    source.stamp = [stamps](std::int64_t i) { return stamps->at(static_cast<std::size_t>(i)); };
+  }
   return source;
 }
 
@@ -139,7 +143,7 @@ std::vector<FrameRecord> run_detector(Detector& detector, const FrameSource& sou
           std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start)
               .count();
       const double cpu_start = thread_cpu_ms();
-      result = detector.process(image, id);
+      result = detector.process(image, id, source.stamp ? source.stamp(i) : kNoStamp);
       times.process_cpu_ms = thread_cpu_ms() - cpu_start;
     } catch (const Error& e) {
       const std::string name = source.name ? source.name(i) : std::to_string(i);

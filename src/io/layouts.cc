@@ -1,9 +1,11 @@
 #include "lsgd/io/files.h"
 #include "lsgd/io/layouts.h"
 
+#include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <locale>
 #include <sstream>
 #include <string>
 #include <system_error>
@@ -79,27 +81,28 @@ std::string kitti_sequence_name(const std::string& nn) {
   return nn.size() == 1 ? "0" + nn : nn;
 }
 
-// Non-blank lines of times.txt, each a number; FormatError naming file:line.
-std::int64_t count_timestamps(const fs::path& times) {
+// Non-blank lines of times.txt, each a finite number; FormatError naming file:line.
+std::vector<double> read_timestamps(const fs::path& times) {
   check_input_file(times.string(), "KITTI times file");
   std::ifstream in(times, std::ios::binary);
   if (!in) throw IoError(concat("cannot read '", times.string(), "'"));
   skip_utf8_bom(in);
-  std::int64_t count = 0;
+  std::vector<double> stamps;
   std::string line;
   for (std::int64_t number = 1; read_line(in, line, times.string(), number); ++number) {
     if (line.find_first_not_of(" \t\r") == std::string::npos) continue;
     std::istringstream fields(line);
+    fields.imbue(std::locale::classic());
     double t = 0;
     std::string rest;
-    if (!(fields >> t) || (fields >> rest)) {
+    if (!(fields >> t) || (fields >> rest) || !std::isfinite(t)) {
       throw FormatError(
           concat(times.string(), ":", number, ": expected one timestamp, got '", line, "'"));
     }
-    ++count;
+    stamps.push_back(t);
   }
   if (in.bad()) throw IoError(concat("error while reading '", times.string(), "'"));
-  return count;
+  return stamps;
 }
 
 // KITTI frames are 000000.png, 000001.png, ...: a gap would shift every later id.
@@ -158,7 +161,8 @@ Sequence open_kitti(const std::string& path, const SequenceOptions& options) {
   sequence.source = folder.string();
   sequence.images = list_images(folder.string());
   check_kitti_names(sequence.images, folder);
-  const std::int64_t stamps = count_timestamps(times);
+  sequence.stamps = read_timestamps(times);
+  const auto stamps = static_cast<std::int64_t>(sequence.stamps.size());
   const auto frames = static_cast<std::int64_t>(sequence.images.size());
   if (stamps != frames) {
     throw FormatError(concat("KITTI sequence: '", folder.string(), "' holds ", frames,
@@ -351,6 +355,9 @@ Sequence subsample(const Sequence& sequence, const FrameSelection& selection) {
   out.source = sequence.source;
   out.images.reserve(kept.size());
   for (std::int64_t i : kept) out.images.push_back(sequence.images[static_cast<std::size_t>(i)]);
+  if (!sequence.stamps.empty()) {
+    for (std::int64_t i : kept) out.stamps.push_back(sequence.stamps[static_cast<std::size_t>(i)]);
+  }
   return out;
 }
 

@@ -3,7 +3,9 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <charconv>
 #include <chrono>
+#include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <iomanip>
@@ -176,9 +178,12 @@ constexpr const char* kCsvHeaders[] = {
     "ranked_confirmed",
     "frame,image,loop_frame,candidate_frame,score,ms,appearance,inliers,ranked_frame,ranked_score,"
     "ranked_confirmed,status",
+    "frame,image,loop_frame,candidate_frame,score,ms,appearance,inliers,ranked_frame,ranked_score,"
+    "ranked_confirmed,status,stamp",
 };
 constexpr int kRankingVersion = 1;  // the first with the ranking's columns
 constexpr int kStatusVersion = 2;   // ... with the status
+constexpr int kStampVersion = 3;    // ... with the frame's time stamp
 
 }  // namespace
 
@@ -224,6 +229,14 @@ void CsvWriter::write(const Result& r, const std::string& image) {
           << (ranked ? r.ranking.best.score : 0.0) << ',' << (ranked && r.ranking.confirmed ? 1 : 0);
   }
   if (version_ >= kStatusVersion) *out_ << ',' << to_string(r.status);
+  if (version_ >= kStampVersion) {  // empty when the frame has none; else the shortest exact text
+    *out_ << ',';
+    if (std::isfinite(r.stamp)) {
+      char text[32];
+      const auto end = std::to_chars(text, text + sizeof(text), r.stamp).ptr;
+      out_->write(text, end - text);
+    }
+  }
   *out_ << '\n' << std::flush;
   if (!*out_) {
     throw IoError("error while writing the row of frame " + std::to_string(r.frame) + " to " +

@@ -85,8 +85,9 @@ class CsvWriter {
  public:
   // The CSV's newest version: frame, image, loop_frame, candidate_frame,
   // score, ms, appearance, inliers (0), ranked_frame, ranked_score,
-  // ranked_confirmed (1), status (2, to_string(LoopStatus)).
-  static constexpr int kCsvNewest = 2;
+  // ranked_confirmed (1), status (2, to_string(LoopStatus)), stamp (3:
+  // Result::stamp in its shortest exact text, empty when the frame has none).
+  static constexpr int kCsvNewest = 3;
   enum Mode { kCreate, kAppend };
   // Empty path: stdout. kCreate writes the newest header (replacing the
   // file); kAppend adds rows after the existing ones (a file trim()
@@ -100,7 +101,7 @@ class CsvWriter {
     std::int64_t dropped = 0;    // complete rows cut
     bool partial = false;        // an incomplete last line was cut
     std::int64_t last_row = -1;  // frame of the last row kept; -1: none
-    int version = kCsvNewest;    // of the header: 0 none of the columns below, 1 ranked_*, 2 status
+    int version = kCsvNewest;    // of the header: 0 none of the columns below, 1 ranked_*, 2 status, 3 stamp
   };
   // Cuts the rows of frames after `last_frame` (and an incomplete last line)
   // from an existing CSV this writer wrote, in place. Throws FormatError when

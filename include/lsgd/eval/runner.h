@@ -23,6 +23,7 @@ struct FrameSource {
   std::int64_t frames = 0;
   std::function<cv::Mat(std::int64_t)> load;        // throws lsgd::Error on bad input
   std::function<std::string(std::int64_t)> name;    // e.g. the image path, for messages and CSV
+  std::function<double(std::int64_t)> stamp;         // its time stamp (empty: none; KITTI's times.txt)
 };
 
 // The images of a sequence, read with io::read_image.

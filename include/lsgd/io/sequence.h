@@ -30,6 +30,10 @@ void check_input_file(const std::string& path, const std::string& what,
 struct Sequence {
   std::string source;               // the folder or list file it was opened from
   std::vector<std::string> images;  // image paths in frame order
+  // Each image's time stamp in seconds when the layout gives them (KITTI's
+  // times.txt), else empty: lsgd run passes them to Detector::process and
+  // writes them in its CSV's stamp column.
+  std::vector<double> stamps;
 };
 
 // Opens PATH as a sequence:

@@ -8,6 +8,7 @@
 
 #include <gtest/gtest.h>
 #include <sqlite3.h>
+#include <sys/stat.h>
 #include <sys/wait.h>
 #include <unistd.h>
 #include <zlib.h>
@@ -988,6 +989,89 @@ TEST(DatabaseWal, ACrashedWritersLogIsReplayedAndSaidSo) {
   Database db = Database::open(path);
   EXPECT_EQ(db.frames(), 20);
   EXPECT_NE(db.note().find("replayed: 20 frames"), std::string::npos) << db.note();
+}
+
+// A writer killed, its file deleted, its log left beside it: a database
+// created at that path must not take in the dead one's frames.
+TEST(DatabaseWal, ANewDatabaseRefusesADeletedOnesLog) {
+  const std::string path = crashed_database("deleted", 20);
+  const std::string wal = read_bytes(path + "-wal");
+  ASSERT_GT(wal.size(), 32u);
+  fs::remove(path);
+  const DetectorOptions o = options(kExhaustiveSearch, "temporal");
+  const std::string m = message_of<IoError>([&] { Database::create(path, o); });
+  EXPECT_NE(m.find("'" + path + "-wal' is the write-ahead log of a database that was deleted"),
+            std::string::npos) << m;
+  EXPECT_NE(m.find("Move '" + path + "-wal' and '" + path + "-shm' away"), std::string::npos) << m;
+  EXPECT_FALSE(fs::exists(path));
+  EXPECT_EQ(read_bytes(path + "-wal"), wal);
+  fs::rename(path + "-wal", path + "-wal.old");
+  Database db = Database::create(path, o);
+  EXPECT_EQ(db.frames(), 0);
+}
+
+// The log's companions must be files of their own: a folder, a FIFO or a
+// link where SQLite keeps them is refused, naming it, before anything is
+// created or read.
+TEST(DatabaseWal, CompanionsThatAreNotFilesAreRefusedByName) {
+  const DetectorOptions o = options(kExhaustiveSearch, "temporal");
+  const std::string path = temp_path("companions");
+  { Database db = Database::create(path, o); }
+  const std::string other = temp_path("companions_target");
+  write_bytes(other, "");
+  struct Case {
+    const char* suffix;
+    const char* kind;
+    std::function<void(const std::string&)> make;
+  };
+  const std::vector<Case> cases = {
+      {"-wal", "a directory", [](const std::string& p) { fs::create_directory(p); }},
+      {"-wal", "a FIFO", [](const std::string& p) { ASSERT_EQ(::mkfifo(p.c_str(), 0600), 0); }},
+      {"-wal", "a symbolic link", [&](const std::string& p) { fs::create_symlink(other, p); }},
+      {"-shm", "a directory", [](const std::string& p) { fs::create_directory(p); }},
+  };
+  for (const Case& c : cases) {
+    SCOPED_TRACE(std::string(c.suffix) + " " + c.kind);
+    const std::string companion = path + c.suffix;
+    fs::remove_all(companion);
+    c.make(companion);
+    for (const Database::Mode mode : {Database::Mode::kReadOnly, Database::Mode::kReadWrite}) {
+      const std::string m = message_of<IoError>([&] { Database::open(path, mode); });
+      EXPECT_NE(m.find("'" + companion + "' is " + c.kind), std::string::npos) << m;
+      EXPECT_NE(m.find("move it away"), std::string::npos) << m;
+    }
+    const std::string fresh = temp_path("companions_fresh");
+    fs::remove_all(fresh + c.suffix);
+    c.make(fresh + c.suffix);
+    const std::string m = message_of<IoError>([&] { Database::create(fresh, o); });
+    EXPECT_NE(m.find("'" + fresh + c.suffix + "' is " + c.kind), std::string::npos) << m;
+    EXPECT_FALSE(fs::exists(fresh));
+    fs::remove_all(fresh + c.suffix);
+    fs::remove_all(companion);
+  }
+  Database db = Database::open(path);
+  EXPECT_EQ(db.frames(), 0);
+}
+
+// Two names of one file have two logs: a writer through either could have
+// its frames undone through the other, so writers refuse a linked file.
+TEST(DatabaseWal, AWriterRefusesAFileWithHardLinks) {
+  const DetectorOptions o = options(kExhaustiveSearch, "temporal");
+  const std::string path = temp_path("linked");
+  {
+    Database db = Database::create(path, o);
+    Detector d(o);
+    for (int i = 0; i < 5; ++i) db.append(d, d.process(frame(i)), 0);
+  }
+  const std::string second = temp_path("linked_second");
+  fs::create_hard_link(path, second);
+  for (const std::string& name : {path, second}) {
+    const std::string m = message_of<IoError>([&] { Database::open(name); });
+    EXPECT_NE(m.find("has 2 hard links"), std::string::npos) << m;
+    EXPECT_EQ(Database::open(name, Database::Mode::kReadOnly).frames(), 5);
+  }
+  fs::remove(second);
+  EXPECT_EQ(Database::open(path).frames(), 5);
 }
 
 // SQLite would replay a damaged log up to the damage and drop every commit

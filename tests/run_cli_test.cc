@@ -396,17 +396,19 @@ TEST_F(RunCli, LocalizeAnswersAsANewSessionAndLeavesTheMapAsItWas) {
 
 // A CSV written before the ranking's columns existed resumes in its own
 // columns: every row has as many fields as its header.
-// A CSV written by an older version (without the status column, or without
-// the ranking's columns too) resumes in its own columns: every row has as
+// A CSV written by an older version (without the stamp column, the status
+// column too, or the ranking's columns too) resumes in its own columns: every row has as
 // many fields as its header, and the old rows stay as they were.
 TEST_F(RunCli, ACsvOfAnOlderVersionResumesInItsColumns) {
   const struct {
     int dropped;  // last columns removed
     const char* header;
   } versions[] = {
-      {4, "frame,image,loop_frame,candidate_frame,score,ms,appearance,inliers\n"},
-      {1, "frame,image,loop_frame,candidate_frame,score,ms,appearance,inliers,ranked_frame,"
+      {5, "frame,image,loop_frame,candidate_frame,score,ms,appearance,inliers\n"},
+      {2, "frame,image,loop_frame,candidate_frame,score,ms,appearance,inliers,ranked_frame,"
           "ranked_score,ranked_confirmed\n"},
+      {1, "frame,image,loop_frame,candidate_frame,score,ms,appearance,inliers,ranked_frame,"
+          "ranked_score,ranked_confirmed,status\n"},
   };
   for (const auto& v : versions) {
     SCOPED_TRACE(v.header);
@@ -467,9 +469,12 @@ TEST_F(RunCli, EveryRowSaysWhyThereIsALoopOrNone) {
   std::istringstream rows(slurp(kTmp / "a.csv"));
   std::string line;
   std::getline(rows, line);
+  ASSERT_EQ(line.substr(line.rfind(',') + 1), "stamp");
+  line.erase(line.rfind(','));
   ASSERT_EQ(line.substr(line.rfind(',') + 1), "status");
   std::map<std::string, int> seen;
   while (std::getline(rows, line)) {
+    ASSERT_EQ(line.back(), ',') << "a folder gives no stamps: " << line;
     std::vector<std::string> f;
     std::stringstream in(line);
     for (std::string x; std::getline(in, x, ',');) f.push_back(x);

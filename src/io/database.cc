@@ -570,6 +570,30 @@ Database::~Database() = default;
 Database::Database(Database&& other) noexcept = default;
 Database& Database::operator=(Database&& other) noexcept = default;
 
+namespace {
+
+// SQLite keeps a database's write-ahead log and its index beside the name it
+// was opened by (FILE-wal, FILE-shm) and trusts whatever it finds there.
+// Refuses a companion that is not a regular file (a folder, a FIFO, a link
+// elsewhere), naming it.
+void check_companions(const std::string& path) {
+  for (const char* suffix : {"-wal", "-shm"}) {
+    const std::string companion = path + suffix;
+    struct stat st;
+    if (::lstat(companion.c_str(), &st) != 0) continue;
+    if (S_ISREG(st.st_mode)) continue;
+    const char* kind = S_ISDIR(st.st_mode)    ? "a directory"
+                       : S_ISLNK(st.st_mode)  ? "a symbolic link"
+                       : S_ISFIFO(st.st_mode) ? "a FIFO"
+                                              : "not a regular file";
+    io_error(path, "'", companion, "' is ", kind, ", where SQLite keeps the database's ",
+             suffix[1] == 'w' ? "write-ahead log" : "shared index of the log",
+             ": move it away (nothing was changed)");
+  }
+}
+
+}  // namespace
+
 Database Database::open(const std::string& path, Mode mode) {
   struct stat st;
   if (::stat(path.c_str(), &st) != 0) {
@@ -578,6 +602,15 @@ Database Database::open(const std::string& path, Mode mode) {
   }
   if (!S_ISREG(st.st_mode)) io_error(path, "is not a regular file");
   const bool writable = mode == Mode::kReadWrite;
+  check_companions(path);
+  // Each name of a file has a log of its own: a writer through one name
+  // would leave a log that a later open through the other replays over newer
+  // frames (SQLite, "How To Corrupt An SQLite Database File", 2.6).
+  if (writable && st.st_nlink > 1) {
+    io_error(path, "has ", st.st_nlink, " hard links: SQLite keeps the log beside the name a "
+             "database is opened by, so a writer through one name can have its frames undone "
+             "through another; copy the file instead of linking it (reading it is fine)");
+  }
   if (::access(path.c_str(), writable ? R_OK | W_OK : R_OK) != 0) {
     io_error(path, "cannot be ", writable ? "read and written" : "read", " (",
              std::strerror(errno), ")");
@@ -700,6 +733,15 @@ Database Database::create(const std::string& path, const DetectorOptions& option
   options.check();
   struct stat st;
   if (::stat(path.c_str(), &st) == 0) io_error(path, "already exists");
+  check_companions(path);
+  // A log left by a database deleted at this path (its writer killed, the
+  // file removed): SQLite would replay its frames into the new database.
+  if (::stat((path + "-wal").c_str(), &st) == 0 && st.st_size > 0) {
+    io_error(path, "'", path, "-wal' is the write-ahead log of a database that was deleted at "
+             "this path (", st.st_size, " bytes): SQLite would replay it into the new database. "
+             "Move '", path, "-wal' and '", path, "-shm' away, or give another path "
+             "(nothing was created)");
+  }
   const std::string tmp = path + ".tmp-" + std::to_string(::getpid());
   for (const char* suffix : {"", "-journal", "-wal", "-shm"}) ::unlink((tmp + suffix).c_str());
   {

@@ -9,6 +9,7 @@
 #include <cstring>
 #include <fstream>
 #include <iomanip>
+#include <map>
 #include <opencv2/core.hpp>
 #include <string>
 #include <vector>
@@ -30,6 +31,26 @@ namespace py = pybind11;
 
 namespace {
 
+// ---- paths: str, bytes or any os.PathLike (pathlib.Path), as os.fspath
+// gives them; bytes as the file system encodes names (os.fsdecode). A NUL
+// inside is refused (the C library would read the name up to it).
+std::string path_of(const py::handle& value, const char* what = "path") {
+  const py::module_ os = py::module_::import("os");
+  py::object text;
+  try {
+    text = os.attr("fsdecode")(os.attr("fspath")(value));
+  } catch (const py::error_already_set&) {
+    throw lsgd::InvalidArgument(std::string(what) + ": " + std::string(py::str(py::type::of(value).attr("__name__"))) +
+                                " is not a path (str, bytes or os.PathLike such as pathlib.Path)");
+  }
+  const std::string path = text.cast<std::string>();
+  if (path.find('\0') != std::string::npos) {
+    throw lsgd::InvalidArgument(std::string(what) + " '" + path.substr(0, path.find('\0')) +
+                                "\\0...' has a NUL character inside: no file has such a name");
+  }
+  return path;
+}
+
 // ---- options: a dict with the YAML's names, nested ({"search": {"min_gap":
 // 50}}) or dotted ({"search.min_gap": 50}), values as Python numbers or text.
 
@@ -48,27 +69,41 @@ std::string option_value_text(const py::handle& value) {
   return py::str(value).cast<std::string>();
 }
 
-void set_options(lsgd::DetectorOptions& options, const py::dict& values, const std::string& prefix) {
+// `given`: the keys set so far from this dict, with their values: a key
+// given twice ({"search": {"min_gap": 5}, "search.min_gap": 7}) is refused.
+void set_options(lsgd::DetectorOptions& options, const py::dict& values, const std::string& prefix,
+                 std::map<std::string, std::string>& given) {
   for (const auto& [k, v] : values) {
     const std::string key = prefix + py::str(k).cast<std::string>();
     if (py::isinstance<py::dict>(v)) {
-      set_options(options, v.cast<py::dict>(), key + ".");
-    } else {
-      lsgd::set_option(options, key, option_value_text(v));
+      set_options(options, v.cast<py::dict>(), key + ".", given);
+      continue;
     }
+    const std::string text = option_value_text(v);
+    const auto [at, added] = given.emplace(key, text);
+    if (!added) {
+      throw lsgd::InvalidArgument("option " + key + " is given twice (" + at->second + " and " + text +
+                                  "), nested and dotted: give it once");
+    }
+    lsgd::set_option(options, key, text);
   }
+}
+
+void set_options(lsgd::DetectorOptions& options, const py::dict& values) {
+  std::map<std::string, std::string> given;
+  set_options(options, values, "", given);
 }
 
 lsgd::DetectorOptions make_options(const py::object& options, const py::kwargs& kwargs) {
   lsgd::DetectorOptions o;
   if (!options.is_none()) {
-    if (py::isinstance<py::str>(options)) {
-      o = lsgd::io::load_config(options.cast<std::string>());  // a YAML file
+    if (py::isinstance<py::dict>(options)) {
+      set_options(o, options.cast<py::dict>());
     } else {
-      set_options(o, options.cast<py::dict>(), "");
+      o = lsgd::io::load_config(path_of(options, "options"));  // a YAML file
     }
   }
-  set_options(o, kwargs, "");
+  set_options(o, kwargs);
   o.check();
   return o;
 }
@@ -83,13 +118,20 @@ py::dict options_dict(const lsgd::DetectorOptions& o) {
 
 // ---- images: numpy uint8 arrays, H x W (gray), H x W x 3 (BGR), H x W x 4 (BGRA)
 
+// Each row's pixels packed (a dimension of size 1 may have any stride: numpy
+// calls such arrays contiguous whatever it holds there).
 bool rows_dense(const py::array& a) {
+  if (a.ndim() < 2) return false;
   const py::ssize_t channels = a.ndim() == 3 ? a.shape(2) : 1;
-  return a.ndim() >= 2 && a.strides(1) == channels && (a.ndim() == 2 || a.strides(2) == 1) &&
-         a.strides(0) >= a.shape(1) * channels;
+  return (a.ndim() == 2 || a.shape(2) == 1 || a.strides(2) == 1) &&
+         (a.shape(1) == 1 || a.strides(1) == channels) &&
+         (a.shape(0) == 1 || a.strides(0) >= a.shape(1) * channels);
 }
 
-lsgd::ImageView image_view(const py::array& a) {
+// The image's pixels, checked (type, shape, size) before anything is copied;
+// an array whose rows are not contiguous is copied into `a` first (the view
+// points into `a`, which must outlive it).
+lsgd::ImageView image_view(py::array& a) {
   if (a.dtype().kind() != 'u' || a.itemsize() != 1) {
     throw lsgd::InvalidArgument("the image is a numpy array of " + py::str(a.dtype()).cast<std::string>() +
                                 ": expected uint8 (convert 16-bit or float images first)");
@@ -101,12 +143,22 @@ lsgd::ImageView image_view(const py::array& a) {
     throw lsgd::InvalidArgument("the image has shape (" + shape +
                                 "): expected (H, W) gray, (H, W, 3) BGR or (H, W, 4) BGRA");
   }
-  if (!rows_dense(a)) throw lsgd::InvalidArgument("the image's rows are not contiguous");
+  for (py::ssize_t i = 0; i < 2; ++i) {
+    if (a.shape(i) == 0 || a.shape(i) > lsgd::kMaxImageSide) {
+      throw lsgd::InvalidArgument("the image is " + std::to_string(a.shape(0)) + " x " +
+                                  std::to_string(a.shape(1)) + " pixels: " +
+                                  (a.shape(i) == 0 ? std::string("empty")
+                                                   : "a side above " + std::to_string(lsgd::kMaxImageSide)));
+    }
+  }
+  if (!rows_dense(a)) a = py::array::ensure(a, py::array::c_style);
+  if (!a || !rows_dense(a)) throw lsgd::InvalidArgument("the image's rows are not contiguous");
   lsgd::ImageView v;
   v.data = static_cast<const std::uint8_t*>(a.data());
   v.width = static_cast<int>(a.shape(1));
   v.height = static_cast<int>(a.shape(0));
-  v.stride_bytes = static_cast<std::size_t>(a.strides(0));
+  v.stride_bytes = a.shape(0) == 1 ? static_cast<std::size_t>(a.shape(1)) * static_cast<std::size_t>(channels)
+                                    : static_cast<std::size_t>(a.strides(0));
   v.format = channels == 1 ? lsgd::PixelFormat::kGray8
              : channels == 3 ? lsgd::PixelFormat::kBgr8 : lsgd::PixelFormat::kBgra8;
   return v;
@@ -326,7 +378,7 @@ PYBIND11_MODULE(_lsgd, m) {
                                       lsgd::parse_similarity_metric(metric.c_str()), query_offset);
           }
           if (!output.is_none()) {  // the CSV lsgd match writes
-            const std::string path = py::str(output);
+            const std::string path = path_of(output, "output");
             std::ofstream out(path, std::ios::trunc);
             if (!out) throw lsgd::IoError("cannot write output file '" + path + "'");
             out << "query,match,score,similarity,rank\n";
@@ -406,9 +458,7 @@ PYBIND11_MODULE(_lsgd, m) {
       .def("process",
            [](lsgd::Detector& d, py::array image, std::int64_t id, double stamp) {
              // A strided view (a crop with a step, a transposed array) is copied once.
-             if (!rows_dense(image)) image = py::array::ensure(image, py::array::c_style);
-             if (!image) throw lsgd::InvalidArgument("the image is not a numpy array");
-             const lsgd::ImageView view = image_view(image);
+             const lsgd::ImageView view = image_view(image);  // may copy into `image`
              py::gil_scoped_release release;  // other Python threads run meanwhile
              return d.process(view, id, stamp);
            },
@@ -420,9 +470,7 @@ PYBIND11_MODULE(_lsgd, m) {
            "released while it runs.")
       .def("query",
            [](lsgd::Detector& d, py::array image, std::int64_t id, double stamp) {
-             if (!rows_dense(image)) image = py::array::ensure(image, py::array::c_style);
-             if (!image) throw lsgd::InvalidArgument("the image is not a numpy array");
-             const lsgd::ImageView view = image_view(image);
+             const lsgd::ImageView view = image_view(image);  // may copy into `image`
              py::gil_scoped_release release;
              return d.query(view, id, stamp);
            },
@@ -443,9 +491,7 @@ PYBIND11_MODULE(_lsgd, m) {
       .def_property_readonly("options", [](const lsgd::Detector& d) { return options_dict(d.options()); })
       .def("describe",
            [](lsgd::Detector& d, py::array image) {
-             if (!rows_dense(image)) image = py::array::ensure(image, py::array::c_style);
-             if (!image) throw lsgd::InvalidArgument("the image is not a numpy array");
-             const lsgd::ImageView view = image_view(image);
+             const lsgd::ImageView view = image_view(image);  // may copy into `image`
              py::gil_scoped_release release;
              return d.describe(view);
            },
@@ -461,13 +507,13 @@ PYBIND11_MODULE(_lsgd, m) {
   py::class_<PyDatabase>(m, "Database",
       "The place database. close() (or leaving a `with` block) releases the file; a closed "
       "Database refuses every call.")
-      .def_static("create", [](const std::string& path, const py::object& options, const py::kwargs& kwargs) {
-             return PyDatabase(lsgd::io::Database::create(path, make_options(options, kwargs)));
+      .def_static("create", [](const py::object& path, const py::object& options, const py::kwargs& kwargs) {
+             return PyDatabase(lsgd::io::Database::create(path_of(path), make_options(options, kwargs)));
            }, py::arg("path"), py::arg("options") = py::none(),
            "Creates a new, empty database for detectors with these options.")
-      .def_static("open", [](const std::string& path, bool writable) {
+      .def_static("open", [](const py::object& path, bool writable) {
              return PyDatabase(lsgd::io::Database::open(
-                 path, writable ? lsgd::io::Database::Mode::kReadWrite : lsgd::io::Database::Mode::kReadOnly));
+                 path_of(path), writable ? lsgd::io::Database::Mode::kReadWrite : lsgd::io::Database::Mode::kReadOnly));
            }, py::arg("path"), py::arg("writable") = true)
       .def("detector", [](const PyDatabase& db, bool rebuild_index) {
              auto d = std::make_unique<lsgd::Detector>(db.get().options());
@@ -515,9 +561,9 @@ PYBIND11_MODULE(_lsgd, m) {
       });
 
   // ---- images and sequences
-  m.def("read_image", [](const std::string& path) { return mat_to_array(lsgd::io::read_image(path)); },
+  m.def("read_image", [](const py::object& path) { return mat_to_array(lsgd::io::read_image(path_of(path))); },
         py::arg("path"), "Reads an image file as a uint8 array (gray or BGR); lsgd.Error on a bad file.");
-  m.def("open_sequence", [](const std::string& path) { return lsgd::io::open_sequence(path).images; },
+  m.def("open_sequence", [](const py::object& path) { return lsgd::io::open_sequence(path_of(path)).images; },
         py::arg("path"), "The image paths of a folder (natural order) or an image list file.");
 
   // ---- ground truth and the strict metrics
@@ -530,11 +576,11 @@ PYBIND11_MODULE(_lsgd, m) {
       .def("matches", &lsgd::eval::GroundTruth::matches)
       .def("queries", &lsgd::eval::GroundTruth::queries)
       .def("has_loop", &lsgd::eval::GroundTruth::has_loop, py::arg("query"), py::arg("min_gap"));
-  m.def("load_groundtruth", [](const std::string& path, std::int64_t frames, const std::string& format) {
+  m.def("load_groundtruth", [](const py::object& path, std::int64_t frames, const std::string& format) {
           lsgd::eval::GtOptions o;
           o.frames = frames;
           o.format = lsgd::eval::parse_gt_format(format);
-          return lsgd::eval::load_groundtruth(path, o);
+          return lsgd::eval::load_groundtruth(path_of(path), o);
         }, py::arg("path"), py::arg("frames") = -1, py::arg("format") = "auto",
         "Reads loop ground truth: pairs text, MATLAB .mat, KITTI poses or loopinf.");
 
@@ -569,16 +615,52 @@ PYBIND11_MODULE(_lsgd, m) {
       .def_readonly("curve", &lsgd::eval::Metrics::curve);
   m.def("evaluate", [](const std::vector<lsgd::Result>& results, const lsgd::eval::GroundTruth& gt,
                        std::int64_t min_gap) {
-          std::vector<lsgd::eval::FrameRecord> records;
-          records.reserve(results.size());
-          for (const lsgd::Result& r : results) records.push_back(record_of(r));
+          // The results of one detector, in order: its frame k has the id
+          // results[k].id, which numbers the ground truth's frames.
+          std::vector<std::int64_t> ids;
+          for (const lsgd::Result& r : results) {
+            if (r.frame != static_cast<std::int64_t>(ids.size())) {
+              throw lsgd::InvalidArgument(
+                  "evaluate: result " + std::to_string(ids.size()) + " is the detector's frame " +
+                  std::to_string(r.frame) + ": give every Result of one detector, in the order "
+                  "process() returned them (frames the camera dropped get no Result; give the "
+                  "others their ids, process(image, id=...))");
+            }
+            if (r.id < 0 || r.id >= gt.frames()) {
+              throw lsgd::InvalidArgument("evaluate: result " + std::to_string(r.frame) + " has id " +
+                                          std::to_string(r.id) + ", outside the ground truth's " +
+                                          std::to_string(gt.frames()) + " frames");
+            }
+            ids.push_back(r.id);
+          }
+          const auto id = [&](std::int64_t frame) {
+            return frame >= 0 && frame < static_cast<std::int64_t>(ids.size())
+                       ? ids[static_cast<std::size_t>(frame)]
+                       : frame;
+          };
+          // Every frame of the ground truth: one without a Result is missed.
+          std::vector<lsgd::eval::FrameRecord> records(static_cast<std::size_t>(gt.frames()));
+          for (std::int64_t f = 0; f < gt.frames(); ++f) {
+            records[static_cast<std::size_t>(f)].frame = f;
+            records[static_cast<std::size_t>(f)].skipped = true;
+          }
+          for (const lsgd::Result& r : results) {
+            lsgd::eval::FrameRecord rec = record_of(r);
+            rec.frame = r.id;
+            rec.reported.frame = id(rec.reported.frame);
+            if (rec.ranking) rec.ranking->best.frame = id(rec.ranking->best.frame);
+            for (lsgd::Candidate& c : rec.candidates) c.frame = id(c.frame);
+            records[static_cast<std::size_t>(r.id)] = rec;
+          }
           return lsgd::eval::evaluate(records, gt, min_gap);
         }, py::arg("results"), py::arg("groundtruth"), py::arg("min_gap"),
-        "Scores Detector results (one per frame, ids as the ground truth's) under the strict "
-        "protocol (docs/evaluation.md): the declared loops (operating point), R@100P, AP, R@N.");
-  m.def("evaluate_detections", [](const std::string& path, const lsgd::eval::GroundTruth& gt,
+        "Scores a detector's results (every Result in order; ids, process(image, id=...), "
+        "number the ground truth's frames, and a frame without a Result is missed) under the "
+        "strict protocol (docs/evaluation.md): the declared loops (operating point), R@100P, "
+        "AP, R@N.");
+  m.def("evaluate_detections", [](const py::object& path, const lsgd::eval::GroundTruth& gt,
                                   std::int64_t min_gap) {
-          return lsgd::eval::evaluate(lsgd::eval::read_detections(path, gt.frames()), gt, min_gap);
+          return lsgd::eval::evaluate(lsgd::eval::read_detections(path_of(path), gt.frames()), gt, min_gap);
         }, py::arg("path"), py::arg("groundtruth"), py::arg("min_gap"),
         "Scores a detections CSV (query,match,score[,rank]: lsgd match, lsgd.match, another "
         "system's output) as lsgd eval --detections does.");

@@ -77,6 +77,23 @@ TEST_F(DetectionsTest, AByteOrderMarkBeforeTheHeaderIsSkipped) {
   EXPECT_EQ(records[4].reported.frame, 1);
 }
 
+// A file saved with Windows or classic Mac line endings reads as the lines it shows.
+TEST_F(DetectionsTest, EveryLineEndingReadsTheSameRows) {
+  const std::string rows = "query,match,score|# a comment||5,0,0.9|6,-1,|7,2,0.85";
+  for (const std::string ending : {"\n", "\r\n", "\r"}) {
+    SCOPED_TRACE(ending == "\r" ? "CR" : ending == "\n" ? "LF" : "CRLF");
+    std::string text;
+    for (const char c : rows) text += c == '|' ? ending : std::string(1, c);
+    const auto records = read_detections(write("d.csv", text + ending));
+    ASSERT_EQ(records.size(), 8u);
+    EXPECT_EQ(records[5].reported.frame, 0);
+    EXPECT_DOUBLE_EQ(records[5].reported.score, 0.9);
+    EXPECT_EQ(records[6].reported.frame, -1);
+    EXPECT_EQ(records[7].reported.frame, 2);
+    EXPECT_DOUBLE_EQ(records[7].reported.score, 0.85);
+  }
+}
+
 TEST_F(DetectionsTest, WhiteSpaceSeparatedRowsAreAccepted) {
   const std::string path = write("d.txt", "3 0 0.25\r\n4\t-1\t0\n");
   const auto records = read_detections(path, 5);

@@ -13,6 +13,8 @@ Errors are ``lsgd.Error`` (``InvalidArgument`` is also a ``ValueError``,
 library's messages.
 """
 
+import os
+
 from ._lsgd import (  # noqa: F401
     Candidate,
     Database,
@@ -51,7 +53,8 @@ def run(detector, images):
 
     A path that cannot be read raises lsgd.Error naming it.
     """
-    return [detector.process(read_image(i) if isinstance(i, str) else i) for i in images]
+    return [detector.process(read_image(i) if isinstance(i, (str, bytes, os.PathLike)) else i)
+            for i in images]
 
 
 def _plain(value):

@@ -325,6 +325,66 @@ def test_example_script_evaluates_and_plots(tmp_path):
     assert figure.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
 
 
+def test_paths_shapes_and_options_a_hostile_user_tries(tmp_path):
+    import pathlib
+    frames = route(6, 1)
+    write_pgm(tmp_path / "0.pgm", frames[0])
+    # pathlib.Path and bytes wherever a path is taken; a NUL inside is refused.
+    image = lsgd.read_image(tmp_path / "0.pgm")
+    assert np.array_equal(image, lsgd.read_image(os.fsencode(str(tmp_path / "0.pgm"))))
+    assert lsgd.open_sequence(tmp_path) == [str(tmp_path / "0.pgm")]
+    with lsgd.Database.create(tmp_path / "p.db") as db:
+        assert db.frames == 0
+    assert lsgd.Database.open(pathlib.Path(tmp_path / "p.db"), writable=False).frames == 0
+    assert lsgd.run(lsgd.Detector(), [tmp_path / "0.pgm"])[0].frame == 0
+    with pytest.raises(lsgd.InvalidArgument, match="has a NUL character inside"):
+        lsgd.read_image(str(tmp_path / "0.pgm") + "\0.txt")
+    with pytest.raises(lsgd.InvalidArgument, match="int is not a path"):
+        lsgd.open_sequence(5)
+    # (H, W, 1) is gray; an empty image or a side above 16384 is refused before any copy.
+    a, b = lsgd.Detector(), lsgd.Detector()
+    for f in frames:
+        x, y = a.process(f), b.process(f[:, :, None])
+        assert (x.frame, x.best.frame, x.best.score) == (y.frame, y.best.frame, y.best.score)
+    with pytest.raises(lsgd.InvalidArgument, match="0 x 160 pixels: empty"):
+        a.process(np.zeros((0, 160), np.uint8))
+    huge = np.lib.stride_tricks.as_strided(np.zeros(1, np.uint8), shape=(1, 2**32 + 160), strides=(0, 0))
+    with pytest.raises(lsgd.InvalidArgument, match="a side above 16384"):
+        a.process(huge)
+    assert len(a) == len(frames)
+    # An option given twice, nested and dotted, is refused.
+    with pytest.raises(lsgd.InvalidArgument, match="option search.min_gap is given twice"):
+        lsgd.Detector({"search": {"min_gap": 5}, "search.min_gap": 7})
+    # A negative frame id other than -1 is refused by Database.append.
+    db = lsgd.Database.create(tmp_path / "q.db")
+    d = lsgd.Detector(db.options)
+    r = d.process(frames[0])
+    with pytest.raises(lsgd.InvalidArgument, match="frame id -5 is negative"):
+        db.append(d, r, session=0, frame=-5)
+    db.append(d, r, session=0)
+    assert db.frames == 1
+
+
+def test_evaluate_counts_frames_without_a_result_as_missed():
+    frames = route(10, 3)
+    gt = lsgd.GroundTruth(len(frames))
+    for i in range(10, 30):
+        for j in range(i % 10, i, 10):
+            gt.add(i, j)
+    everything = lsgd.Detector(search={"min_gap": 5})
+    full = lsgd.evaluate([everything.process(f, id=i) for i, f in enumerate(frames)], gt, min_gap=5)
+    kept = [i for i in range(30) if not (i >= 20 and i % 2)]  # the camera dropped half a lap
+    d = lsgd.Detector(search={"min_gap": 5})
+    part = [d.process(frames[i], id=i) for i in kept]
+    m = lsgd.evaluate(part, gt, min_gap=5)
+    dropped = sum(1 for i in range(30) if i not in kept and gt.has_loop(i, 5))
+    assert dropped == 5 and m.frames == 30 and m.positives == full.positives
+    assert m.recall_at_1 <= (m.positives - dropped) / m.positives
+    assert all(r.loop_id in kept for r in part if r.loop)
+    with pytest.raises(lsgd.InvalidArgument, match="give every Result of one detector"):
+        lsgd.evaluate(part[1:], gt, min_gap=5)
+
+
 def test_readable_objects_closable_database_and_did_you_mean(tmp_path):
     frames = route(20, 3)
     d = lsgd.Detector(search={"min_gap": 5})

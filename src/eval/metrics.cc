@@ -144,6 +144,7 @@ void fill_recall_at_n(const std::vector<FrameRecord>& records, const GroundTruth
 void fill_timings(const std::vector<FrameRecord>& records, Metrics& m) {
   std::vector<double> total, load, convert, segment, describe, search, verify;
   for (const auto& r : records) {
+    if (r.skipped) continue;  // never processed: no time of the detector's
     load.push_back(r.load_ms);
     total.push_back(r.timings.total_ms);
     convert.push_back(r.timings.convert_ms);

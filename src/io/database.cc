@@ -1278,6 +1278,10 @@ void Database::append(const Detector& detector, const Result& /*result*/, std::i
   // The frame's id is the detector's (Detector::process(frame, id)): a
   // different one would be refused when the frame is restored.
   const std::int64_t own = detector.id_of(detector.size() - 1);
+  if (frame < -1) {
+    internal::throw_invalid("database ", m.path, ": frame id ", frame, " is negative (-1: the "
+                            "detector's id of its last frame)");
+  }
   if (frame >= 0 && frame != own) {
     internal::throw_invalid("database ", m.path, ": frame id ", frame, " is not the detector's id ", own,
                             " of its last frame (give the id to Detector::process)");

@@ -30,6 +30,10 @@ bool read_line(std::istream& in, std::string& line, const std::string& file, std
       return !line.empty();
     }
     if (c == '\n') return true;
+    if (c == '\r') {  // "\r\n", or a lone '\r' (classic Mac line endings)
+      if (buffer->sgetc() == '\n') buffer->sbumpc();
+      return true;
+    }
     if (static_cast<std::int64_t>(line.size()) >= kMaxLineBytes) {
       throw FormatError(concat("line ", number, " of '", file, "' is longer than ", kMaxLineBytes,
                                " bytes: not a text file of this kind"));

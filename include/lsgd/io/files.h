@@ -9,8 +9,9 @@
 
 namespace lsgd::io {
 
-// Reads the next line of `in` (without its newline; a final '\r' is kept)
-// into `line`; false at the end. A line longer than kMaxLineBytes
+// Reads the next line of `in` into `line`, without its ending: "\n",
+// "\r\n" or a lone "\r" (files saved with classic Mac line endings read as
+// the lines they show); false at the end. A line longer than kMaxLineBytes
 // (lsgd/limits.h) is a FormatError naming `file` and the line number
 // `number`, thrown before more than that is held in memory.
 bool read_line(std::istream& in, std::string& line, const std::string& file, std::int64_t number);

@@ -8,10 +8,12 @@
 #include <algorithm>
 #include <cstdint>
 #include <opencv2/core.hpp>
+#include <ostream>
 #include <string>
 #include <vector>
 
 #include "lsgd/detector.h"
+#include "lsgd/stage.h"
 #include "synthetic/synthetic.h"
 
 namespace lsgd::test {
@@ -104,5 +106,52 @@ inline void expect_same_state(const Detector& a, const Detector& b) {
     ASSERT_EQ(a.frame_state(f), b.frame_state(f)) << "frame " << f;
   }
 }
+
+// A search mode and verification stages, min_gap 20 (the tests of every mode).
+struct ModeCase {
+  std::string mode;
+  const char* stages;
+  std::int64_t exhaustive_up_to = 8192;  // index mode: 0, the graph from the start
+};
+
+inline void PrintTo(const ModeCase& c, std::ostream* out) {
+  *out << c.mode << " " << c.stages
+       << (c.mode == kIndexSearch ? " exhaustive up to " + std::to_string(c.exhaustive_up_to) : "");
+}
+
+inline DetectorOptions options(const ModeCase& c) {
+  DetectorOptions o;
+  o.search.mode = c.mode;
+  o.search.min_gap = 20;
+  o.search.index.exhaustive_up_to = c.exhaustive_up_to;
+  parse_verification_stages(c.stages, o.verification);
+  return o;
+}
+
+// The search mode's saved index (index mode's graph), to compare two detectors'.
+inline std::vector<std::uint8_t> index_of(const Detector& d) {
+  std::vector<std::uint8_t> out;
+  d.save_index(out);
+  return out;
+}
+
+// A verification stage of one's own with per-frame state that says nothing
+// of queries or of forgetting (answers_queries() and forgets() false):
+// Detector::query() and forget() must refuse it by name. Registered as
+// "test-remembering" by the tests that use it.
+class Remembering final : public VerificationStage {
+ public:
+  const char* name() const override { return "test-remembering"; }
+  Role role() const override { return Role::kGate; }
+  bool has_state() const override { return true; }
+  StageCheck check(std::int64_t, const Candidate&) override { return {true, -1, "ok", 0, nullptr}; }
+  void end(std::int64_t query, const std::vector<Candidate>&) override { seen_.push_back(query); }
+  void save_frame(std::int64_t frame, StateWriter& out) const override {
+    out.put_i64(seen_.at(static_cast<std::size_t>(frame)));
+  }
+
+ private:
+  std::vector<std::int64_t> seen_;
+};
 
 }  // namespace lsgd::test

@@ -28,36 +28,27 @@ using test::expect_same;
 using test::expect_same_state;
 using test::frame;
 using test::message_of;
+using test::Remembering;
 using test::world;
 
-struct ForgetCase {
-  std::string mode;
-  const char* stages;
-  std::int64_t exhaustive_up_to = 8192;  // index mode: 0, the graph from the start
-};
-
-void PrintTo(const ForgetCase& c, std::ostream* out) { *out << c.mode << " " << c.stages; }
-
-DetectorOptions options(const ForgetCase& c) {
-  DetectorOptions o;
-  o.search.mode = c.mode;
-  o.search.min_gap = 20;
-  o.search.index.exhaustive_up_to = c.exhaustive_up_to;
-  parse_verification_stages(c.stages, o.verification);
-  return o;
-}
-
-std::vector<std::uint8_t> index_of(const Detector& d) {
-  std::vector<std::uint8_t> out;
-  d.save_index(out);
-  return out;
-}
+using ForgetCase = test::ModeCase;
+using test::index_of;
+using test::options;
 
 std::string temp_path(const std::string& name) {
   std::filesystem::create_directories(LSGD_TEST_TMP);
   const std::string path = std::string(LSGD_TEST_TMP) + "/forget_" + name;
   std::filesystem::remove_all(path);
   for (const char* suffix : {"-wal", "-shm", "-journal"}) std::filesystem::remove(path + suffix);
+  return path;
+}
+
+// A database of the street's first `frames` frames, one session.
+std::string written_database(const std::string& name, const DetectorOptions& o, std::int64_t frames) {
+  const std::string path = temp_path(name);
+  io::Database db = io::Database::create(path, o);
+  Detector writer(o);
+  for (std::int64_t i = 0; i < frames; ++i) db.append(writer, writer.process(frame(i)), 0);
   return path;
 }
 
@@ -207,22 +198,6 @@ TEST(Forget, EverythingLeavesAnEmptyDetectorThatTakesAnySize) {
   EXPECT_EQ(d.width(), 128);
 }
 
-// A stage of one's own with per-frame state that says nothing of forgetting.
-class Remembering final : public VerificationStage {
- public:
-  const char* name() const override { return "test-remembering"; }
-  Role role() const override { return Role::kGate; }
-  bool has_state() const override { return true; }
-  StageCheck check(std::int64_t, const Candidate&) override { return {true, -1, "ok", 0, nullptr}; }
-  void end(std::int64_t query, const std::vector<Candidate>&) override { seen_.push_back(query); }
-  void save_frame(std::int64_t frame, StateWriter& out) const override {
-    out.put_i64(seen_.at(static_cast<std::size_t>(frame)));
-  }
-
- private:
-  std::vector<std::int64_t> seen_;
-};
-
 TEST(Forget, AComponentThatCannotIsRefusedByName) {
   register_verification_stage({"test-remembering", "a gate with state",
                                [](const VerificationOptions&) -> std::unique_ptr<VerificationStage> {
@@ -340,12 +315,7 @@ TEST(ForgetDatabase, TheLastSessionLeavesTheMapBeforeIt) {
 
 TEST(ForgetDatabase, EverythingThenFramesOfAnotherSize) {
   const DetectorOptions o = options({kExhaustiveSearch, "temporal,geometric"});
-  const std::string path = temp_path("everything.lsgd");
-  {
-    io::Database db = io::Database::create(path, o);
-    Detector writer(o);
-    for (std::int64_t i = 0; i < 30; ++i) db.append(writer, writer.process(frame(i)), 0);
-  }
+  const std::string path = written_database("everything.lsgd", o, 30);
   {
     io::Database db = io::Database::open(path);
     EXPECT_EQ(db.forget(0, kMaxFrameId), 30);
@@ -367,12 +337,7 @@ TEST(ForgetDatabase, EverythingThenFramesOfAnotherSize) {
 
 TEST(ForgetDatabase, ReadOnlyOrABackwardRangeIsRefused) {
   const DetectorOptions o = options({kExhaustiveSearch, "temporal"});
-  const std::string path = temp_path("refused.lsgd");
-  {
-    io::Database db = io::Database::create(path, o);
-    Detector writer(o);
-    for (std::int64_t i = 0; i < 10; ++i) db.append(writer, writer.process(frame(i)), 0);
-  }
+  const std::string path = written_database("refused.lsgd", o, 10);
   {
     io::Database db = io::Database::open(path, io::Database::Mode::kReadOnly);
     const std::string m = message_of<InvalidArgument>([&] { db.forget(0, 5); });

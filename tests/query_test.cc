@@ -30,33 +30,12 @@ using test::expect_same;
 using test::expect_same_state;
 using test::frame;
 using test::message_of;
+using test::Remembering;
 using test::world;
 
-struct QueryCase {
-  std::string mode;
-  const char* stages;
-  std::int64_t exhaustive_up_to = 8192;  // index mode: 0, the graph from the start
-};
-
-void PrintTo(const QueryCase& c, std::ostream* out) {
-  *out << c.mode << " " << c.stages
-       << (c.mode == kIndexSearch ? " exhaustive up to " + std::to_string(c.exhaustive_up_to) : "");
-}
-
-DetectorOptions options(const QueryCase& c) {
-  DetectorOptions o;
-  o.search.mode = c.mode;
-  o.search.min_gap = 20;
-  o.search.index.exhaustive_up_to = c.exhaustive_up_to;
-  parse_verification_stages(c.stages, o.verification);
-  return o;
-}
-
-std::vector<std::uint8_t> index_of(const Detector& d) {
-  std::vector<std::uint8_t> out;
-  d.save_index(out);
-  return out;
-}
+using QueryCase = test::ModeCase;
+using test::index_of;
+using test::options;
 
 class Query : public ::testing::TestWithParam<QueryCase> {};
 
@@ -141,22 +120,6 @@ class StoringOnly final : public CandidateSearch {
  private:
   SearchOptions options_;
   std::vector<Candidate> scratch_;
-};
-
-// A stage of one's own with per-frame state that says nothing of queries.
-class Remembering final : public VerificationStage {
- public:
-  const char* name() const override { return "test-remembering"; }
-  Role role() const override { return Role::kGate; }
-  bool has_state() const override { return true; }
-  StageCheck check(std::int64_t, const Candidate&) override { return {true, -1, "ok", 0, nullptr}; }
-  void end(std::int64_t query, const std::vector<Candidate>&) override { seen_.push_back(query); }
-  void save_frame(std::int64_t frame, StateWriter& out) const override {
-    out.put_i64(seen_.at(static_cast<std::size_t>(frame)));
-  }
-
- private:
-  std::vector<std::int64_t> seen_;
 };
 
 TEST(Query, ASearchModeOrStageThatCannotAnswerIsRefusedByName) {

@@ -423,6 +423,7 @@ CLASS_NAMES = {
     1: 'outputs vs inputs', 2: 'truncated/corrupt images', 3: 'frame ids',
     4: 'kill -9 and re-run', 5: 'WAL / database damage', 6: 'hangs, unbounded reads',
     7: 'MAT files', 8: 'zero-frame runs, broken links', 10: 'messages',
+    11: 'leftovers, bombs, line ends',
 }
 
 
@@ -2847,8 +2848,93 @@ def print_report(total_time):
     print('details: %s' % os.path.join(WORK, 'results.json'))
 
 
+def class11():
+    """Issue 35: a dead database's leftovers, decompression bombs, companions
+    that are not files, line endings of other systems."""
+    print('\n=== class 11: leftovers, bombs, line ends', flush=True)
+    root = fresh(os.path.join(WORK, 'c11'))
+    corr = os.path.join(BASE, 'corr')
+    seq = os.path.join(corr, 'sequence.txt')
+
+    # A writer killed, its file deleted, its log left: a new database there refuses it.
+    cwd = fresh(os.path.join(root, 'stale'))
+    c = Case(11, 'a database deleted after its writer was killed; a new one at its path',
+             'refused naming the -wal left beside it; no database created; the log untouched')
+    c.run(['run', '--sequence', seq, '--database', 'd.db', '--output', 'c.csv', '--min-gap', '20'],
+          cwd, timeout=120, kill_when=wait_rows(os.path.join(cwd, 'c.csv'), 45))
+    wal = os.path.join(cwd, 'd.db-wal')
+    if c.check(os.path.isfile(wal) and os.path.getsize(wal) > 0, 'the killed writer left no log (harness)'):
+        before = read(wal)
+        os.remove(os.path.join(cwd, 'd.db'))
+        r = c.run(['run', '--sequence', seq, '--database', 'd.db', '--output', 'c2.csv', '--min-gap', '20'], cwd)
+        msg(11, c.name, r)
+        c.check(r.rc != 0, 'accepted (rc 0): the new database may hold the dead one\'s frames', r)
+        c.check('d.db-wal' in r.stderr, 'the message does not name the log', r)
+        c.check(not os.path.exists(os.path.join(cwd, 'd.db')), 'a database was created', r)
+        c.check(read(wal) == before, 'the log was changed', r)
+    c.done()
+
+    # A companion that is a folder.
+    cwd = fresh(os.path.join(root, 'walfolder'))
+    c = Case(11, 'db info with d.db-wal a folder', 'refused naming d.db-wal')
+    c.run(['run', '--sequence', seq, '--database', 'd.db', '--output', 'c.csv', '--last', '30'], cwd)
+    os.makedirs(os.path.join(cwd, 'd.db-wal'))
+    r = c.run(['db', 'info', 'd.db'], cwd)
+    msg(11, c.name, r)
+    c.check(r.rc != 0 and 'd.db-wal\' is a directory' in r.stderr, 'not refused naming the folder', r)
+    c.done()
+
+    # Decompression bombs beside good images: skipped from the header, cheaply.
+    def sof_resized(data, w, h):
+        at = jpeg_sof_offset(data)
+        return data[:at + 5] + struct.pack('>HH', h, w) + data[at + 9:]
+    good = read(os.path.join(corr, corr_list(corr)[0]))
+    bombs = {
+        'progressive JPEG 30000 x 30000': None,
+        'baseline JPEG 65500 x 65500': sof_resized(good, 65500, 65500),
+        'PNG 30000 x 30000': make_png(8, 8)[:16] + struct.pack('>II', 30000, 30000) + make_png(8, 8)[24:],
+        'PGM 30000 x 30000': b'P5\n30000 30000\n255\n' + bytes(512),
+    }
+    # A progressive JPEG: the good frame's header with SOF2 in place of SOF0
+    # (its scans then fail, after the size is read).
+    at = jpeg_sof_offset(good)
+    bombs['progressive JPEG 30000 x 30000'] = sof_resized(good[:at + 1] + b'\xC2' + good[at + 2:], 30000, 30000)
+    for label, data in bombs.items():
+        cwd = fresh(os.path.join(root, 'bomb-' + label.split()[0].lower() + label.split()[1].lower()))
+        c = Case(11, 'a %s among good frames' % label,
+                 'skipped from its header naming it; under 256 MB and 1 s for it')
+        names = corr_list(corr)[:6]
+        for i, n in enumerate(names):
+            shutil.copy(os.path.join(corr, n), os.path.join(cwd, '%02d.jpg' % (2 * i)))
+        ext = '.png' if label.startswith('PNG') else '.pgm' if label.startswith('PGM') else '.jpg'
+        write(os.path.join(cwd, '05' + ext), data)
+        r = c.run(['run', '--sequence', cwd, '--output', os.path.join(root, label.split()[0] + '.csv')], root)
+        msg(11, c.name, r)
+        c.check(r.rc == 0, 'rc=%s' % r.rc, r)
+        c.check('declares' in r.stderr and '05' + ext in r.stderr, 'not skipped from its header', r)
+        c.check(r.maxrss_kb < 256 * 1024, 'used %d MB' % (r.maxrss_kb // 1024), r)
+        c.check(r.elapsed < 5, 'took %.1f s' % r.elapsed, r)
+        c.done()
+
+    # Detections with CR-only (classic Mac) and CRLF line endings score as with LF.
+    cwd = fresh(os.path.join(root, 'ends'))
+    c = Case(11, 'a detections file with CR-only or CRLF line endings', 'the same metrics as with LF')
+    rows = ['query,match,score'] + ['%d,%d,0.9' % (q, q - 1) for q in range(5, 40)]
+    write(os.path.join(cwd, 'gt.txt'), ''.join('%d %d\n' % (q, q - 1) for q in range(5, 40)).encode())
+    got = {}
+    for name, end in (('lf', '\n'), ('cr', '\r'), ('crlf', '\r\n')):
+        write(os.path.join(cwd, name + '.csv'), (end.join(rows) + end).encode())
+        r = c.run(['eval', '--detections', name + '.csv', '--gt', 'gt.txt', '--min-gap', '0', '--json',
+                   name + '.json'], cwd)
+        if c.check(r.rc == 0, '%s: rc=%s' % (name, r.rc), r):
+            with open(os.path.join(cwd, name + '.json')) as f:
+                got[name] = json.load(f)['recall_at_1']
+    c.check(len(set(got.values())) == 1 and got.get('lf', 0) > 0, 'recall differs: %s' % got)
+    c.done()
+
+
 CLASSES = {1: 'class1', 2: 'class2', 3: 'class3', 4: 'class4', 5: 'class5', 6: 'class6',
-           7: 'class7', 8: 'class8', 10: 'class10'}
+           7: 'class7', 8: 'class8', 10: 'class10', 11: 'class11'}
 
 
 def main():

@@ -441,5 +441,85 @@ TEST_F(SequenceTest, FloatTiffIsFormatError) {
   expect_error<FormatError>([&] { read_image(p); }, {p, "float"});
 }
 
+// The size a header declares is checked before anything is decoded: a few
+// hundred bytes claiming 30000 x 30000 pixels (decompression bombs) are
+// refused at once, in every format lsgd reads (issue 35).
+TEST_F(SequenceTest, ImagesDeclaringTooManyPixelsAreRefusedFromTheHeader) {
+  const cv::Mat small = random_image(CV_8UC3);
+  const auto encode = [&](const char* ext, std::vector<int> params = {}) {
+    std::vector<uchar> b;
+    EXPECT_TRUE(cv::imencode(ext, small, b, params)) << ext;
+    return std::string(b.begin(), b.end());
+  };
+  const auto put_be16 = [](std::string& b, std::size_t at, int v) {
+    b[at] = static_cast<char>(v >> 8), b[at + 1] = static_cast<char>(v & 0xFF);
+  };
+  const auto put_be32 = [](std::string& b, std::size_t at, std::uint32_t v) {
+    for (int k = 0; k < 4; ++k) b[at + k] = static_cast<char>(v >> (24 - 8 * k));
+  };
+  const auto put_le32 = [](std::string& b, std::size_t at, std::uint32_t v) {
+    for (int k = 0; k < 4; ++k) b[at + k] = static_cast<char>(v >> (8 * k));
+  };
+  std::vector<std::pair<std::string, std::string>> bombs;  // name, bytes
+  for (const bool progressive : {false, true}) {
+    std::string jpeg = encode(".jpg", {cv::IMWRITE_JPEG_PROGRESSIVE, progressive ? 1 : 0});
+    const std::size_t sof = jpeg.find(progressive ? "\xFF\xC2" : "\xFF\xC0");
+    ASSERT_NE(sof, std::string::npos);
+    put_be16(jpeg, sof + 5, 30000);
+    put_be16(jpeg, sof + 7, 30000);
+    bombs.emplace_back(progressive ? "progressive.jpg" : "baseline.jpg", jpeg);
+  }
+  std::string png = encode(".png");
+  put_be32(png, 16, 30000);
+  put_be32(png, 20, 30000);
+  bombs.emplace_back("bomb.png", png);
+  std::string bmp = encode(".bmp");
+  put_le32(bmp, 18, 30000);
+  put_le32(bmp, 22, 30000);
+  bombs.emplace_back("bomb.bmp", bmp);
+  bombs.emplace_back("bomb.pgm", "P5\n# a comment\n30000 30000\n255\n" + std::string(64, 'x'));
+  bombs.emplace_back("wide.pgm", "P5 16385 1 255\n" + std::string(64, 'x'));
+  bombs.emplace_back("many.pgm", "P5 8192 8192 255\n" + std::string(64, 'x'));  // 67 M pixels
+  for (const auto& [name, bytes] : bombs) {
+    SCOPED_TRACE(name);
+    const std::string p = write(name, bytes);
+    expect_error<FormatError>([&] { read_image(p); }, {p, "declares", "nothing was decoded"});
+  }
+  // Not one of the formats lsgd reads (a GIF): refused, naming them.
+  const std::string gif = write("a.gif", std::string("GIF89a\x10\x00\x10\x00", 10) + std::string(40, '\0'));
+  expect_error<FormatError>([&] { read_image(gif); }, {gif, "not a decodable image", "JPEG, PNG"});
+}
+
+// A progressive JPEG keeps every coefficient until its last scan: one that
+// would need more than kMaxJpegCoefficientBytes is refused from its header.
+TEST_F(SequenceTest, AProgressiveJpegNeedingTooMuchMemoryIsRefused) {
+  const cv::Mat small = random_image(CV_8UC3);
+  std::vector<uchar> b;
+  ASSERT_TRUE(cv::imencode(".jpg", small, b, {cv::IMWRITE_JPEG_PROGRESSIVE, 1}));
+  std::string jpeg(b.begin(), b.end());
+  const std::size_t sof = jpeg.find("\xFF\xC2");
+  ASSERT_NE(sof, std::string::npos);
+  ASSERT_EQ(jpeg[sof + 9], 3);  // three components: sampled 4:4:4 from now on
+  for (int c = 0; c < 3; ++c) jpeg[sof + 11 + 3 * c] = 0x11;
+  // 8192 x 6000: 49 M pixels (within kMaxImagePixels), 4:4:4, 295 MB of coefficients.
+  jpeg[sof + 5] = static_cast<char>(6000 >> 8), jpeg[sof + 6] = static_cast<char>(6000 & 0xFF);
+  jpeg[sof + 7] = static_cast<char>(8192 >> 8), jpeg[sof + 8] = static_cast<char>(8192 & 0xFF);
+  const std::string p = write("deep.jpg", jpeg);
+  expect_error<FormatError>([&] { read_image(p); }, {p, "progressive JPEG of 8192 x 6000", "MB to decode"});
+}
+
+// A PNM's samples run from 0 to its maxval: scaled to 0 .. 255.
+TEST_F(SequenceTest, PnmMaxvalIsHonoured) {
+  const std::string p = write("fifteen.pgm", std::string("P5\n2 2\n15\n\x00\x0F\x07\x08", 15));
+  const cv::Mat m = read_image(p);
+  ASSERT_EQ(m.type(), CV_8UC1);
+  EXPECT_EQ(m.at<uchar>(0, 0), 0);
+  EXPECT_EQ(m.at<uchar>(0, 1), 255);
+  EXPECT_EQ(m.at<uchar>(1, 0), 119);
+  EXPECT_EQ(m.at<uchar>(1, 1), 136);
+  const std::string full = write("full.pgm", std::string("P5\n2 1\n255\n\x00\x0F", 13));
+  EXPECT_EQ(read_image(full).at<uchar>(0, 1), 15);
+}
+
 }  // namespace
 }  // namespace lsgd::io

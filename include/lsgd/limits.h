@@ -17,6 +17,13 @@ constexpr std::int64_t kMaxFrameId = (std::int64_t{1} << 53) - 1;
 constexpr std::int64_t kMaxSession = kMaxFrameId;
 // An image file: 1 GiB (a 16384 x 16384 BGRA image uncompressed).
 constexpr std::int64_t kMaxImageFileBytes = std::int64_t{1} << 30;
+// Pixels an image file may declare (sides at most kMaxImageSide, lsgd/image.h):
+// 50 MP, 8192 x 6144 (201 MB as BGRA). io::read_image refuses more from the
+// header, before anything is decoded.
+constexpr std::int64_t kMaxImagePixels = std::int64_t{8192} * 6144;
+// Memory a JPEG decoder may need besides the image (a progressive JPEG keeps
+// every coefficient): io::read_image refuses more from the header.
+constexpr std::int64_t kMaxJpegCoefficientBytes = std::int64_t{256} << 20;
 // A temporal window, tolerance or frame step: 10^9 frames.
 constexpr std::int64_t kMaxWindowFrames = 1'000'000'000;
 // A YAML configuration file: 1 MiB.

@@ -24,7 +24,9 @@
 #include <vector>
 
 #include "internal/check.h"
+#include "io/image_header.h"
 #include "lsgd/error.h"
+#include "lsgd/image.h"
 #include "lsgd/limits.h"
 
 namespace lsgd::io {
@@ -289,7 +291,9 @@ void jpeg_message(j_common_ptr info, int level) {
 // upsampling: tests/sequence_test.cc checks equality with cv::imdecode);
 // other colour spaces (CMYK) are only checked, with `out` left empty, and
 // decoded by OpenCV after.
-std::string decode_jpeg(const std::vector<unsigned char>& bytes, cv::Mat& out) {
+// `refused`: set, with nothing decoded, when a progressive (or multi-scan)
+// JPEG would need more than kMaxJpegCoefficientBytes for its coefficients.
+std::string decode_jpeg(const std::vector<unsigned char>& bytes, cv::Mat& out, std::string& refused) {
   jpeg_decompress_struct info{};
   JpegCheck check{};
   info.err = jpeg_std_error(&check.pub);
@@ -303,6 +307,20 @@ std::string decode_jpeg(const std::vector<unsigned char>& bytes, cv::Mat& out) {
   jpeg_create_decompress(&info);
   jpeg_mem_src(&info, bytes.data(), static_cast<unsigned long>(bytes.size()));
   jpeg_read_header(&info, TRUE);
+  if (jpeg_has_multiple_scans(&info)) {  // every coefficient is kept until the last scan
+    std::int64_t coefficients = 0;
+    for (int c = 0; c < info.num_components; ++c) {
+      coefficients += static_cast<std::int64_t>(info.comp_info[c].width_in_blocks) *
+                      info.comp_info[c].height_in_blocks * DCTSIZE2 * sizeof(JCOEF);
+    }
+    if (coefficients > kMaxJpegCoefficientBytes) {
+      refused = concat("a progressive JPEG of ", info.image_width, " x ", info.image_height,
+                       " pixels needs ", coefficients >> 20, " MB to decode, above the ",
+                       kMaxJpegCoefficientBytes >> 20, " MB lsgd allows (nothing was decoded)");
+      jpeg_destroy_decompress(&info);
+      return "";
+    }
+  }
   const bool gray = info.num_components == 1;
   const bool colour = info.num_components == 3 &&
                       (info.jpeg_color_space == JCS_YCbCr || info.jpeg_color_space == JCS_RGB);
@@ -400,17 +418,35 @@ Sequence open_sequence(const std::string& path) {
 cv::Mat read_image(const std::string& path) {
   const std::vector<unsigned char> bytes = read_bytes(path);
   if (bytes.empty()) throw FormatError(concat("image '", path, "' is an empty file (0 bytes)"));
-  const bool jpeg = bytes.size() >= 3 && bytes[0] == 0xFF && bytes[1] == 0xD8 && bytes[2] == 0xFF;
+  // The size the header declares, checked before a decoder allocates it.
+  const header::ImageHeader declared = header::read_header(bytes);
+  if (declared.format.empty()) {
+    throw FormatError(concat("'", path, "' is not a decodable image: it does not start as one of the "
+                             "formats lsgd reads (", header::known_formats(), ")"));
+  }
+  const bool jpeg = declared.format == "JPEG";
   if (jpeg && !jpeg_reaches_eoi(bytes)) {
     throw FormatError(concat("image '", path, "' is a truncated or damaged JPEG: its ",
                              bytes.size(), " bytes end before the end-of-image marker"));
   }
+  if (declared.width <= 0 || declared.height <= 0) {
+    throw FormatError(concat("image '", path, "' is a damaged ", declared.format,
+                             ": its header gives no size"));
+  }
+  if (declared.width > kMaxImageSide || declared.height > kMaxImageSide ||
+      declared.width * declared.height > kMaxImagePixels) {
+    throw FormatError(concat("image '", path, "' declares ", declared.width, " x ", declared.height,
+                             " pixels, more than lsgd reads (sides up to ", kMaxImageSide, ", ",
+                             kMaxImagePixels, " pixels in all); nothing was decoded"));
+  }
   cv::Mat image;
   // One decoding pass that also sees libjpeg's warnings (OpenCV drops them).
   if (jpeg) {
-    if (const std::string damage = decode_jpeg(bytes, image); !damage.empty()) {
+    std::string refused;
+    if (const std::string damage = decode_jpeg(bytes, image, refused); !damage.empty()) {
       throw FormatError(concat("image '", path, "' is a damaged JPEG: ", damage));
     }
+    if (!refused.empty()) throw FormatError(concat("image '", path, "': ", refused));
   }
   if (image.empty()) {  // not a JPEG, or one libjpeg only checked (CMYK)
     try {
@@ -427,6 +463,10 @@ cv::Mat read_image(const std::string& path) {
                              "format)"));
   }
   check_decoded(image, path);
+  // A PNM's samples go from 0 to its maxval: OpenCV keeps them as stored.
+  if (declared.pnm_maxval > 0 && declared.pnm_maxval < 255) {
+    image.convertTo(image, CV_8U, 255.0 / declared.pnm_maxval);
+  }
   return image;
 }
 

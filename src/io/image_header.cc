@@ -1,0 +1,184 @@
+#include "io/image_header.h"
+
+#include <algorithm>
+#include <cctype>
+#include <cstring>
+
+namespace lsgd::io::header {
+namespace {
+
+using Bytes = std::vector<unsigned char>;
+
+bool starts_with(const Bytes& b, const char* magic, std::size_t n, std::size_t at = 0) {
+  return b.size() >= at + n && std::memcmp(b.data() + at, magic, n) == 0;
+}
+
+// Unsigned integers of n bytes at `at`, big- or little-endian; -1 when cut.
+std::int64_t be(const Bytes& b, std::size_t at, std::size_t n) {
+  if (b.size() < at + n) return -1;
+  std::int64_t v = 0;
+  for (std::size_t i = 0; i < n; ++i) v = (v << 8) | b[at + i];
+  return v;
+}
+std::int64_t le(const Bytes& b, std::size_t at, std::size_t n) {
+  if (b.size() < at + n) return -1;
+  std::int64_t v = 0;
+  for (std::size_t i = n; i-- > 0;) v = (v << 8) | b[at + i];
+  return v;
+}
+
+// JPEG: the first start-of-frame segment's height and width.
+void read_jpeg(const Bytes& b, ImageHeader& h) {
+  std::size_t at = 2;
+  while (at + 4 <= b.size()) {
+    if (b[at] != 0xFF) return;
+    const unsigned char marker = b[at + 1];
+    if (marker == 0xFF) {  // fill byte
+      ++at;
+      continue;
+    }
+    if (marker == 0xD8 || (marker >= 0xD0 && marker <= 0xD7) || marker == 0x01) {
+      at += 2;
+      continue;
+    }
+    const std::int64_t length = be(b, at + 2, 2);
+    if (length < 2) return;
+    const bool frame = marker >= 0xC0 && marker <= 0xCF && marker != 0xC4 && marker != 0xC8 &&
+                       marker != 0xCC;
+    if (frame) {
+      const std::int64_t height = be(b, at + 5, 2), width = be(b, at + 7, 2);
+      if (height > 0 && width > 0) h.height = height, h.width = width;  // 0: set later (DNL)
+      return;
+    }
+    if (marker == 0xDA || marker == 0xD9) return;  // scan data before any frame: damaged
+    at += 2 + static_cast<std::size_t>(length);
+  }
+}
+
+// PNM: "P1" .. "P6" then width, height (and maxval but for bitmaps), separated
+// by white space and '#' comments; "P7" (PAM): WIDTH, HEIGHT, MAXVAL lines.
+void read_pnm(const Bytes& b, ImageHeader& h) {
+  const char kind = static_cast<char>(b[1]);
+  std::size_t at = 2;
+  // The next token of the header ("" at its end or when too long).
+  const auto token = [&]() {
+    std::string t;
+    while (at < b.size()) {
+      const auto c = static_cast<char>(b[at]);
+      if (c == '#') {
+        while (at < b.size() && b[at] != '\n' && b[at] != '\r') ++at;
+      } else if (std::isspace(static_cast<unsigned char>(c))) {
+        ++at;
+      } else {
+        break;
+      }
+    }
+    while (at < b.size() && !std::isspace(b[at]) && b[at] != '#' && t.size() < 24) {
+      t += static_cast<char>(b[at++]);
+    }
+    return t;
+  };
+  const auto number = [](const std::string& t) -> std::int64_t {
+    if (t.empty() || t.size() > 18) return -1;
+    std::int64_t v = 0;
+    for (const char c : t) {
+      if (c < '0' || c > '9') return -1;
+      v = v * 10 + (c - '0');
+    }
+    return v;
+  };
+  if (kind == '7') {
+    for (int tokens = 0; tokens < 64; ++tokens) {
+      const std::string t = token();
+      if (t.empty() || t == "ENDHDR") break;
+      if (t == "WIDTH") h.width = number(token());
+      if (t == "HEIGHT") h.height = number(token());
+      if (t == "MAXVAL") h.pnm_maxval = static_cast<int>(std::min<std::int64_t>(number(token()), 1 << 20));
+    }
+    return;
+  }
+  h.width = number(token());
+  h.height = number(token());
+  if (kind != '1' && kind != '4') {
+    h.pnm_maxval = static_cast<int>(std::min<std::int64_t>(number(token()), 1 << 20));
+  }
+}
+
+// TIFF and BigTIFF: ImageWidth (256) and ImageLength (257) of the first IFD.
+void read_tiff(const Bytes& b, ImageHeader& h) {
+  const bool little = b[0] == 'I';
+  const auto u = [&](std::size_t at, std::size_t n) { return little ? le(b, at, n) : be(b, at, n); };
+  const std::int64_t version = u(2, 2);
+  const bool big = version == 43;
+  std::int64_t ifd = big ? u(8, 8) : u(4, 4);
+  if (ifd < 8 || static_cast<std::uint64_t>(ifd) >= b.size()) return;
+  const auto at = static_cast<std::size_t>(ifd);
+  const std::int64_t count = big ? u(at, 8) : u(at, 2);
+  const std::size_t entry = big ? 20 : 12, first = at + (big ? 8 : 2);
+  for (std::int64_t k = 0; k < count && k < 4096; ++k) {
+    const std::size_t e = first + static_cast<std::size_t>(k) * entry;
+    const std::int64_t tag = u(e, 2), type = u(e + 2, 2);
+    if (tag < 0 || type < 0) return;
+    if (tag != 256 && tag != 257) continue;
+    const std::size_t value = e + (big ? 12 : 8);
+    const std::int64_t v = type == 3 ? u(value, 2) : type == 4 ? u(value, 4) : type == 16 ? u(value, 8) : -1;
+    (tag == 256 ? h.width : h.height) = v;
+  }
+}
+
+// WebP: the lossy (VP8), lossless (VP8L) or extended (VP8X) header's size.
+void read_webp(const Bytes& b, ImageHeader& h) {
+  if (starts_with(b, "VP8 ", 4, 12) && b.size() >= 30 && b[23] == 0x9D && b[24] == 0x01 && b[25] == 0x2A) {
+    h.width = le(b, 26, 2) & 0x3FFF;
+    h.height = le(b, 28, 2) & 0x3FFF;
+  } else if (starts_with(b, "VP8L", 4, 12) && b.size() >= 25 && b[20] == 0x2F) {
+    const std::int64_t bits = le(b, 21, 4);
+    h.width = (bits & 0x3FFF) + 1;
+    h.height = ((bits >> 14) & 0x3FFF) + 1;
+  } else if (starts_with(b, "VP8X", 4, 12) && b.size() >= 30) {
+    h.width = le(b, 24, 3) + 1;
+    h.height = le(b, 27, 3) + 1;
+  }
+}
+
+}  // namespace
+
+ImageHeader read_header(const Bytes& b) {
+  ImageHeader h;
+  if (b.size() >= 3 && b[0] == 0xFF && b[1] == 0xD8 && b[2] == 0xFF) {
+    h.format = "JPEG";
+    read_jpeg(b, h);
+  } else if (starts_with(b, "\x89PNG\r\n\x1a\n", 8)) {
+    h.format = "PNG";
+    if (starts_with(b, "IHDR", 4, 12)) h.width = be(b, 16, 4), h.height = be(b, 20, 4);
+  } else if (starts_with(b, "BM", 2)) {
+    h.format = "BMP";
+    const std::int64_t size = le(b, 14, 4);
+    if (size == 12) {
+      h.width = le(b, 18, 2), h.height = le(b, 20, 2);
+    } else if (size >= 16) {
+      const std::int64_t w = le(b, 18, 4), ht = le(b, 22, 4);
+      if (w >= 0 && ht >= 0) {
+        h.width = static_cast<std::int32_t>(static_cast<std::uint32_t>(w));
+        const auto signed_height = static_cast<std::int32_t>(static_cast<std::uint32_t>(ht));
+        h.height = signed_height < 0 ? -static_cast<std::int64_t>(signed_height) : signed_height;  // top-down
+      }
+    }
+  } else if (b.size() >= 3 && b[0] == 'P' && b[1] >= '1' && b[1] <= '7' &&
+             std::isspace(b[2])) {
+    h.format = "PNM";
+    read_pnm(b, h);
+  } else if (starts_with(b, "II*\0", 4) || starts_with(b, "MM\0*", 4) || starts_with(b, "II+\0", 4) ||
+             starts_with(b, "MM\0+", 4)) {
+    h.format = "TIFF";
+    read_tiff(b, h);
+  } else if (starts_with(b, "RIFF", 4) && starts_with(b, "WEBP", 4, 8)) {
+    h.format = "WebP";
+    read_webp(b, h);
+  }
+  return h;
+}
+
+const char* known_formats() { return "JPEG, PNG, BMP, PGM/PPM/PBM/PAM, TIFF or WebP"; }
+
+}  // namespace lsgd::io::header

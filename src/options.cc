@@ -22,20 +22,42 @@ std::string format_real(double value) {
 
 namespace internal {
 
+std::string shown_value(const std::string& text) {
+  constexpr std::size_t kShown = 64;
+  std::string out;
+  for (std::size_t i = 0; i < text.size() && i < kShown; ++i) {
+    const auto c = static_cast<unsigned char>(text[i]);
+    if (c == 0) {
+      out += "\\0";
+    } else if (c < 0x20 || c == 0x7F) {
+      out += concat("\\x", "0123456789abcdef"[c >> 4], "0123456789abcdef"[c & 15]);
+    } else {
+      out += static_cast<char>(c);
+    }
+  }
+  if (text.size() > kShown) out += concat("... (", text.size(), " bytes)");
+  return out;
+}
+
 void throw_out_of_range(const std::string& key, const std::string& value, double lo, double hi,
                         bool lo_open, bool integer, const std::string& unit) {
   const std::string range =
       integer ? concat("[", static_cast<std::int64_t>(lo), ", ", static_cast<std::int64_t>(hi), "]")
               : concat(lo_open ? "(" : "[", lo, ", ", hi, "]");
-  throw_invalid(key, " = ", value, " is out of range: must be in ", range, unit.empty() ? "" : " ",
-                unit);
+  throw_invalid(key, " = ", shown_value(value), " is out of range: must be in ", range,
+                unit.empty() ? "" : " ", unit);
 }
 
 std::string number_text(double value) { return concat(value); }
 
 void throw_bad_option_text(const std::string& key, const std::string& text,
                            const std::string& expected) {
-  throw_invalid(key, " = '", text, "' is not ", expected);
+  // Digits alone are an integer too large for the option, not "not an integer".
+  const std::size_t digits = text.find_first_not_of("0123456789", text[0] == '-' || text[0] == '+' ? 1 : 0);
+  if (expected == "an integer" && !text.empty() && digits == std::string::npos && text.size() > 1) {
+    throw_invalid(key, " = ", shown_value(text), " is out of range: far beyond the values it takes");
+  }
+  throw_invalid(key, " = '", shown_value(text), "' is not ", expected);
 }
 
 namespace {

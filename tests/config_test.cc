@@ -422,8 +422,17 @@ TEST(OptionTables, SetOptionNamesUnknownKeysAndWrongValues) {
   EXPECT_NE(m.find("search.min_gap = '12x' is not an integer"), std::string::npos) << m;
   m = test::message_of<InvalidArgument>([&] { set_option(o, "decision.threshold", "seven"); });
   EXPECT_NE(m.find("decision.threshold = 'seven' is not a number"), std::string::npos) << m;
-  m = test::message_of<InvalidArgument>([&] { set_option(o, "search.top_n", "99999999999"); });
-  EXPECT_NE(m.find("is not an integer"), std::string::npos) << m;  // beyond int
+  // Beyond the option's type (int), or beyond int64: out of range, not "not an integer".
+  for (const char* big : {"99999999999", "9223372036854775807", "92233720368547758070"}) {
+    m = test::message_of<InvalidArgument>([&] { set_option(o, "search.top_n", big); });
+    EXPECT_NE(m.find(std::string("search.top_n = ") + big + " is out of range"), std::string::npos) << m;
+  }
+  // A value is shown on one line: a NUL escaped, a long one cut with its length.
+  m = test::message_of<InvalidArgument>([&] { set_option(o, "search.min_gap", std::string("1\0x", 3)); });
+  EXPECT_NE(m.find("search.min_gap = '1\\0x' is not an integer"), std::string::npos) << m;
+  m = test::message_of<InvalidArgument>([&] { set_option(o, "decision.threshold", std::string(900000, '7') + "x"); });
+  EXPECT_NE(m.find("... (900001 bytes)"), std::string::npos) << m.substr(0, 200);
+  EXPECT_LT(m.size(), 200u);
   set_option(o, "search.mode", "nodes");
   set_option(o, "verification.stages", "geometric,temporal");
   EXPECT_EQ(option_text(o, "verification.stages"), "temporal,geometric");

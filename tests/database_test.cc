@@ -1010,6 +1010,32 @@ TEST(DatabaseWal, ANewDatabaseRefusesADeletedOnesLog) {
   EXPECT_EQ(db.frames(), 0);
 }
 
+// A file restored from an older backup beside its newer log: refused, on
+// one line, saying to move the log away; moved away, the backup opens.
+TEST(DatabaseWal, ABackupBesideANewerLogSaysToMoveTheLogAway) {
+  const std::string newer = crashed_database("newer", 45);  // frames 32 .. 44 in its log
+  const std::string older = crashed_database("older", 3);  // its file alone: no frame yet
+  const std::string path = temp_path("restored");
+  fs::copy_file(older, path);
+  fs::copy_file(newer + "-wal", path + "-wal");
+  std::string m;
+  try {
+    Database db = Database::open(path, Database::Mode::kReadOnly);
+    db.verify();
+  } catch (const Error& e) {
+    m = e.what();
+  }
+  ASSERT_FALSE(m.empty()) << "the newer log was replayed over the backup without a word";
+  EXPECT_EQ(m.find('\n'), std::string::npos) << m;
+  EXPECT_LT(m.size(), 800u) << m;
+  EXPECT_NE(m.find("move '" + path + "-wal'"), std::string::npos) << m;
+  fs::rename(path + "-wal", path + "-wal.newer");
+  fs::remove(path + "-shm");
+  const Database db = Database::open(path, Database::Mode::kReadOnly);
+  EXPECT_EQ(db.frames(), 0);
+  EXPECT_NO_THROW(db.verify());
+}
+
 // The log's companions must be files of their own: a folder, a FIFO or a
 // link where SQLite keeps them is refused, naming it, before anything is
 // created or read.

@@ -94,6 +94,16 @@ TEST_F(DetectionsTest, EveryLineEndingReadsTheSameRows) {
   }
 }
 
+// A read error (EIO) names the file, the line and the reason.
+TEST_F(DetectionsTest, AReadErrorNamesTheFile) {
+  const std::string eio = "/proc/self/mem";  // read() fails with EIO at offset 0
+  std::error_code ec;
+  if (!fs::is_regular_file(eio, ec)) GTEST_SKIP() << eio << " is not here";
+  const std::string m = test::message_of<IoError>([&] { read_detections(eio, 10); });
+  EXPECT_NE(m.find(eio), std::string::npos) << m;
+  EXPECT_NE(m.find("Input/output error"), std::string::npos) << m;
+}
+
 TEST_F(DetectionsTest, WhiteSpaceSeparatedRowsAreAccepted) {
   const std::string path = write("d.txt", "3 0 0.25\r\n4\t-1\t0\n");
   const auto records = read_detections(path, 5);

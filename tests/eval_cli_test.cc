@@ -468,6 +468,43 @@ TEST(EvalCli, BadImagesAreSkippedAndReportedOrStopTheRunUnderStrict) {
   EXPECT_NE(r.err.find("frame 2 (" + (dir / "2.png").string() + ")"), std::string::npos) << r.err;
 }
 
+// Results once computed are written: a report over a run that skipped
+// frames (they have no descriptor), a JSON naming a path that is not UTF-8;
+// and what can be checked before the run is (a --compare file).
+TEST(EvalCli, ResultsAreWrittenAndInputsCheckedBeforeTheRun) {
+  const fs::path dir = kTmp / "skipped-report";
+  for (int i = 0; i < 8; ++i) write_image(dir / (std::to_string(i) + ".png"), i % 4);
+  write_text(dir / "3.png", "");  // skipped
+  write_text(kTmp / "skipped-gt.txt", "4 0\n5 1\n7 3\n");
+  const fs::path report = kTmp / "skipped.html", json = kTmp / "skipped.json";
+  CmdResult r = lsgd("eval --sequence " + q(dir) + " --gt " + q(kTmp / "skipped-gt.txt") +
+                     " --min-gap 1 --json " + q(json) + " --report " + q(report));
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_NE(r.err.find("skipped frame 3"), std::string::npos) << r.err;
+  EXPECT_NE(slurp(report).find("<html"), std::string::npos);
+  EXPECT_EQ(read_json(json)["skipped_frames"], 1);
+
+  // A --compare file that does not exist: refused before any frame is run.
+  const fs::path csv = kTmp / "compare-run.csv";
+  r = lsgd("eval --sequence " + q(dir) + " --gt " + q(kTmp / "skipped-gt.txt") + " --min-gap 1 --json " +
+           q(kTmp / "c.json") + " --output " + q(csv) + " --compare " + q(kTmp / "nowhere.csv"));
+  EXPECT_NE(r.code, 0);
+  EXPECT_NE(r.err.find("nowhere.csv"), std::string::npos) << r.err;
+  EXPECT_FALSE(fs::exists(csv));
+  EXPECT_FALSE(fs::exists(kTmp / "c.json"));
+
+  // A folder whose name is not UTF-8: the JSON is written, the byte replaced.
+  const fs::path odd = kTmp / "odd\xff\xfe";
+  fs::create_directories(odd);
+  for (int i = 0; i < 4; ++i) write_image(odd / (std::to_string(i) + ".png"), i);
+  write_text(kTmp / "odd-gt.txt", "3 0\n");
+  r = lsgd("eval --sequence " + q(odd) + " --gt " + q(kTmp / "odd-gt.txt") + " --min-gap 1 --json " +
+           q(kTmp / "odd.json"));
+  ASSERT_EQ(r.code, 0) << r.err;
+  const std::string sequence = read_json(kTmp / "odd.json")["sequence"];
+  EXPECT_NE(sequence.find("odd\xEF\xBF\xBD"), std::string::npos) << sequence;  // U+FFFD
+}
+
 TEST(EvalCli, DetectionsErrorNamesFileAndLine) {
   const fs::path dir = kTmp / "badcsv";
   write_text(dir / "gt.txt", "8 0\n");

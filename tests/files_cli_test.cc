@@ -4,7 +4,10 @@
 // cannot be written stops the command before any work. Each refusal leaves
 // every file as it was.
 #include <sys/stat.h>
+#include <sys/wait.h>
 #include <unistd.h>
+
+#include <cstdlib>
 
 #include <filesystem>
 #include <fstream>
@@ -211,6 +214,34 @@ TEST_F(Files, AFullDiskFailsTheCommandAndDevicesStayDevices) {
   ASSERT_EQ(::stat("/dev/null", &st), 0);
   EXPECT_TRUE(S_ISCHR(st.st_mode)) << "/dev/null was replaced";
   EXPECT_FALSE(fs::exists("/dev/null.tmp"));
+}
+
+// A command killed while it writes an output (here by the file size limit,
+// SIGXFSZ; SIGINT, SIGTERM and SIGHUP alike) leaves no temporary file; one
+// started with standard error closed does not write its diagnostics into
+// the first file it opens.
+TEST_F(Files, AKilledWriteLeavesNoTemporaryAndAClosedStderrStaysClosed) {
+  const fs::path out = kTmp / "killed";
+  fs::create_directories(out);
+  const std::string eval = "'" + std::string(LSGD_CLI) + "' eval --sequence " + q(dir_ / "sequence.txt") +
+                           " --gt " + q(dir_ / "gt.txt") + " --min-gap 5 --verify none --json " +
+                           q(out / "m.json");
+  const int status = std::system(("sh -c \"ulimit -f 1 && exec " + eval + "\" >/dev/null 2>&1").c_str());
+  EXPECT_FALSE(WIFEXITED(status) && WEXITSTATUS(status) == 0) << "the 512-byte limit was not reached";
+  for (const auto& entry : fs::directory_iterator(out)) {
+    EXPECT_EQ(entry.path().filename().string().find(".tmp-"), std::string::npos) << entry.path();
+  }
+  EXPECT_FALSE(fs::exists(out / "m.json"));
+
+  const fs::path bad = kTmp / "bad-seq";
+  fs::create_directories(bad);
+  for (int i = 0; i < 4; ++i) fs::copy_file(dir_ / "images" / (std::to_string(1000 + i) + ".png"), bad / (std::to_string(i) + ".png"));
+  std::ofstream(bad / "2.png") << "not an image";
+  const std::string run = "'" + std::string(LSGD_CLI) + "' run --sequence " + q(bad) + " --output " + q(out / "c.csv");
+  ASSERT_EQ(std::system(("sh -c \"exec " + run + " 2>&-\" >/dev/null").c_str()), 0);
+  const std::string csv = slurp(out / "c.csv");
+  EXPECT_EQ(csv.find("skipped"), std::string::npos) << csv;
+  EXPECT_EQ(csv.rfind("frame,image,", 0), 0u) << csv;
 }
 
 // lsgd demo --output DIR writes frames and files there: a folder it did not

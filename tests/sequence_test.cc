@@ -15,6 +15,7 @@
 #include <vector>
 
 #include "lsgd/error.h"
+#include "lsgd/io/config.h"
 #include "lsgd/limits.h"
 #include "test_util.h"
 
@@ -519,6 +520,18 @@ TEST_F(SequenceTest, PnmMaxvalIsHonoured) {
   EXPECT_EQ(m.at<uchar>(1, 1), 136);
   const std::string full = write("full.pgm", std::string("P5\n2 1\n255\n\x00\x0F", 13));
   EXPECT_EQ(read_image(full).at<uchar>(0, 1), 15);
+}
+
+// A read error of the system (EIO; /proc/self/mem gives one at offset 0)
+// is an IoError naming the file and the reason, for an image, a list file
+// and a config, never the stream library's bare "basic_filebuf::underflow".
+TEST_F(SequenceTest, ReadErrorsNameTheFileAndTheReason) {
+  const std::string eio = "/proc/self/mem";
+  std::error_code ec;
+  if (!fs::is_regular_file(eio, ec)) GTEST_SKIP() << eio << " is not here";
+  expect_error<IoError>([&] { read_image(eio); }, {"image '" + eio + "'", "Input/output error"});
+  expect_error<IoError>([&] { read_image_list(eio); }, {eio, "line 1", "Input/output error"});
+  expect_error<IoError>([&] { load_config(eio); }, {"config '" + eio + "'", "Input/output error"});
 }
 
 }  // namespace

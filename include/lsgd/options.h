@@ -59,6 +59,9 @@ using OptionTable = std::vector<OptionField<S>>;
 std::string format_real(double value);
 
 namespace internal {
+// A value as a message shows it, on one line: control characters (a NUL)
+// escaped, cut after 64 bytes with the length said.
+std::string shown_value(const std::string& text);
 [[noreturn]] void throw_out_of_range(const std::string& key, const std::string& value, double lo,
                                      double hi, bool lo_open, bool integer,
                                      const std::string& unit);

@@ -232,9 +232,9 @@ cv::Mat similarity_image(const ReportInput& in, const Sampling& s, double& lo, d
   values.reserve(static_cast<std::size_t>(s.n) * (s.n - 1) / 2);
   for (int a = 0; a < s.n; ++a) {
     for (int b = 0; b < a; ++b) {
-      const double v = in.similarity(s.frame(a), s.frame(b));
+      const double v = in.similarity(s.frame(a), s.frame(b));  // NaN: a frame never described
       sim.at<double>(a, b) = sim.at<double>(b, a) = v;
-      values.push_back(v);
+      if (!std::isnan(v)) values.push_back(v);
     }
   }
   // Scale from the 1st percentile to the maximum, so a few outliers do not flatten the contrast.
@@ -242,6 +242,9 @@ cv::Mat similarity_image(const ReportInput& in, const Sampling& s, double& lo, d
   hi = values.empty() ? 1 : *std::max_element(values.begin(), values.end());
   if (!(hi > lo)) hi = lo + 1e-6;
   for (int a = 0; a < s.n; ++a) sim.at<double>(a, a) = hi;
+  sim.forEach<double>([lo](double& v, const int*) {
+    if (std::isnan(v)) v = lo;  // shown as the least similar
+  });
   cv::Mat gray;
   sim.convertTo(gray, CV_8U, 255.0 / (hi - lo), -255.0 * lo / (hi - lo));
   return gray;

@@ -20,6 +20,7 @@
 #include "internal/names.h"
 #include "internal/numbers.h"
 #include "lsgd/error.h"
+#include "lsgd/io/files.h"
 #include "lsgd/io/sequence.h"
 #include "lsgd/limits.h"
 
@@ -45,12 +46,10 @@ std::string describe(const YAML::Node& node) {
     case YAML::NodeType::Map:
       return "a map";
     case YAML::NodeType::Scalar: {
-      // A long value is shown by its start: a message is one line.
-      const std::string& text = node.Scalar();
-      const std::string shown =
-          text.size() <= 80 ? text : concat(text.substr(0, 60), "...' (", text.size(), " bytes)");
-      return concat(node.Tag() == "!" ? "the quoted string '" : "'", shown,
-                    text.size() <= 80 ? "'" : "");
+      // A long value is shown by its start, control characters escaped: a
+      // message is one line.
+      return concat(node.Tag() == "!" ? "the quoted string '" : "'",
+                    internal::shown_value(node.Scalar()), "'");
     }
     default:
       return "an undefined value";
@@ -301,17 +300,10 @@ DetectorOptions parse_config(const std::string& yaml_text, const std::string& so
 }
 
 DetectorOptions load_config(const std::string& path, const DetectorOptions& base) {
-  std::error_code ec;
   check_input_file(path, "config", kMaxConfigBytes);
-  std::ifstream in(path, std::ios::binary);
-  if (!in) {
-    const bool missing = !std::filesystem::exists(path, ec);
-    throw IoError(concat("cannot read config '", path, "'", missing ? ": it does not exist" : ""));
-  }
-  std::ostringstream text;
-  text << in.rdbuf();
-  if (in.bad()) throw IoError(concat("cannot read config '", path, "'"));
-  return parse_config(text.str(), path, base);
+  // A read error is an error, not an empty config (the defaults).
+  const std::vector<unsigned char> bytes = read_file(path, "config", kMaxConfigBytes);
+  return parse_config(std::string(bytes.begin(), bytes.end()), path, base);
 }
 
 std::string to_yaml(const DetectorOptions& options) {

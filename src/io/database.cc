@@ -398,8 +398,20 @@ void Database::Impl::load_header() {
   {
     Statement check(db, path, "PRAGMA quick_check");
     if (step_read(db, check.get(), path)) {
-      const std::string verdict = column_text(check.get(), 0);
-      if (verdict != "ok") format_error(path, "damaged (SQLite quick_check: ", verdict, ")");
+      std::string verdict = column_text(check.get(), 0);
+      if (verdict != "ok") {
+        // Its first problem on one line (it may list a hundred pages).
+        for (char& c : verdict) c = c == '\n' ? ' ' : c;
+        if (verdict.size() > 200) verdict = concat(verdict.substr(0, 200), "...");
+        // A log that does not belong to this file (a backup restored beside
+        // a newer log) damages it as it is replayed: say what to do.
+        const std::string hint =
+            file_size(path + "-wal") > 0
+                ? concat(". If the file was restored from a backup beside a newer write-ahead log, "
+                         "move '", path, "-wal' (and '", path, "-shm') away and open it again")
+                : std::string();
+        format_error(path, "damaged (SQLite quick_check: ", verdict, ")", hint);
+      }
     }
   }
   // A file cut at a page boundary, or cut inside its last page's unused tail,

@@ -5,9 +5,12 @@
 #include <unistd.h>
 
 #include <cerrno>
+#include <csignal>
 #include <cstdio>
 #include <cstring>
 #include <fstream>
+#include <ios>
+#include <vector>
 
 #include "internal/check.h"
 #include "lsgd/error.h"
@@ -17,13 +20,13 @@ namespace lsgd::io {
 
 using internal::concat;
 
-bool read_line(std::istream& in, std::string& line, const std::string& file, std::int64_t number) {
-  line.clear();
-  std::istream::sentry sentry(in, true);  // no whitespace skipped
-  if (!sentry) return false;
-  std::streambuf* buffer = in.rdbuf();
+namespace {
+
+// read_line's loop; the stream library's exceptions pass through.
+bool read_line_from(std::istream& in, std::streambuf& buffer, std::string& line,
+                    const std::string& file, std::int64_t number) {
   for (;;) {
-    const int c = buffer->sbumpc();
+    const int c = buffer.sbumpc();
     if (c == std::char_traits<char>::eof()) {
       in.setstate(std::ios::eofbit);
       if (line.empty()) in.setstate(std::ios::failbit);
@@ -31,7 +34,7 @@ bool read_line(std::istream& in, std::string& line, const std::string& file, std
     }
     if (c == '\n') return true;
     if (c == '\r') {  // "\r\n", or a lone '\r' (classic Mac line endings)
-      if (buffer->sgetc() == '\n') buffer->sbumpc();
+      if (buffer.sgetc() == '\n') buffer.sbumpc();
       return true;
     }
     if (static_cast<std::int64_t>(line.size()) >= kMaxLineBytes) {
@@ -39,6 +42,57 @@ bool read_line(std::istream& in, std::string& line, const std::string& file, std
                                " bytes: not a text file of this kind"));
     }
     line.push_back(static_cast<char>(c));
+  }
+}
+
+}  // namespace
+
+bool read_line(std::istream& in, std::string& line, const std::string& file, std::int64_t number) {
+  line.clear();
+  std::istream::sentry sentry(in, true);  // no whitespace skipped
+  if (!sentry) return false;
+  errno = 0;
+  try {
+    return read_line_from(in, *in.rdbuf(), line, file, number);
+  } catch (const std::ios_base::failure&) {  // libstdc++'s filebuf on a failed read()
+    const int error = errno;
+    in.setstate(std::ios::badbit);
+    throw IoError(concat("error while reading '", file, "' at line ", number, ": ",
+                         error != 0 ? std::strerror(error) : "a read error"));
+  }
+}
+
+std::vector<unsigned char> read_file(const std::string& path, const std::string& what,
+                                     std::int64_t max_bytes) {
+  const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
+  if (fd < 0) {
+    const int error = errno;
+    throw IoError(concat("cannot read ", what, " '", path, "': ", std::strerror(error)));
+  }
+  struct Close {
+    int fd;
+    ~Close() { ::close(fd); }
+  } close{fd};
+  std::vector<unsigned char> bytes;
+  struct stat st {};
+  if (::fstat(fd, &st) == 0 && st.st_size > 0 && st.st_size <= max_bytes) {
+    bytes.reserve(static_cast<std::size_t>(st.st_size));
+  }
+  unsigned char chunk[1 << 16];
+  for (;;) {
+    const ssize_t n = ::read(fd, chunk, sizeof(chunk));
+    if (n < 0 && errno == EINTR) continue;
+    if (n < 0) {
+      const int error = errno;
+      throw IoError(concat("error while reading ", what, " '", path, "' (after ", bytes.size(),
+                           " bytes): ", std::strerror(error)));
+    }
+    if (n == 0) return bytes;
+    if (static_cast<std::int64_t>(bytes.size()) + n > max_bytes) {
+      throw FormatError(concat(what, " '", path, "' has more than the ", max_bytes,
+                               " bytes this lsgd reads"));
+    }
+    bytes.insert(bytes.end(), chunk, chunk + n);
   }
 }
 
@@ -67,6 +121,43 @@ bool write_all(int fd, const std::string& content) {
 
 }  // namespace
 
+namespace {
+
+// The temporary file write_output_file() is writing, for the signal handler
+// of remove_temporary_files_on_signal() (async-signal-safe: a fixed buffer,
+// unlink()).
+char g_temporary[4096];
+volatile std::sig_atomic_t g_writing = 0;
+
+extern "C" void remove_temporary_and_die(int signal) {
+  if (g_writing) ::unlink(g_temporary);
+  std::signal(signal, SIG_DFL);
+  std::raise(signal);
+}
+
+struct Writing {
+  explicit Writing(const std::string& temp) {
+    if (temp.size() < sizeof(g_temporary)) {
+      std::memcpy(g_temporary, temp.c_str(), temp.size() + 1);
+      g_writing = 1;
+    }
+  }
+  ~Writing() { g_writing = 0; }
+};
+
+}  // namespace
+
+void remove_temporary_files_on_signal() {
+  for (const int signal : {SIGINT, SIGTERM, SIGHUP, SIGXFSZ}) {
+    struct sigaction action {};
+    if (::sigaction(signal, nullptr, &action) != 0 || action.sa_handler == SIG_IGN) continue;
+    action.sa_handler = remove_temporary_and_die;
+    sigemptyset(&action.sa_mask);
+    action.sa_flags = 0;
+    ::sigaction(signal, &action, nullptr);
+  }
+}
+
 void write_output_file(const std::string& path, const std::string& content,
                        const std::string& what) {
   struct stat st {};
@@ -81,6 +172,7 @@ void write_output_file(const std::string& path, const std::string& content,
     return;
   }
   const std::string temp = concat(path, ".tmp-", ::getpid());
+  const Writing writing(temp);  // an interrupted write leaves no temporary file
   const int fd = ::open(temp.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
   if (fd < 0) throw IoError(concat("cannot write ", what, " '", path, "': ", std::strerror(errno)));
   bool ok = write_all(fd, content);

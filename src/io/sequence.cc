@@ -202,12 +202,7 @@ const char* depth_name(int depth) {
 // Reads the whole file; IoError when it is missing or unreadable.
 std::vector<unsigned char> read_bytes(const std::string& path) {
   check_input_file(path, "image", kMaxImageFileBytes);
-  std::ifstream in(path, std::ios::binary);
-  if (!in) throw IoError(concat("cannot read image '", path, "'"));
-  std::vector<unsigned char> bytes((std::istreambuf_iterator<char>(in)),
-                                   std::istreambuf_iterator<char>());
-  if (in.bad()) throw IoError(concat("cannot read image '", path, "'"));
-  return bytes;
+  return read_file(path, "image", kMaxImageFileBytes);
 }
 
 // JPEG decoders fill a truncated file with gray and only warn, so a cut JPEG

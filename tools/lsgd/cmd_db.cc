@@ -58,7 +58,7 @@ void db_info(const DbInfoArgs& args) {
                               {"damage", damage},
                               {"options", info.options_yaml}};
     stamp(j);
-    std::cout << j.dump(2) << "\n";
+    std::cout << j.dump(2, ' ', false, nlohmann::json::error_handler_t::replace) << "\n";
   } else {
     std::cout << "database: " << info.path << "\n"
               << "format version: " << info.format_version << " (written by lsgd "

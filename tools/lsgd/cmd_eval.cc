@@ -7,6 +7,7 @@
 #include <fstream>
 #include <filesystem>
 #include <iostream>
+#include <limits>
 #include <memory>
 #include <optional>
 #include <sstream>
@@ -238,6 +239,8 @@ void evaluate_sequence(const EvalArgs& args, const io::SequenceOptions& options)
   const io::Sequence& sequence = dataset.frames;
   const eval::GroundTruth& gt = dataset.gt;
   check_files(args, dataset.all.images);
+  // Every --compare file is read now: a bad one fails before the (long) run.
+  for (const std::string& file : compared_files(args)) eval::read_detections(file, gt.frames());
   const eval::FrameSource source = eval::sequence_source(sequence);
   std::unique_ptr<CsvWriter> csv;
   if (!args.output.empty()) csv = std::make_unique<CsvWriter>(args.output);
@@ -288,8 +291,10 @@ void evaluate_sequence(const EvalArgs& args, const io::SequenceOptions& options)
     input.mode = detector_options.search.mode;
     input.verification = verification_stages(detector_options.verification);
     input.config_yaml = io::to_yaml(detector_options);
+    // Frames are named by their ids; a skipped frame has no descriptor (NaN).
     input.similarity = [&detector](std::int64_t a, std::int64_t b) {
-      return detector.similarity(a, b);
+      const std::int64_t fa = detector.frame_of(a), fb = detector.frame_of(b);
+      return fa < 0 || fb < 0 ? std::numeric_limits<double>::quiet_NaN() : detector.similarity(fa, fb);
     };
     input.nodes = detector.nodes();
     input.bytes_per_frame = detector.bytes_per_frame();

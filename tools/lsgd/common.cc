@@ -459,7 +459,8 @@ void print_metrics(const eval::Metrics& m, std::int64_t nodes, std::ostream& out
 void write_json(const nlohmann::json& json, const std::string& path) {
   nlohmann::json out = json;
   if (out.is_object()) stamp(out);  // every JSON result says what made it
-  io::write_output_file(path, out.dump(2) + "\n", "JSON file");
+  // A path or name that is not UTF-8 is written with U+FFFD in its place, not an exception.
+  io::write_output_file(path, out.dump(2, ' ', false, nlohmann::json::error_handler_t::replace) + "\n", "JSON file");
 }
 
 }  // namespace lsgd::cli

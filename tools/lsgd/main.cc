@@ -1,5 +1,9 @@
 // lsgd: the command-line front end of the LSGDDN-LCD loop-closure detector.
+#include <fcntl.h>
+#include <unistd.h>
+
 #include <algorithm>
+#include <cerrno>
 #include <cstdlib>
 #include <exception>
 #include <iostream>
@@ -13,6 +17,7 @@
 #include "common.h"
 #include "internal/names.h"
 #include "lsgd/error.h"
+#include "lsgd/io/files.h"
 
 namespace {
 
@@ -79,6 +84,13 @@ std::string usage_message(CLI::App& app, const CLI::ParseError& e, int argc, cha
 }  // namespace
 
 int main(int argc, char** argv) {
+  // Descriptors 0, 1 and 2 closed by the caller would be taken by the first
+  // files opened (a CSV as fd 2 would receive every diagnostic): they are
+  // held by /dev/null instead.
+  for (int fd = 0; fd <= 2; ++fd) {
+    if (::fcntl(fd, F_GETFD) == -1 && errno == EBADF && ::open("/dev/null", O_RDWR) != fd) break;
+  }
+  lsgd::io::remove_temporary_files_on_signal();
   // The tool computes on the CPU: OpenCV must not load an OpenCL runtime for
   // ORB (the ICD loader it may dlopen brings dynamic TLS that crashed
   // LeakSanitizer's exit check, and nothing here runs on a GPU). A value the

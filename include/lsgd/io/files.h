@@ -6,6 +6,7 @@
 #include <cstdint>
 #include <istream>
 #include <string>
+#include <vector>
 
 namespace lsgd::io {
 
@@ -14,7 +15,16 @@ namespace lsgd::io {
 // the lines they show); false at the end. A line longer than kMaxLineBytes
 // (lsgd/limits.h) is a FormatError naming `file` and the line number
 // `number`, thrown before more than that is held in memory.
+// A read error of the system (EIO) is an IoError naming `file`, the line and
+// the reason (the stream library's own exception says neither).
 bool read_line(std::istream& in, std::string& line, const std::string& file, std::int64_t number);
+
+// The whole of file `path` (`what` names it in errors: "image", "config"):
+// at most `max_bytes`, a FormatError beyond, also for a file that grows while
+// it is read; IoError naming the file and the system's reason when it cannot
+// be opened or a read fails (EIO), never the stream library's bare message.
+std::vector<unsigned char> read_file(const std::string& path, const std::string& what,
+                                     std::int64_t max_bytes);
 
 // Writes `content` to `path` (`what` names it in errors: "JSON file",
 // "report"). A regular file or a new path is written to a temporary file
@@ -25,5 +35,11 @@ bool read_line(std::istream& in, std::string& line, const std::string& file, std
 // system's reason.
 void write_output_file(const std::string& path, const std::string& content,
                        const std::string& what);
+
+// Installs handlers of SIGINT, SIGTERM, SIGHUP and SIGXFSZ (a file size
+// limit reached; those not ignored) that
+// remove the temporary file write_output_file() is writing, then end the
+// process by the signal as before. For programs (lsgd calls it first).
+void remove_temporary_files_on_signal();
 
 }  // namespace lsgd::io

@@ -7,10 +7,10 @@
 #include <pybind11/stl.h>
 
 #include <cstring>
-#include <fstream>
 #include <iomanip>
 #include <map>
 #include <opencv2/core.hpp>
+#include <sstream>
 #include <string>
 #include <vector>
 
@@ -23,6 +23,7 @@
 #include "lsgd/eval/metrics.h"
 #include "lsgd/io/config.h"
 #include "lsgd/io/database.h"
+#include "lsgd/io/files.h"
 #include "lsgd/io/sequence.h"
 #include "lsgd/options.h"
 #include "lsgd/version.h"
@@ -377,17 +378,14 @@ PYBIND11_MODULE(_lsgd, m) {
             found = lsgd::match_top_k(refs, queries, top_k,
                                       lsgd::parse_similarity_metric(metric.c_str()), query_offset);
           }
-          if (!output.is_none()) {  // the CSV lsgd match writes
-            const std::string path = path_of(output, "output");
-            std::ofstream out(path, std::ios::trunc);
-            if (!out) throw lsgd::IoError("cannot write output file '" + path + "'");
+          if (!output.is_none()) {  // the CSV lsgd match writes, whole or not at all
+            std::ostringstream out;
             out << "query,match,score,similarity,rank\n";
             for (const lsgd::TopMatch& t : found) {
               out << t.query << ',' << t.match << ',' << std::setprecision(9) << t.score << ','
                   << t.similarity << ',' << t.rank << '\n';
             }
-            out.flush();
-            if (!out) throw lsgd::IoError("error while writing '" + path + "'");
+            lsgd::io::write_output_file(path_of(output, "output"), out.str(), "matches CSV");
           }
           const auto n = static_cast<py::ssize_t>(found.size());
           py::array_t<std::int64_t> q(n), j(n), rank(n);

@@ -242,6 +242,16 @@ TEST_F(Files, AKilledWriteLeavesNoTemporaryAndAClosedStderrStaysClosed) {
   const std::string csv = slurp(out / "c.csv");
   EXPECT_EQ(csv.find("skipped"), std::string::npos) << csv;
   EXPECT_EQ(csv.rfind("frame,image,", 0), 0u) << csv;
+
+  // A working folder deleted under the command: its relative output's error says so.
+  const fs::path gone = kTmp / "gone";
+  const std::string in_gone = "mkdir -p " + q(gone) + " && cd " + q(gone) + " && rmdir " + q(gone) +
+                              " && exec '" + std::string(LSGD_CLI) + "' run --sequence " + q(bad) +
+                              " --output rel.csv 2>" + q(out / "gone.err");
+  EXPECT_NE(std::system(("sh -c \"" + in_gone + "\" >/dev/null").c_str()), 0);
+  EXPECT_NE(slurp(out / "gone.err").find("cannot write output file 'rel.csv': No such file or directory; the "
+                                          "working folder no longer exists"),
+            std::string::npos) << slurp(out / "gone.err");
 }
 
 // lsgd demo --output DIR writes frames and files there: a folder it did not

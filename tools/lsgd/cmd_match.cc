@@ -125,7 +125,7 @@ void match(const MatchArgs& args) {
   std::ostream* out = &std::cout;
   if (!args.output.empty()) {
     file = std::make_unique<std::ofstream>(args.output, std::ios::trunc);
-    if (!*file) throw IoError("cannot write output file '" + args.output + "'");
+    if (!*file) throw_cannot_write(args.output);
     out = file.get();
   }
   *out << "query,match,score,similarity,rank\n";

@@ -101,7 +101,7 @@ std::string csv_field(const std::string& text) {
 
 std::ofstream open_output(const std::string& path) {
   std::ofstream out(path);
-  if (!out) throw IoError("cannot write output file '" + path + "'");
+  if (!out) throw_cannot_write(path);
   return out;
 }
 

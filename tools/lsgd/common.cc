@@ -3,9 +3,11 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <cerrno>
 #include <charconv>
 #include <chrono>
 #include <cmath>
+#include <cstring>
 #include <cstdio>
 #include <filesystem>
 #include <iomanip>
@@ -187,6 +189,16 @@ constexpr int kStampVersion = 3;    // ... with the frame's time stamp
 
 }  // namespace
 
+void throw_cannot_write(const std::string& path) {
+  const int error = errno;
+  std::string why = error != 0 ? std::strerror(error) : "unknown reason";
+  char cwd[16];
+  if (!path.empty() && path[0] != '/' && ::getcwd(cwd, sizeof(cwd)) == nullptr && errno == ENOENT) {
+    why += "; the working folder no longer exists (give an absolute path, or cd into a folder)";
+  }
+  throw IoError("cannot write output file '" + path + "': " + why);
+}
+
 const CLI::Validator kNonEmptyPath(
     [](std::string& value) { return value.empty() ? std::string("an empty file name") : ""; },
     "");  // no name in the help: ExistingFile already says FILE where it applies
@@ -205,7 +217,7 @@ CsvWriter::CsvWriter(const std::string& path, Mode mode, int version)
   if (!path.empty()) {
     file_ = std::make_unique<std::ofstream>(
         path, mode == kAppend ? std::ios::out | std::ios::app : std::ios::out | std::ios::trunc);
-    if (!*file_) throw IoError("cannot write output file '" + path + "'");
+    if (!*file_) throw_cannot_write(path);
     out_ = file_.get();
   }
   if (mode == kCreate) *out_ << kCsvHeaders[kCsvNewest] << "\n" << std::flush;

@@ -146,6 +146,10 @@ FrameRun run_frames(Detector& detector, const eval::FrameSource& source, const s
 // A run in which every image was skipped is an error, not an empty success:
 // throws lsgd::Error saying so, with the first image's error.
 [[noreturn]] void throw_no_frame(std::int64_t images, const std::string& first_error);
+// IoError "cannot write output file 'PATH': <the system's reason>" for an
+// output that failed to open (errno as the open left it), saying so when a
+// relative path's working folder was deleted.
+[[noreturn]] void throw_cannot_write(const std::string& path);
 
 nlohmann::json metrics_json(const eval::Metrics& m);
 

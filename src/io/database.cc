@@ -1436,7 +1436,8 @@ std::int64_t Database::forget(std::int64_t first_id, std::int64_t last_id) {
   std::string kept_first;
   for (const auto& [session, id] : first_ids) {
     if (sessions.count(session) == 0) continue;
-    const auto at = std::find_if(rows.begin(), rows.end(), [&](const Row& r) { return r.session == session; });
+    const std::int64_t s = session;  // (C++17 lambdas cannot capture a structured binding)
+    const auto at = std::find_if(rows.begin(), rows.end(), [s](const Row& r) { return r.session == s; });
     const std::int64_t before = at == rows.begin() ? 0 : std::prev(at)->id + 1;
     if (before == id) continue;
     session_first[session] = id;

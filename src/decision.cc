@@ -363,20 +363,17 @@ void LoopDecision::check_frame(std::int64_t frame, int, int, std::uint32_t versi
 }
 
 void LoopDecision::restore_frame(std::int64_t frame, int, int, std::uint32_t version, StateReader in) {
-  restore_renumbered(frame, 0, 0, version, in, FrameRenumbering({}));
+  restore_renumbered(frame, 0, 0, version, in, FrameRenumbering::identity());
 }
 
 void LoopDecision::restore_renumbered(std::int64_t frame, int, int, std::uint32_t version,
                                       StateReader in, const FrameRenumbering& renumbered) {
   ContinuityState s{frame, -1, 0}, t{frame, -1, 0};
-  // restore_frame() passes no renumbering: the numbers as saved.
-  const bool same = renumbered.frames_before() == 0;
   const auto read = [&](ContinuityState& c) {
-    c.loop = in.get_i64();
+    const std::int64_t loop = in.get_i64();
     c.inliers = in.get_f64();
-    if (same || c.loop < 0) return;
-    c.loop = renumbered.after(c.loop);
-    if (c.loop < 0) c.inliers = 0;  // forgotten
+    c.loop = renumbered.after(loop);
+    if (loop >= 0 && c.loop < 0) c.inliers = 0;  // forgotten
   };
   if (in.present()) {
     read(s);

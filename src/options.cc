@@ -52,12 +52,16 @@ std::string number_text(double value) { return concat(value); }
 
 void throw_bad_option_text(const std::string& key, const std::string& text,
                            const std::string& expected) {
-  // Digits alone are an integer too large for the option, not "not an integer".
-  const std::size_t digits = text.find_first_not_of("0123456789", text[0] == '-' || text[0] == '+' ? 1 : 0);
-  if (expected == "an integer" && !text.empty() && digits == std::string::npos && text.size() > 1) {
+  throw_invalid(key, " = '", shown_value(text), "' is not ", expected);
+}
+
+void throw_bad_integer_text(const std::string& key, const std::string& text) {
+  // Digits alone are an integer beyond the option's type (or int64), not "not an integer".
+  const std::size_t sign = !text.empty() && (text[0] == '-' || text[0] == '+') ? 1 : 0;
+  if (text.size() > sign && text.find_first_not_of("0123456789", sign) == std::string::npos) {
     throw_invalid(key, " = ", shown_value(text), " is out of range: far beyond the values it takes");
   }
-  throw_invalid(key, " = '", shown_value(text), "' is not ", expected);
+  throw_bad_option_text(key, text, "an integer");
 }
 
 namespace {

@@ -67,6 +67,8 @@ std::string shown_value(const std::string& text);
                                      const std::string& unit);
 [[noreturn]] void throw_bad_option_text(const std::string& key, const std::string& text,
                                         const std::string& expected);
+// throw_bad_option_text(key, text, "an integer"), or out of range for digits alone.
+[[noreturn]] void throw_bad_integer_text(const std::string& key, const std::string& text);
 bool parse_integer_text(const std::string& text, std::int64_t& value);
 std::string number_text(double value);  // as an ostream prints it, for messages
 bool parse_real_text(const std::string& text, double& value);
@@ -201,7 +203,7 @@ void set_option_text(const OptionField<S>& f, S& s, const std::string& text) {
     case OptionKind::kInteger: {
       std::int64_t v = 0;
       if (!internal::parse_integer_text(text, v) || v < f.type_min || v > f.type_max) {
-        internal::throw_bad_option_text(f.name, text, "an integer");
+        internal::throw_bad_integer_text(f.name, text);
       }
       f.set_integer(s, v);
       return;

@@ -88,18 +88,22 @@ void check_state_version(const std::string& what, const char* component, std::ui
 
 // The frames' numbers before and after some are forgotten: after(f) is old
 // frame f's new number, -1 for a forgotten frame or for -1 (none).
+// identity() keeps every number (restore_frame() as restore_renumbered()).
 class FrameRenumbering {
  public:
   explicit FrameRenumbering(std::vector<std::int64_t> after) : after_(std::move(after)) {}
+  static FrameRenumbering identity() { return FrameRenumbering(); }
   std::int64_t after(std::int64_t frame) const {
-    return frame < 0 || frame >= static_cast<std::int64_t>(after_.size())
-               ? -1
-               : after_[static_cast<std::size_t>(frame)];
+    if (frame < 0) return -1;
+    if (identity_) return frame;
+    return frame >= static_cast<std::int64_t>(after_.size()) ? -1
+                                                             : after_[static_cast<std::size_t>(frame)];
   }
-  std::int64_t frames_before() const { return static_cast<std::int64_t>(after_.size()); }
 
  private:
+  FrameRenumbering() : identity_(true) {}
   std::vector<std::int64_t> after_;
+  bool identity_ = false;
 };
 
 // A component with per-frame state (see the top of this file).

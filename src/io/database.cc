@@ -1416,12 +1416,8 @@ std::int64_t Database::forget(std::int64_t first_id, std::int64_t last_id) {
   const auto dense = static_cast<std::int64_t>(from - rows.begin());  // the first forgotten frame
   // The first id of every session as lsgd run numbered it, before any of
   // its earlier frames are gone.
-  std::map<std::int64_t, std::int64_t> first_ids = m.session_first;
-  for (std::size_t k = 0; k < rows.size(); ++k) {
-    if (k == 0 || rows[k].session != rows[k - 1].session) {
-      first_ids.emplace(rows[k].session, k == 0 ? 0 : rows[k - 1].id + 1);
-    }
-  }
+  std::map<std::int64_t, std::int64_t> first_ids;
+  for (const std::int64_t s : m.sessions) first_ids[s] = session_frames(s).first_id;
   // The kept frames' state: what the detector keeps when it forgets them.
   Detector detector(m.options);
   restore(detector, IndexUse::kRebuild);

@@ -221,15 +221,9 @@ class IndexSearch final : public CandidateSearch {
     }
     in.finish();
   }
-  void restore_frame(std::int64_t frame, int, int, std::uint32_t, StateReader in) override {
-    previous_frame_ = frame;
-    previous_.clear();
-    const bool known = in.present() && !in.empty();
-    if (known) {
-      const std::int64_t n = in.get_i64();
-      for (std::int64_t k = 0; k < n; ++k) previous_.push_back(in.get_i64());
-    }
-    keep_ranked(frame, known);
+  void restore_frame(std::int64_t frame, int width, int height, std::uint32_t version,
+                     StateReader in) override {
+    restore_renumbered(frame, width, height, version, in, FrameRenumbering::identity());
   }
   // Forgotten places are followed no more; the graph is built again from the
   // kept frames at the next query.
@@ -243,7 +237,7 @@ class IndexSearch final : public CandidateSearch {
       const std::int64_t n = in.get_i64();
       for (std::int64_t k = 0; k < n; ++k) {
         const std::int64_t j = renumbered.after(in.get_i64());
-        if (j >= 0) previous_.push_back(j);
+        if (j >= 0) previous_.push_back(j);  // (-1, none: never followed)
       }
     }
     keep_ranked(frame, known);

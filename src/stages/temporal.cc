@@ -111,9 +111,9 @@ class TemporalStage final : public VerificationStage {
       internal::throw_invalid(in.what(), ": place ", place, " is not an earlier frame or -1");
     }
   }
-  void restore_frame(std::int64_t frame, int, int, std::uint32_t, StateReader in) override {
-    const std::int64_t place = in.present() ? in.get_i64() : -1;
-    end(frame, {Candidate{place, 0.0}});
+  void restore_frame(std::int64_t frame, int width, int height, std::uint32_t version,
+                     StateReader in) override {
+    restore_renumbered(frame, width, height, version, in, FrameRenumbering::identity());
   }
   // A forgotten place is no place (-1).
   bool forgets() const override { return true; }

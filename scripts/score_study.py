@@ -1,0 +1,119 @@
+#!/usr/bin/python3
+# Offline study of the appearance scores (docs/results.md, "Why corridor loses
+# loops after lip6-outdoor"): the similarity matrix of a sequence from the
+# detector's own descriptors, then the sequence score R of every query
+# (exhaustive search, min gap w, sequences of 16 and 48 frames, terms before
+# the map counting 0) under variants of the standardisation, and what each
+# ranks: R@1 of the sequence score alone, R@100P of that ranking, the true
+# places at 3.5 and 2 sigma, the best score of queries with no revisit.
+# No geometry and no decision: a study of the ranking the decision starts from.
+#
+#   PYTHONPATH=build/python scripts/score_study.py SEQUENCE GROUNDTRUTH [--first Q] [--min-gap 50]
+#
+# SEQUENCE is anything `lsgd.open_sequence` reads; GROUNDTRUTH is pairs
+# "query match" (scripts/eval_suite.py writes them); --first: queries before
+# it are not counted (a mixed map's earlier parts). The matrix is kept in
+# /tmp/score-study-<hash>.npy.
+import argparse, hashlib, os, sys
+
+import numpy as np
+import lsgd
+
+ap = argparse.ArgumentParser()
+ap.add_argument('sequence')
+ap.add_argument('groundtruth')
+ap.add_argument('--first', type=int, default=0)
+ap.add_argument('--min-gap', type=int, default=50)
+args = ap.parse_args()
+w = args.min_gap
+
+images = lsgd.open_sequence(args.sequence)
+cache = '/tmp/score-study-' + hashlib.sha1('\n'.join(images).encode()).hexdigest()[:12] + '.npy'
+if os.path.isfile(cache):
+    S = np.load(cache)
+else:
+    detector = lsgd.Detector()
+    D = [detector.describe(lsgd.read_image(p)) for p in images]
+    S = np.zeros((len(D), len(D)))
+    for i in range(len(D)):
+        for j in range(i):
+            S[i, j] = S[j, i] = lsgd.similarity(D[i], D[j])
+    np.save(cache, S)
+n = len(S)
+gt = {}
+with open(args.groundtruth) as f:
+    for line in f:
+        q, m = map(int, line.split()[:2])
+        gt.setdefault(q, set()).add(m)
+
+
+def z_global(c):
+    return (c - c.mean()) / c.std()
+
+
+def z_local(radius):
+    """SeqSLAM's local contrast: each similarity against +-radius candidates."""
+    def z(c):
+        m = len(c)
+        cs, cs2 = np.concatenate([[0], np.cumsum(c)]), np.concatenate([[0], np.cumsum(c * c)])
+        lo, hi = np.clip(np.arange(m) - radius, 0, m), np.clip(np.arange(m) + radius + 1, 0, m)
+        mu = (cs[hi] - cs[lo]) / (hi - lo)
+        sd = np.sqrt(np.maximum((cs2[hi] - cs2[lo]) / (hi - lo) - mu * mu, 0))
+        return (c - mu) / np.maximum(sd, 0.25 * c.std())
+    return z
+
+
+def z_otsu(eta0):
+    """The upper class of Otsu's split when the split separates at least eta0 of the variance."""
+    def z(c):
+        v = np.sort(c)
+        cs = np.cumsum(v)
+        k = np.arange(1, len(v))
+        w0 = k / len(v)
+        between = w0 * (1 - w0) * ((cs[-1] - cs[k - 1]) / (len(v) - k) - cs[k - 1] / k) ** 2
+        b = int(np.argmax(between))
+        upper = v[k[b]:]
+        if between[b] / c.var() >= eta0 and len(upper) >= 32:
+            return (c - upper.mean()) / upper.std()
+        return z_global(c)
+    return z
+
+
+def combine_mean(a, b):
+    return (a + b) / 2
+
+
+variants = [('shipped: global z, mean of 16 and 48', z_global, combine_mean),
+            ('local contrast +-10', z_local(10), combine_mean),
+            ('local contrast +-20', z_local(20), combine_mean),
+            ('Otsu upper class, eta >= 0.7', z_otsu(0.7), combine_mean),
+            ('max(16, mean of 16 and 48)', z_global, lambda a, b: np.maximum(a, (a + b) / 2)),
+            ('16 only', z_global, lambda a, b: a)]
+queries = [i for i in range(max(args.first, w + 32), n)]
+for name, standardise, combine in variants:
+    Z = np.zeros((n, n))
+    for i in range(w + 32, n):
+        Z[i, :i - w] = standardise(S[i, :i - w])
+    rows = []  # (best R, correct, has a revisit)
+    for i in queries:
+        m = i - w
+        sums = []
+        for L in (16, 48):
+            s = np.zeros(m)
+            for t in range(L):
+                j = np.arange(m) - t
+                s[j >= 0] += Z[i - t, j[j >= 0]]
+            sums.append(s / L)
+        A = combine(*sums)
+        R = (A - A.mean()) / A.std()
+        best = int(np.argmax(R))
+        rows.append((R[best], best in gt.get(i, ()), i in gt))
+    rows.sort(key=lambda r: -r[0])
+    positives = sum(1 for r in rows if r[2])
+    before_first_false = next((k for k, r in enumerate(rows) if not r[1]), len(rows))
+    nulls = [r[0] for r in rows if not r[2]]
+    print(f'{name}: R@1 {sum(r[1] for r in rows)}/{positives}, '
+          f'R@100P {before_first_false / max(positives, 1):.3f}, '
+          f'true at 3.5 sigma {sum(1 for r in rows if r[1] and r[0] >= 3.5)}, '
+          f'at 2 {sum(1 for r in rows if r[1] and r[0] >= 2)}, '
+          f'best of a query with no revisit {max(nulls) if nulls else float("nan"):.2f}')

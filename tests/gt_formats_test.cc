@@ -185,7 +185,7 @@ TEST(ReadMat, Version73AndVersion4) {
   auto d = dense<double>(kN, kPairs, Layout::kLower);
   const fs::path v73 = kTmp / "v73.mat";
   if (write_mat(v73, {{"gt", MAT_C_DOUBLE, MAT_T_DOUBLE, kN, kN, d.data()}}, MAT_FT_MAT73)) {
-    EXPECT_EQ(lsgd::eval::detect_gt_format(v73.string()), GtFormat::kMat);
+    EXPECT_EQ(lsgd::eval::detect_gt_format(v73.string()), std::string(lsgd::eval::kMatGtFormat));
     EXPECT_EQ(pairs_of(lsgd::eval::read_mat(v73.string())), kPairs);
   } else {
     std::cout << "this matio cannot write MAT v7.3 (no HDF5): v7.3 not tested\n";
@@ -193,7 +193,7 @@ TEST(ReadMat, Version73AndVersion4) {
   const fs::path v4 = kTmp / "v4.mat";
   ASSERT_TRUE(write_mat(v4, {{"gt", MAT_C_DOUBLE, MAT_T_DOUBLE, kN, kN, d.data()}}, MAT_FT_MAT4,
                         MAT_COMPRESSION_NONE));
-  EXPECT_EQ(lsgd::eval::detect_gt_format(v4.string()), GtFormat::kMat);  // by its extension
+  EXPECT_EQ(lsgd::eval::detect_gt_format(v4.string()), std::string(lsgd::eval::kMatGtFormat));  // by its extension
   EXPECT_EQ(pairs_of(lsgd::eval::read_mat(v4.string())), kPairs);
 }
 
@@ -679,20 +679,20 @@ TEST(ReadLoopinf, ErrorsNameFileAndLine) {
 TEST(DetectGtFormat, TellsEachFormatByContent) {
   using lsgd::eval::detect_gt_format;
   EXPECT_EQ(detect_gt_format(write_file("d-pairs", "# c\n12 2\n13 3\n\n4 30\n").string()),
-            GtFormat::kPairs);
-  EXPECT_EQ(detect_gt_format(write_file("d-pairs-tab", "5\t1\n9\t2\n").string()), GtFormat::kPairs);
+            std::string(lsgd::eval::kPairsGtFormat));
+  EXPECT_EQ(detect_gt_format(write_file("d-pairs-tab", "5\t1\n9\t2\n").string()), std::string(lsgd::eval::kPairsGtFormat));
   EXPECT_EQ(detect_gt_format(write_file("d-li", "0\t-1\n1\t-1\n2\t0\n").string()),
-            GtFormat::kLoopinf);
+            std::string(lsgd::eval::kLoopinfGtFormat));
   EXPECT_EQ(detect_gt_format(write_file("d-li-space", "0 -1\n1 -1\n").string()),
-            GtFormat::kLoopinf);
+            std::string(lsgd::eval::kLoopinfGtFormat));
   EXPECT_EQ(detect_gt_format(write_file("d-li-tab", "0\t3\n1\t4\n2\t5\n").string()),
-            GtFormat::kLoopinf);
+            std::string(lsgd::eval::kLoopinfGtFormat));
   EXPECT_EQ(detect_gt_format(write_file("d-12", pose_line(1, 2, 3, false)).string()),
-            GtFormat::kKittiPoses);
+            std::string(lsgd::eval::kKittiPosesGtFormat));
   EXPECT_EQ(detect_gt_format(write_file("d-13", pose_line(1, 2, 3, true)).string()),
-            GtFormat::kKittiPoses);
+            std::string(lsgd::eval::kKittiPosesGtFormat));
   EXPECT_EQ(detect_gt_format(write_dense_u8("d.dat", Layout::kLower, true).string()),
-            GtFormat::kMat);  // by the header, whatever the name
+            std::string(lsgd::eval::kMatGtFormat));  // by the header, whatever the name
   for (const auto& [name, text] : std::vector<std::pair<std::string, std::string>>{
            {"d-three", "1 2 3\n"},
            {"d-empty", ""},
@@ -709,13 +709,71 @@ TEST(DetectGtFormat, TellsEachFormatByContent) {
 }
 
 TEST(GtFormatNames, RoundTripAndRejectUnknown) {
-  for (GtFormat f : {GtFormat::kAuto, GtFormat::kPairs, GtFormat::kMat, GtFormat::kKittiPoses,
-                     GtFormat::kLoopinf}) {
-    EXPECT_EQ(lsgd::eval::parse_gt_format(lsgd::eval::to_string(f)), f);
+  for (const char* f : {"auto", "pairs", "mat", "kitti-poses", "loopinf"}) {
+    EXPECT_EQ(lsgd::eval::parse_gt_format(f), f);
   }
+  const std::vector<std::string> names = lsgd::eval::gt_format_names();
+  ASSERT_GE(names.size(), 5u);
+  EXPECT_EQ(std::vector<std::string>(names.begin(), names.begin() + 5),
+            (std::vector<std::string>{"auto", "pairs", "mat", "kitti-poses", "loopinf"}));
   const std::string e =
       message_of<lsgd::InvalidArgument>([] { lsgd::eval::parse_gt_format("matlab"); });
   EXPECT_TRUE(contains(e, "'matlab'")) << e;
+  EXPECT_TRUE(contains(e, "auto, pairs, mat, kitti-poses")) << e;
+}
+
+// docs/design.md's recipe from outside the library: a format of one's own
+// ("ranges": "q first last" per line, q revisits every frame first..last),
+// registered, detected by "auto" before the built-in formats, read by name.
+GroundTruth read_ranges(const std::string& path, const lsgd::eval::GtOptions& options) {
+  std::ifstream in(path);
+  std::string tag;
+  std::getline(in, tag);  // "# ranges"
+  std::vector<std::pair<std::int64_t, std::int64_t>> pairs;
+  std::int64_t q = 0, first = 0, last = 0, frames = 0;
+  while (in >> q >> first >> last) {
+    for (std::int64_t m = first; m <= last; ++m) pairs.emplace_back(q, m);
+    frames = std::max(frames, q + 1);
+  }
+  GroundTruth gt(options.frames >= 0 ? options.frames : frames);
+  for (const auto& [a, b] : pairs) gt.add(a, b);
+  return gt;
+}
+bool detect_ranges(const std::string& path) {
+  std::ifstream in(path);
+  std::string tag;
+  return std::getline(in, tag) && tag == "# ranges";
+}
+
+TEST(GtFormatRegistry, AFormatRegisteredFromOutsideIsDetectedAndRead) {
+  static const bool registered = [] {
+    lsgd::eval::register_gt_format({"ranges", "'q first last' per line", read_ranges, detect_ranges});
+    return true;
+  }();
+  ASSERT_TRUE(registered);
+  // Three integers a line would fit no built-in format; "auto" asks "ranges" first.
+  const fs::path p = write_file("ranges.txt", "# ranges\n9 2 4\n12 5 5\n");
+  EXPECT_EQ(lsgd::eval::detect_gt_format(p.string()), "ranges");
+  const GroundTruth gt = lsgd::eval::load_groundtruth(p.string());
+  EXPECT_EQ(gt.frames(), 13);
+  EXPECT_EQ(gt.pairs(), 4);
+  EXPECT_TRUE(gt.is_loop(9, 3));
+  lsgd::eval::GtOptions by_name;
+  by_name.format = lsgd::eval::parse_gt_format("ranges");
+  by_name.frames = 20;
+  EXPECT_EQ(lsgd::eval::load_groundtruth(p.string(), by_name).frames(), 20);
+  // A built-in file is still told apart as before.
+  EXPECT_EQ(lsgd::eval::detect_gt_format(write_file("r-pairs", "5 1\n").string()), "pairs");
+  const std::vector<std::string> names = lsgd::eval::gt_format_names();
+  EXPECT_NE(std::find(names.begin(), names.end(), "ranges"), names.end());
+  EXPECT_TRUE(contains(message_of<lsgd::InvalidArgument>([] {
+                         lsgd::eval::register_gt_format({"ranges", "again", read_ranges});
+                       }),
+                       "already registered"));
+  EXPECT_TRUE(contains(message_of<lsgd::InvalidArgument>([] {
+                         lsgd::eval::register_gt_format({"auto", "no", read_ranges});
+                       }),
+                       "'auto' is not a ground-truth format name"));
 }
 
 TEST(GtOptions, CheckNamesTheField) {
@@ -755,10 +813,10 @@ TEST(LoadGroundtruth, DispatchesAndTakesFramesFromTheFile) {
   EXPECT_THROW(lsgd::eval::load_groundtruth(poses.string(), o), lsgd::FormatError);
 
   o = {};
-  o.format = GtFormat::kLoopinf;  // forced: the detector would say pairs
+  o.format = std::string(lsgd::eval::kLoopinfGtFormat);  // forced: the detector would say pairs
   const fs::path li = write_file("l-li.txt", "0\t2\n1\t3\n2\t0\n3\t1\n");
   EXPECT_EQ(pairs_of(lsgd::eval::load_groundtruth(li.string(), o)), (Pairs{{2, 0}, {3, 1}}));
-  o.format = GtFormat::kMat;
+  o.format = std::string(lsgd::eval::kMatGtFormat);
   EXPECT_THROW(lsgd::eval::load_groundtruth(li.string(), o), lsgd::FormatError);
   o = {};
   o.poses_distance = -1;
@@ -771,11 +829,11 @@ TEST(LoadGroundtruth, AByteOrderMarkIsSkippedInEveryTextFormat) {
   const std::string bom = "\xEF\xBB\xBF";
   lsgd::eval::GtOptions o;
   const fs::path pairs = write_file("bom-pairs.txt", bom + "12 2\n13 3\n");
-  EXPECT_EQ(lsgd::eval::detect_gt_format(pairs.string()), GtFormat::kPairs);
+  EXPECT_EQ(lsgd::eval::detect_gt_format(pairs.string()), std::string(lsgd::eval::kPairsGtFormat));
   EXPECT_EQ(pairs_of(lsgd::eval::load_groundtruth(pairs.string(), o)), (Pairs{{12, 2}, {13, 3}}));
   EXPECT_EQ(pairs_of(lsgd::eval::read_pairs(pairs.string(), 20)), (Pairs{{12, 2}, {13, 3}}));
   const fs::path li = write_file("bom-li.txt", bom + "0\t2\n1\t3\n2\t0\n3\t1\n");
-  o.format = GtFormat::kLoopinf;
+  o.format = std::string(lsgd::eval::kLoopinfGtFormat);
   EXPECT_EQ(pairs_of(lsgd::eval::load_groundtruth(li.string(), o)), (Pairs{{2, 0}, {3, 1}}));
   const fs::path poses = write_file("bom-poses.txt", bom + pose_line(1, 2, 3, false));
   const auto p = lsgd::eval::read_kitti_poses(poses.string());
@@ -875,8 +933,8 @@ TEST_P(PublishedMat, EqualsItsPairsTwin) {
   ASSERT_TRUE(fs::exists(twin)) << twin;
   std::int64_t frames = -1;
   const Pairs expected = read_twin(twin, frames);
-  EXPECT_EQ(lsgd::eval::detect_gt_format(mat.string()), GtFormat::kMat);
-  EXPECT_EQ(lsgd::eval::detect_gt_format(twin.string()), GtFormat::kPairs);
+  EXPECT_EQ(lsgd::eval::detect_gt_format(mat.string()), std::string(lsgd::eval::kMatGtFormat));
+  EXPECT_EQ(lsgd::eval::detect_gt_format(twin.string()), std::string(lsgd::eval::kPairsGtFormat));
   const GroundTruth gt = lsgd::eval::read_mat(mat.string());
   EXPECT_EQ(gt.frames(), frames);
   EXPECT_EQ(gt.pairs(), static_cast<std::int64_t>(expected.size()));
@@ -911,7 +969,7 @@ TEST(SharedLoopinf, EveryFileReadsOrNamesTheBadLine) {
     const auto n = static_cast<std::int64_t>(loop.size());
     std::int64_t bad_line = 0;
     for (std::int64_t i = 0; i < n && !bad_line; ++i) bad_line = loop[i] >= n ? i + 1 : 0;
-    EXPECT_EQ(lsgd::eval::detect_gt_format(path), GtFormat::kLoopinf) << path;
+    EXPECT_EQ(lsgd::eval::detect_gt_format(path), std::string(lsgd::eval::kLoopinfGtFormat)) << path;
     ++files;
     if (bad_line) {
       ++rejected;
@@ -943,7 +1001,7 @@ TEST(SharedKittiPoses, EveryFileReads) {
     const std::string path = entry.path().string();
     std::ifstream in(path);
     const auto lines = std::count(std::istreambuf_iterator<char>(in), {}, '\n');
-    EXPECT_EQ(lsgd::eval::detect_gt_format(path), GtFormat::kKittiPoses) << path;
+    EXPECT_EQ(lsgd::eval::detect_gt_format(path), std::string(lsgd::eval::kKittiPosesGtFormat)) << path;
     EXPECT_EQ(static_cast<std::int64_t>(lsgd::eval::read_kitti_poses(path).size()), lines) << path;
     ++files;
   }

@@ -5,6 +5,7 @@
 #include <gtest/gtest.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
@@ -85,8 +86,12 @@ class LayoutTest : public ::testing::Test {
 
 TEST(LayoutNames, ParseAndPrintRoundTrip) {
   for (const char* name : {"auto", "folder", "list", "kitti", "fabmap", "neu"}) {
-    EXPECT_EQ(to_string(parse_layout(name)), name);
+    EXPECT_EQ(parse_layout(name), name);
   }
+  const std::vector<std::string> names = layout_names();
+  ASSERT_GE(names.size(), 6u);
+  EXPECT_EQ(std::vector<std::string>(names.begin(), names.begin() + 6),
+            (std::vector<std::string>{"auto", "folder", "list", "kitti", "fabmap", "neu"}));
   for (const char* name : {"left", "right", "both"}) EXPECT_EQ(to_string(parse_side(name)), name);
   expect_error<InvalidArgument>([] { parse_layout("KITTI"); }, {"KITTI", "fabmap"});
   expect_error<InvalidArgument>([] { parse_side("middle"); }, {"middle"});
@@ -123,8 +128,8 @@ TEST(FrameSelection, RejectsInvalidOrOutOfRangeSelections) {
 TEST_F(LayoutTest, AutoOpensFoldersAndListFilesAsBefore) {
   for (const char* name : {"10.png", "2.png", "1.png"}) image(dir_ / "f" / name);
   text(dir_ / "list.txt", "f/10.png\nf/1.png\n");
-  EXPECT_EQ(detect_layout((dir_ / "f").string()), Layout::kFolder);
-  EXPECT_EQ(detect_layout((dir_ / "list.txt").string()), Layout::kList);
+  EXPECT_EQ(detect_layout((dir_ / "f").string()), std::string(kFolderLayout));
+  EXPECT_EQ(detect_layout((dir_ / "list.txt").string()), std::string(kListLayout));
   const Sequence folder = open_sequence((dir_ / "f").string(), SequenceOptions{});
   EXPECT_EQ(names_of(folder), (std::vector<std::string>{"1.png", "2.png", "10.png"}));
   EXPECT_EQ(folder.images, open_sequence((dir_ / "f").string()).images);
@@ -132,15 +137,63 @@ TEST_F(LayoutTest, AutoOpensFoldersAndListFilesAsBefore) {
   EXPECT_EQ(names_of(list), (std::vector<std::string>{"10.png", "1.png"}));
 }
 
+// docs/design.md's recipe from outside the library: a layout of one's own
+// ("reversed": a folder marked by a REVERSED file, its images last first),
+// registered, detected by "auto", opened by name, listed among the choices.
+Sequence open_reversed(const std::string& path, const SequenceOptions&) {
+  Sequence s = open_sequence(path);
+  std::reverse(s.images.begin(), s.images.end());
+  return s;
+}
+bool detect_reversed(const std::string& path, const SequenceOptions&) {
+  return fs::exists(fs::path(path) / "REVERSED");
+}
+
+TEST_F(LayoutTest, ALayoutRegisteredFromOutsideIsDetectedOpenedAndListed) {
+  static const bool registered = [] {
+    register_layout({"reversed", "a folder marked REVERSED, last image first", open_reversed,
+                     detect_reversed});
+    return true;
+  }();
+  ASSERT_TRUE(registered);
+  for (const char* name : {"1.png", "2.png", "3.png"}) image(dir_ / "r" / name);
+  text(dir_ / "r" / "REVERSED", "");
+  const std::string path = (dir_ / "r").string();
+  EXPECT_EQ(detect_layout(path), "reversed");
+  EXPECT_EQ(names_of(open_sequence(path, SequenceOptions{})),
+            (std::vector<std::string>{"3.png", "2.png", "1.png"}));
+  SequenceOptions by_name;
+  by_name.layout = parse_layout("reversed");
+  FrameSelection every_other{0, -1, 2};
+  by_name.selection = every_other;
+  EXPECT_EQ(names_of(open_sequence(path, by_name)), (std::vector<std::string>{"3.png", "1.png"}));
+  SequenceOptions folder;
+  folder.layout = kFolderLayout;  // a name given wins over detection
+  EXPECT_EQ(names_of(open_sequence(path, folder)),
+            (std::vector<std::string>{"1.png", "2.png", "3.png"}));
+  const std::vector<std::string> names = layout_names();
+  EXPECT_NE(std::find(names.begin(), names.end(), "reversed"), names.end());
+  expect_error<InvalidArgument>([] { register_layout({"reversed", "again", open_reversed}); },
+                                {"register_layout", "reversed", "already registered"});
+  expect_error<InvalidArgument>([] { register_layout({"auto", "no", open_reversed}); },
+                                {"'auto' is not a layout name"});
+  expect_error<InvalidArgument>([] { register_layout({"empty", "no open function", nullptr}); },
+                                {"register_layout", "needs a name, a summary and a function"});
+  SequenceOptions unknown;
+  unknown.layout = "upside-down";
+  expect_error<InvalidArgument>([&] { open_sequence(path, unknown); },
+                                {"layout 'upside-down' is not one of auto, folder", "reversed"});
+}
+
 TEST_F(LayoutTest, ExplicitLayoutMustFitThePath) {
   image(dir_ / "f" / "1.png");
   text(dir_ / "list.txt", "f/1.png\n");
   SequenceOptions list;
-  list.layout = Layout::kList;
+  list.layout = std::string(kListLayout);
   expect_error<InvalidArgument>([&] { open_sequence((dir_ / "f").string(), list); },
                                 {"f", "is a folder"});
   SequenceOptions folder;
-  folder.layout = Layout::kFolder;
+  folder.layout = std::string(kFolderLayout);
   expect_error<InvalidArgument>([&] { open_sequence((dir_ / "list.txt").string(), folder); },
                                 {"list.txt", "is a file"});
   expect_error<IoError>([&] { open_sequence((dir_ / "nope").string(), SequenceOptions{}); },
@@ -154,7 +207,7 @@ TEST_F(LayoutTest, NeuOrdersNamesByteWiseLikeTheAuthorsCode) {
     image(dir_ / "neu" / name);
   }
   SequenceOptions neu;
-  neu.layout = Layout::kNeu;
+  neu.layout = std::string(kNeuLayout);
   EXPECT_EQ(names_of(open_sequence((dir_ / "neu").string(), neu)),
             (std::vector<std::string>{"1.png", "10.png", "1650000000.25.png", "1650000000.5.png",
                                       "2.png"}));
@@ -169,7 +222,7 @@ TEST_F(LayoutTest, KittiFromTheDatasetRootWithASequenceNumber) {
   kitti("05", {0, 2}, 3, 3);
   SequenceOptions options;
   options.kitti_sequence = "5";  // "05"
-  EXPECT_EQ(detect_layout((dir_ / "dataset").string(), options), Layout::kKitti);
+  EXPECT_EQ(detect_layout((dir_ / "dataset").string(), options), std::string(kKittiLayout));
   const Sequence s = open_sequence((dir_ / "dataset").string(), options);
   ASSERT_EQ(s.images.size(), 3u);
   EXPECT_EQ(fs::path(s.images[0]), dir_ / "dataset/sequences/05/image_0/000000.png");
@@ -184,8 +237,8 @@ TEST_F(LayoutTest, KittiFromTheDatasetRootWithASequenceNumber) {
 
 TEST_F(LayoutTest, KittiSequenceFolderIsDetectedAutomatically) {
   const fs::path seq = kitti("00", {0, 1}, 12, 12);
-  EXPECT_EQ(detect_layout(seq.string()), Layout::kKitti);
-  EXPECT_EQ(detect_layout(seq.string() + "/"), Layout::kKitti);
+  EXPECT_EQ(detect_layout(seq.string()), std::string(kKittiLayout));
+  EXPECT_EQ(detect_layout(seq.string() + "/"), std::string(kKittiLayout));
   const Sequence s = open_sequence(seq.string(), SequenceOptions{});
   ASSERT_EQ(s.images.size(), 12u);
   for (int i = 0; i < 12; ++i) {  // 000010 after 000009: frame order is numeric
@@ -200,13 +253,13 @@ TEST_F(LayoutTest, KittiSequenceFolderIsDetectedAutomatically) {
   const Sequence picked = open_sequence(seq.string(), every);
   EXPECT_EQ(picked.stamps, (std::vector<double>{s.stamps[1], s.stamps[6], s.stamps[11]}));
   SequenceOptions folder;
-  folder.layout = Layout::kFolder;
+  folder.layout = std::string(kFolderLayout);
   EXPECT_TRUE(open_sequence((seq / "image_0").string(), folder).stamps.empty());
 }
 
 TEST_F(LayoutTest, KittiImageFolderItselfNamesTheCamera) {
   const fs::path seq = kitti("00", {0, 1}, 2, 2);
-  EXPECT_EQ(detect_layout((seq / "image_1").string()), Layout::kKitti);
+  EXPECT_EQ(detect_layout((seq / "image_1").string()), std::string(kKittiLayout));
   const Sequence s = open_sequence((seq / "image_1").string(), SequenceOptions{});
   EXPECT_EQ(fs::path(s.images[1]), seq / "image_1" / kitti_name(1));
   SequenceOptions options;
@@ -215,7 +268,7 @@ TEST_F(LayoutTest, KittiImageFolderItselfNamesTheCamera) {
                                 {"camera 0", "image_1"});
   // Without times.txt beside it, an image_X folder is a plain folder.
   image(dir_ / "plain" / "image_0" / "000000.png");
-  EXPECT_EQ(detect_layout((dir_ / "plain" / "image_0").string()), Layout::kFolder);
+  EXPECT_EQ(detect_layout((dir_ / "plain" / "image_0").string()), std::string(kFolderLayout));
 }
 
 TEST_F(LayoutTest, KittiWithoutTheCameraFolderNamesWhatItHas) {
@@ -223,7 +276,7 @@ TEST_F(LayoutTest, KittiWithoutTheCameraFolderNamesWhatItHas) {
   expect_error<FormatError>([&] { open_sequence(seq.string(), SequenceOptions{}); },
                             {seq.string(), "no image_0", "gray left", "image_2, image_3"});
   SequenceOptions kitti_layout;
-  kitti_layout.layout = Layout::kKitti;
+  kitti_layout.layout = std::string(kKittiLayout);
   fs::create_directories(dir_ / "empty");
   text(dir_ / "empty" / "times.txt", "0\n");
   expect_error<FormatError>([&] { open_sequence((dir_ / "empty").string(), kitti_layout); },
@@ -244,7 +297,7 @@ TEST_F(LayoutTest, KittiTimesTxtIsRequiredAndParsed) {
                             {"times.txt:2", "not-a-time"});
   fs::remove(seq / "times.txt");
   SequenceOptions kitti_layout;
-  kitti_layout.layout = Layout::kKitti;
+  kitti_layout.layout = std::string(kKittiLayout);
   expect_error<FormatError>([&] { open_sequence(seq.string(), kitti_layout); },
                             {"no times.txt", "--layout folder"});
 }
@@ -274,7 +327,7 @@ TEST_F(LayoutTest, KittiFlagsOnAnotherLayoutAreRejected) {
 TEST_F(LayoutTest, FabmapSidesPickAlternatingFiles) {
   const fs::path folder = fabmap(6);
   SequenceOptions options;
-  options.layout = Layout::kFabmap;
+  options.layout = std::string(kFabmapLayout);
   EXPECT_EQ(names_of(open_sequence(folder.string(), options)),
             (std::vector<std::string>{"0001.jpg", "0003.jpg", "0005.jpg"}));
   options.side = Side::kRight;
@@ -284,14 +337,14 @@ TEST_F(LayoutTest, FabmapSidesPickAlternatingFiles) {
   EXPECT_EQ(open_sequence(folder.string(), options).images.size(), 6u);
   EXPECT_EQ(names_of(open_sequence(folder.string(), options))[3], "0004.jpg");
   // FAB-MAP folders look like any folder: auto never picks fabmap.
-  EXPECT_EQ(detect_layout(folder.string()), Layout::kFolder);
+  EXPECT_EQ(detect_layout(folder.string()), std::string(kFolderLayout));
 }
 
 TEST_F(LayoutTest, FabmapOddImageCountIsAnError) {
   const fs::path folder = fabmap(5);
   for (Side side : {Side::kBoth, Side::kLeft}) {
     SequenceOptions options;
-    options.layout = Layout::kFabmap;
+    options.layout = std::string(kFabmapLayout);
     options.side = side;
     expect_error<FormatError>([&] { open_sequence(folder.string(), options); },
                               {folder.string(), "5 images", "odd", "0005.jpg"});
@@ -301,7 +354,7 @@ TEST_F(LayoutTest, FabmapOddImageCountIsAnError) {
 TEST_F(LayoutTest, SubsamplingAppliesAfterTheLayout) {
   const fs::path folder = fabmap(12);
   SequenceOptions options;
-  options.layout = Layout::kFabmap;
+  options.layout = std::string(kFabmapLayout);
   options.side = Side::kRight;     // 0002, 0004, ..., 0012: six frames
   options.selection = {1, -1, 2};  // frames 1, 3, 5
   EXPECT_EQ(names_of(open_sequence(folder.string(), options)),

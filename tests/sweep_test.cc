@@ -219,12 +219,12 @@ TEST(SweepDataset, OptionsAfterThePartsAreEvalsDatasetFlags) {
   EXPECT_EQ(k.sequence, "/kitti");
   EXPECT_EQ(k.ground_truth, "/poses/05.txt");
   EXPECT_EQ(k.min_gap, 100);
-  EXPECT_EQ(k.sequence_options.layout, lsgd::io::Layout::kKitti);
+  EXPECT_EQ(k.sequence_options.layout, lsgd::io::kKittiLayout);
   EXPECT_EQ(k.sequence_options.kitti_sequence, "5");
   EXPECT_EQ(k.sequence_options.camera, 2);
   EXPECT_EQ(k.sequence_options.selection.first, 10);
   EXPECT_EQ(k.sequence_options.selection.every, 2);
-  EXPECT_EQ(k.gt_options.format, lsgd::eval::GtFormat::kKittiPoses);
+  EXPECT_EQ(k.gt_options.format, std::string(lsgd::eval::kKittiPosesGtFormat));
   EXPECT_EQ(k.gt_options.match, lsgd::eval::SubsampleMatch::kBlock);
   const auto f = parse_dataset_spec("cc=/cc,20,layout=fabmap,side=both,gt-rows=image");
   EXPECT_EQ(f.sequence, "/cc/sequence.txt");

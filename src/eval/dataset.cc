@@ -21,13 +21,13 @@ GroundTruth evaluated_groundtruth(const std::string& path, const GroundTruthOpti
   try {
     truth = load_groundtruth(path, read);
   } catch (const FormatError& e) {
-    if (layout != io::Layout::kFabmap || rows < 0) throw;
+    if (layout != io::kFabmapLayout || rows < 0) throw;
     throw FormatError(concat(e.what(), " (FAB-MAP with --gt-rows ", to_string(gt.rows),
                              " expects ", rows, " rows; is the ground truth given per ",
                              gt.rows == GtRows::kPair ? "image? --gt-rows image)"
                                                       : "pair? --gt-rows pair)"));
   }
-  if (layout == io::Layout::kFabmap) {
+  if (layout == io::kFabmapLayout) {
     const std::int64_t pairs = gt.rows == GtRows::kPair ? truth.frames() : truth.frames() / 2;
     truth = fabmap_groundtruth(truth, pairs, sequence.side);
   }
@@ -44,7 +44,7 @@ Dataset open_dataset(const std::string& sequence, const io::SequenceOptions& opt
   d.frames = io::subsample(d.all, options.selection);
   const auto images = static_cast<std::int64_t>(d.all.images.size());
   std::int64_t rows = images;
-  if (d.layout == io::Layout::kFabmap) {
+  if (d.layout == io::kFabmapLayout) {
     rows = fabmap_gt_frames(options.side == io::Side::kBoth ? images / 2 : images, gt.rows);
   }
   d.gt = evaluated_groundtruth(ground_truth, gt, options, d.layout, rows);

@@ -19,6 +19,7 @@
 #include <utility>
 
 #include "internal/check.h"
+#include "internal/registry.h"
 #include "internal/numbers.h"
 #include "lsgd/error.h"
 #include "lsgd/io/sequence.h"
@@ -31,14 +32,6 @@ using internal::concat;
 namespace {
 
 // ---- text helpers ---------------------------------------------------------
-
-constexpr std::array<std::pair<GtFormat, const char*>, 5> kFormatNames = {{
-    {GtFormat::kAuto, "auto"},
-    {GtFormat::kPairs, "pairs"},
-    {GtFormat::kMat, "mat"},
-    {GtFormat::kKittiPoses, "kitti-poses"},
-    {GtFormat::kLoopinf, "loopinf"},
-}};
 
 std::ifstream open_text(const std::string& path, const char* what) {
   io::check_input_file(path, what);
@@ -896,19 +889,75 @@ struct CellHash {
 
 // ---- names and options ------------------------------------------------------
 
-GtFormat parse_gt_format(const std::string& name) {
-  for (const auto& [format, text] : kFormatNames) {
-    if (name == text) return format;
+namespace {
+
+GroundTruth open_pairs(const std::string& path, const GtOptions& options) {
+  return read_pairs_counted(path, options.frames);
+}
+GroundTruth open_mat(const std::string& path, const GtOptions& options) {
+  return read_mat(path, options.frames, options.mat_variable);
+}
+GroundTruth open_loopinf(const std::string& path, const GtOptions& options) {
+  return read_loopinf(path, options.frames);
+}
+GroundTruth open_kitti_poses(const std::string& path, const GtOptions& options) {
+  const auto poses = read_kitti_poses(path);
+  const auto n = static_cast<std::int64_t>(poses.size());
+  if (options.frames >= 0 && n != options.frames) {
+    throw FormatError(concat("'", path, "' has ", n, " poses but the sequence has ",
+                             options.frames, " frames"));
   }
-  internal::throw_invalid("ground-truth format '", name,
-                          "' is unknown: expected auto, pairs, mat, kitti-poses or loopinf");
+  return groundtruth_from_poses(poses, options.poses_distance, options.poses_min_gap);
 }
 
-std::string to_string(GtFormat format) {
-  for (const auto& [f, text] : kFormatNames) {
-    if (f == format) return text;
+// The formats, built-in ones first (register_gt_format()).
+internal::Registry<GtFormatType>& registry() {
+  static internal::Registry<GtFormatType> formats(
+      "ground-truth format",
+      {
+          {kPairsGtFormat, "'q m' per line, 0-based", open_pairs},
+          {kMatGtFormat, "a MATLAB N x N loop matrix", open_mat},
+          {kKittiPosesGtFormat, "KITTI poses, a loop within 10 m and 100 frames by default",
+           open_kitti_poses},
+          {kLoopinfGtFormat, "the LSGDDN authors' 'frame<TAB>loop_frame', -1 = none",
+           open_loopinf},
+      });
+  return formats;
+}
+
+// The built-in formats are told apart by detect_gt_format() itself.
+bool builtin(const GtFormatType& t) {
+  for (const char* name : {kPairsGtFormat, kMatGtFormat, kKittiPosesGtFormat, kLoopinfGtFormat}) {
+    if (std::strcmp(t.name, name) == 0) return true;
   }
-  return "unknown";
+  return false;
+}
+
+}  // namespace
+
+std::vector<GtFormatType> gt_format_types() { return registry().entries(); }
+
+void register_gt_format(const GtFormatType& format) {
+  registry().add(format, "register_gt_format", kAutoGtFormat);
+}
+
+std::vector<std::string> gt_format_names() {
+  std::vector<std::string> names{kAutoGtFormat};
+  for (const GtFormatType& t : gt_format_types()) names.emplace_back(t.name);
+  return names;
+}
+
+GtFormat parse_gt_format(const std::string& name) {
+  if (name == kAutoGtFormat) return name;
+  for (const GtFormatType& t : gt_format_types()) {
+    if (name == t.name) return name;
+  }
+  std::string all;
+  const std::vector<std::string> names = gt_format_names();
+  for (std::size_t k = 0; k < names.size(); ++k) {
+    all += (k == 0 ? "" : k + 1 == names.size() ? " or " : ", ") + names[k];
+  }
+  internal::throw_invalid("ground-truth format '", name, "' is unknown: expected ", all);
 }
 
 void GtOptions::check() const {
@@ -916,21 +965,23 @@ void GtOptions::check() const {
   internal::check_range_open_low("ground truth poses_distance", poses_distance, 0.0, 1e6, "metres");
   internal::check_range<std::int64_t>("ground truth poses_min_gap", poses_min_gap, 0, kMaxWindowFrames,
                                       "frames");
-  if (static_cast<int>(format) < 0 || static_cast<int>(format) > 4) {
-    internal::throw_invalid("ground truth format = ", static_cast<int>(format), " is invalid");
-  }
+  parse_gt_format(format);
 }
 
 // ---- detection and dispatch ---------------------------------------------------
 
 GtFormat detect_gt_format(const std::string& path) {
+  io::check_input_file(path, "ground-truth file");
+  for (const GtFormatType& t : gt_format_types()) {
+    if (!builtin(t) && t.detect != nullptr && t.detect(path)) return t.name;
+  }
   std::ifstream in = open_text(path, "ground-truth file");
   std::string head(128, '\0');
   in.read(head.data(), static_cast<std::streamsize>(head.size()));
   head.resize(static_cast<std::size_t>(in.gcount()));
-  if (head.rfind("MATLAB", 0) == 0 && head.find("MAT-file") < 116) return GtFormat::kMat;
+  if (head.rfind("MATLAB", 0) == 0 && head.find("MAT-file") < 116) return kMatGtFormat;
   if (head.find('\0') != std::string::npos) {
-    if (has_mat_extension(path)) return GtFormat::kMat;  // MAT v4: no text header
+    if (has_mat_extension(path)) return kMatGtFormat;  // MAT v4: no text header
     throw FormatError(concat("cannot tell the ground-truth format of '", path,
                              "': a binary file without a MAT-file header"));
   }
@@ -942,12 +993,12 @@ GtFormat detect_gt_format(const std::string& path) {
     throw FormatError(concat("cannot tell the ground-truth format of '", path,
                              "': no data lines (empty or only comments)"));
   }
-  if (shape.columns == 12 || shape.columns == 13) return GtFormat::kKittiPoses;
+  if (shape.columns == 12 || shape.columns == 13) return kKittiPosesGtFormat;
   if (shape.columns == 2 && shape.integers) {
     if (shape.consecutive && !shape.other_negative && (shape.minus_one || shape.tabs)) {
-      return GtFormat::kLoopinf;
+      return kLoopinfGtFormat;
     }
-    if (!shape.minus_one && !shape.other_negative) return GtFormat::kPairs;
+    if (!shape.minus_one && !shape.other_negative) return kPairsGtFormat;
   }
   throw FormatError(concat("cannot tell the ground-truth format of '", path, "': ", shape.columns,
                            shape.integers ? " integer" : " numeric",
@@ -958,27 +1009,8 @@ GtFormat detect_gt_format(const std::string& path) {
 GroundTruth load_groundtruth(const std::string& path, const GtOptions& options) {
   options.check();
   const GtFormat format =
-      options.format == GtFormat::kAuto ? detect_gt_format(path) : options.format;
-  switch (format) {
-    case GtFormat::kPairs:
-      return read_pairs_counted(path, options.frames);
-    case GtFormat::kMat:
-      return read_mat(path, options.frames, options.mat_variable);
-    case GtFormat::kLoopinf:
-      return read_loopinf(path, options.frames);
-    case GtFormat::kKittiPoses: {
-      const auto poses = read_kitti_poses(path);
-      const auto n = static_cast<std::int64_t>(poses.size());
-      if (options.frames >= 0 && n != options.frames) {
-        throw FormatError(concat("'", path, "' has ", n, " poses but the sequence has ",
-                                 options.frames, " frames"));
-      }
-      return groundtruth_from_poses(poses, options.poses_distance, options.poses_min_gap);
-    }
-    case GtFormat::kAuto:
-      break;
-  }
-  throw FormatError(concat("cannot read '", path, "': no format"));
+      options.format == kAutoGtFormat ? detect_gt_format(path) : options.format;
+  return registry().find(format).open(path, options);
 }
 
 namespace {

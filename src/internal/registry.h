@@ -1,6 +1,7 @@
-// A table of named factories (search modes, verification stages): the
-// built-in entries first, then those an application registers. Entry has
-// const char* name, summary and a make function pointer.
+// A table of named factories (search modes, verification stages, dataset
+// layouts, ground-truth formats): the built-in entries first, then those an
+// application registers. Entry has const char* name and summary and a
+// function pointer: `make` (modes, stages) or `open` (layouts, formats).
 #pragma once
 
 #include <mutex>
@@ -10,6 +11,16 @@
 #include "internal/check.h"
 
 namespace lsgd::internal {
+
+// Whether an entry has its function: `make` or `open`, whichever it declares.
+template <class Entry>
+auto has_function(const Entry& e, int) -> decltype(e.make, bool()) {
+  return e.make != nullptr;
+}
+template <class Entry>
+auto has_function(const Entry& e, long) -> decltype(e.open, bool()) {
+  return e.open != nullptr;
+}
 
 template <class Entry>
 class Registry {
@@ -23,11 +34,11 @@ class Registry {
   }
 
   // InvalidArgument ("<caller>: ...") for an entry without name, summary or
-  // make function, a name in `reserved`, or one already registered.
+  // function, a name in `reserved`, or one already registered.
   void add(const Entry& entry, const char* caller, const char* reserved = nullptr) {
     if (entry.name == nullptr || *entry.name == '\0' || entry.summary == nullptr ||
-        entry.make == nullptr) {
-      throw_invalid(caller, ": a ", what_, " needs a name, a summary and a make function");
+        !has_function(entry, 0)) {
+      throw_invalid(caller, ": a ", what_, " needs a name, a summary and a function");
     }
     if (reserved != nullptr && std::string(entry.name) == reserved) {
       throw_invalid(caller, ": '", reserved, "' is not a ", what_, " name");

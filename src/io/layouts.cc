@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "internal/check.h"
+#include "internal/registry.h"
 #include "lsgd/error.h"
 #include "lsgd/limits.h"
 
@@ -205,21 +206,21 @@ std::string dataset_list(const std::string& path) {
   return is_file(list) ? list.string() : "";
 }
 
-Sequence open_plain(const std::string& path, Layout layout) {
+Sequence open_plain(const std::string& path, const Layout& layout) {
   std::error_code ec;
   const bool folder = fs::is_directory(path, ec);
-  if (layout == Layout::kList && folder && !dataset_list(path).empty()) {
+  if (layout == kListLayout && folder && !dataset_list(path).empty()) {
     return open_sequence(dataset_list(path));
   }
-  if (layout == Layout::kList && folder) {
+  if (layout == kListLayout && folder) {
     internal::throw_invalid("layout list needs a list file, but '", path,
                             "' is a folder (use --layout folder or auto)");
   }
-  if ((layout == Layout::kFolder || layout == Layout::kNeu) && !folder && fs::exists(path, ec)) {
-    internal::throw_invalid("layout ", to_string(layout), " needs a folder, but '", path,
+  if ((layout == kFolderLayout || layout == kNeuLayout) && !folder && fs::exists(path, ec)) {
+    internal::throw_invalid("layout ", layout, " needs a folder, but '", path,
                             "' is a file (a list file? use --layout list or auto)");
   }
-  if (layout != Layout::kNeu) return open_sequence(path);
+  if (layout != kNeuLayout) return open_sequence(path);
   if (!folder) throw IoError(concat("sequence '", path, "' does not exist"));
   // The authors' code sorts readdir() names as strings: their frame k is the
   // k-th name in byte order, which their loopinf files refer to.
@@ -229,35 +230,69 @@ Sequence open_plain(const std::string& path, Layout layout) {
   return sequence;
 }
 
-}  // namespace
-
-Layout parse_layout(const std::string& name) {
-  if (name == "auto") return Layout::kAuto;
-  if (name == "folder") return Layout::kFolder;
-  if (name == "list") return Layout::kList;
-  if (name == "kitti") return Layout::kKitti;
-  if (name == "fabmap") return Layout::kFabmap;
-  if (name == "neu") return Layout::kNeu;
-  internal::throw_invalid("layout '", name,
-                          "' is not one of auto, folder, list, kitti, fabmap, neu");
+Sequence open_folder(const std::string& path, const SequenceOptions&) {
+  return open_plain(path, kFolderLayout);
+}
+Sequence open_list(const std::string& path, const SequenceOptions&) {
+  return open_plain(path, kListLayout);
+}
+Sequence open_neu(const std::string& path, const SequenceOptions&) {
+  return open_plain(path, kNeuLayout);
+}
+Sequence open_fabmap_layout(const std::string& path, const SequenceOptions& options) {
+  return open_fabmap(path, options.side);
 }
 
-std::string to_string(Layout layout) {
-  switch (layout) {
-    case Layout::kAuto:
-      return "auto";
-    case Layout::kFolder:
-      return "folder";
-    case Layout::kList:
-      return "list";
-    case Layout::kKitti:
-      return "kitti";
-    case Layout::kFabmap:
-      return "fabmap";
-    case Layout::kNeu:
-      return "neu";
+// A KITTI sequence folder, or one of its image_X folders.
+bool detect_kitti(const std::string& path, const SequenceOptions&) {
+  std::error_code ec;
+  if (!fs::is_directory(path, ec)) return false;
+  const fs::path dir = clean(path);
+  return is_kitti_sequence(dir) ||
+         (image_folder_camera(dir) >= 0 && is_file(dir.parent_path() / "times.txt"));
+}
+
+// The layouts, built-in ones first (register_layout()).
+internal::Registry<LayoutType>& registry() {
+  static internal::Registry<LayoutType> layouts(
+      "layout",
+      {
+          {kFolderLayout, "every image of a folder, natural order", open_folder},
+          {kListLayout, "a text file listing image paths, or a dataset folder's sequence.txt",
+           open_list},
+          {kKittiLayout, "KITTI odometry: sequences/NN/image_<camera>, times.txt", open_kitti,
+           detect_kitti},
+          {kFabmapLayout, "FAB-MAP City Centre / New College: alternating left and right images",
+           open_fabmap_layout},
+          {kNeuLayout, "the LSGDDN authors' NEU set: file names in byte order", open_neu},
+      });
+  return layouts;
+}
+
+}  // namespace
+
+std::vector<LayoutType> layout_types() { return registry().entries(); }
+
+void register_layout(const LayoutType& layout) {
+  registry().add(layout, "register_layout", kAutoLayout);
+}
+
+std::vector<std::string> layout_names() {
+  std::vector<std::string> names{kAutoLayout};
+  for (const LayoutType& t : layout_types()) names.emplace_back(t.name);
+  return names;
+}
+
+Layout parse_layout(const std::string& name) {
+  if (name == kAutoLayout) return name;
+  try {
+    registry().find(name);
+  } catch (const InvalidArgument&) {
+    std::string all;
+    for (const std::string& n : layout_names()) all += (all.empty() ? "" : ", ") + n;
+    internal::throw_invalid("layout '", name, "' is not one of ", all);
   }
-  return "unknown";
+  return name;
 }
 
 Side parse_side(const std::string& name) {
@@ -309,43 +344,35 @@ void SequenceOptions::check() const {
     internal::throw_invalid("camera = ", camera, " is out of range: must be 0, 1, 2 or 3");
   }
   if (!kitti_sequence.empty()) kitti_sequence_name(kitti_sequence);
+  parse_layout(layout);
   selection.check();
 }
 
 Layout detect_layout(const std::string& path, const SequenceOptions& options) {
-  if (options.layout != Layout::kAuto) return options.layout;
-  if (!options.kitti_sequence.empty()) return Layout::kKitti;
+  if (options.layout != kAutoLayout) return parse_layout(options.layout);
+  if (!options.kitti_sequence.empty()) return kKittiLayout;
   std::error_code ec;
   const fs::file_status status = fs::status(path, ec);
   if (path.empty() || status.type() == fs::file_type::not_found) {
     throw IoError(concat("sequence '", path, "' does not exist"));
   }
   if (ec) throw IoError(concat("cannot access sequence '", path, "': ", ec.message()));
-  if (!fs::is_directory(status)) return Layout::kList;
-  const fs::path dir = clean(path);
-  if (is_kitti_sequence(dir)) return Layout::kKitti;
-  if (image_folder_camera(dir) >= 0 && is_file(dir.parent_path() / "times.txt")) {
-    return Layout::kKitti;
+  for (const LayoutType& t : layout_types()) {
+    if (t.detect != nullptr && t.detect(path, options)) return t.name;
   }
-  if (!dataset_list(path).empty()) return Layout::kList;  // a dataset folder: its own order
-  return Layout::kFolder;
+  if (!fs::is_directory(status)) return kListLayout;
+  if (!dataset_list(path).empty()) return kListLayout;  // a dataset folder: its own order
+  return kFolderLayout;
 }
 
 Sequence open_layout(const std::string& path, const SequenceOptions& options) {
   options.check();
   const Layout layout = detect_layout(path, options);
-  if (layout != Layout::kKitti && (!options.kitti_sequence.empty() || options.camera >= 0)) {
+  if (layout != kKittiLayout && (!options.kitti_sequence.empty() || options.camera >= 0)) {
     internal::throw_invalid("a KITTI sequence number or camera was given, but '", path,
-                            "' is opened with layout ", to_string(layout));
+                            "' is opened with layout ", layout);
   }
-  switch (layout) {
-    case Layout::kKitti:
-      return open_kitti(path, options);
-    case Layout::kFabmap:
-      return open_fabmap(path, options.side);
-    default:
-      return open_plain(path, layout);
-  }
+  return registry().find(layout).open(path, options);
 }
 
 Sequence subsample(const Sequence& sequence, const FrameSelection& selection) {

@@ -83,7 +83,7 @@ void check_flags(const EvalArgs& args, io::Layout layout) {
   if (!args.poses.empty() && args.report.empty()) {
     throw InvalidArgument("--poses draws the trajectory of --report: give --report too");
   }
-  if (!args.gt_rows.empty() && layout != io::Layout::kFabmap) {
+  if (!args.gt_rows.empty() && layout != io::kFabmapLayout) {
     throw InvalidArgument("--gt-rows applies to --layout fabmap only");
   }
 }
@@ -146,8 +146,8 @@ void describe_inputs(const EvalArgs& args, const io::SequenceOptions& options, i
                      const eval::GroundTruth& gt, nlohmann::json& json) {
   json["ground_truth"] = args.gt;
   json["ground_truth_pairs"] = gt.pairs();
-  json["layout"] = io::to_string(layout);
-  if (layout == io::Layout::kFabmap) {
+  json["layout"] = layout;
+  if (layout == io::kFabmapLayout) {
     json["side"] = io::to_string(options.side);
     json["gt_rows"] = args.gt_rows.empty() ? "pair" : args.gt_rows;
   }
@@ -205,7 +205,7 @@ void evaluate_detections(const EvalArgs& args, const io::SequenceOptions& option
                                                      options.layout, args.frames ? *args.frames : -1);
   // A pairs file only implies frames up to its largest id; when frame ids map
   // one to one, detections of later (loop-free) frames extend it.
-  if (!args.frames && options.layout != io::Layout::kFabmap && options.selection.keeps_all()) {
+  if (!args.frames && options.layout != io::kFabmapLayout && options.selection.keeps_all()) {
     const auto extent = static_cast<std::int64_t>(eval::read_detections(args.detections).size());
     if (extent > gt.frames()) {
       gt = eval::evaluated_groundtruth(args.gt, gt_options(args), options, options.layout, extent);
@@ -338,10 +338,14 @@ void register_eval(CLI::App& app) {
       ->required()
       ->check(CLI::ExistingFile)
       ->check(kNonEmptyPath);
-  cmd->add_option("--gt-format", args->gt_format,
-                  "auto (default), pairs, mat, kitti-poses (10 m, 100 frames; see `lsgd gt "
-                  "convert` for other values) or loopinf")
-      ->check(CLI::IsMember({"auto", "pairs", "mat", "kitti-poses", "loopinf"}));
+  cmd->add_option("--gt-format", args->gt_format, [] {
+        std::string help = "auto (default: by content)";
+        for (const eval::GtFormatType& t : eval::gt_format_types()) {
+          help += std::string(", ") + t.name + " (" + t.summary + ")";
+        }
+        return help + "; `lsgd gt convert` takes the KITTI poses' distances";
+      }())
+      ->check(CLI::IsMember(eval::gt_format_names()));
   cmd->add_option("--report", args->report,
                   "write a self-contained HTML report here (PR curve, trajectory with --poses or "
                   "scores over the run, example loops as thumbnails, similarity matrix with "

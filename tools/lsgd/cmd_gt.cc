@@ -30,8 +30,11 @@ void add_source_options(CLI::App& cmd, GtArgs& a) {
                  "ground truth: pairs text, MATLAB .mat, KITTI poses or LSGDDN loopinf")
       ->required()
       ->check(kNonEmptyPath);
-  cmd.add_option("--format", a.format,
-                 "auto | pairs | mat | kitti-poses | loopinf (default auto: by content)");
+  cmd.add_option("--format", a.format, [] {
+       std::string help = "auto (default: by content)";
+       for (const eval::GtFormatType& t : eval::gt_format_types()) help += std::string(" | ") + t.name;
+       return help;
+     }());
   cmd.add_option(
       "--frames", a.frames,
       "expected frame count; a file that disagrees is an error (default: from the file)");
@@ -46,21 +49,21 @@ void add_source_options(CLI::App& cmd, GtArgs& a) {
 eval::GtOptions resolve(const GtArgs& a, bool min_gap_is_poses_only) {
   eval::GtOptions o;
   o.format = eval::parse_gt_format(a.format);
-  if (o.format == eval::GtFormat::kAuto) o.format = eval::detect_gt_format(a.source);
+  if (o.format == eval::kAutoGtFormat) o.format = eval::detect_gt_format(a.source);
   o.frames = a.frames;
   o.mat_variable = a.variable;
-  const bool poses = o.format == eval::GtFormat::kKittiPoses;
+  const bool poses = o.format == eval::kKittiPosesGtFormat;
   if (a.distance && !poses) {
     throw InvalidArgument("--distance applies to kitti-poses only; '" + a.source + "' is " +
-                          eval::to_string(o.format));
+                          o.format);
   }
   if (a.min_gap && min_gap_is_poses_only && !poses) {
     throw InvalidArgument("--min-gap applies to kitti-poses only; '" + a.source + "' is " +
-                          eval::to_string(o.format));
+                          o.format);
   }
-  if (!a.variable.empty() && o.format != eval::GtFormat::kMat) {
+  if (!a.variable.empty() && o.format != eval::kMatGtFormat) {
     throw InvalidArgument("--variable applies to mat only; '" + a.source + "' is " +
-                          eval::to_string(o.format));
+                          o.format);
   }
   if (a.distance) o.poses_distance = *a.distance;
   if (a.min_gap) o.poses_min_gap = *a.min_gap;
@@ -77,7 +80,7 @@ void convert(const GtArgs& a) {
   const eval::GroundTruth gt = eval::load_groundtruth(a.source, o);
   eval::write_pairs(gt, a.output);
   std::cout << "wrote " << gt.pairs() << " pairs over " << gt.frames() << " frames to " << a.output
-            << " (from " << eval::to_string(o.format) << ")\n";
+            << " (from " << o.format << ")\n";
 }
 
 void stats(const GtArgs& a) {
@@ -88,7 +91,7 @@ void stats(const GtArgs& a) {
   files.check();
   const eval::GroundTruth gt = eval::load_groundtruth(a.source, o);
   const eval::GtStats s = eval::gt_stats(gt, a.min_gap.value_or(0));
-  std::cout << "ground truth: " << a.source << " (" << eval::to_string(o.format) << ")\n"
+  std::cout << "ground truth: " << a.source << " (" << o.format << ")\n"
             << "frames: " << s.frames << "\n"
             << "pairs: " << s.pairs << "\n"
             << "positive queries: " << s.positives << "\n"
@@ -102,7 +105,7 @@ void stats(const GtArgs& a) {
   if (a.json.empty()) return;
   nlohmann::json j;
   j["source"] = a.source;
-  j["format"] = eval::to_string(o.format);
+  j["format"] = o.format;
   j["frames"] = s.frames;
   j["pairs"] = s.pairs;
   j["positives"] = s.positives;
@@ -113,7 +116,7 @@ void stats(const GtArgs& a) {
   j["min_gap"] = s.min_gap;
   j["window_positives"] = s.window_positives;
   j["window_pairs"] = s.window_pairs;
-  if (o.format == eval::GtFormat::kKittiPoses) {
+  if (o.format == eval::kKittiPosesGtFormat) {
     j["poses_distance"] = o.poses_distance;
     j["poses_min_gap"] = o.poses_min_gap;
   }

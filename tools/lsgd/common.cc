@@ -81,11 +81,16 @@ void DetectorFlags::apply(DetectorOptions& o) const {
 
 void SequenceFlags::add_to(CLI::App& command) {
   command
-      .add_option("--layout", layout,
-                  "how PATH is laid out: auto (KITTI when it has image_X/ and times.txt, else "
-                  "folder or list), folder, list, kitti, fabmap (left/right images "
-                  "alternating) or neu (folder in byte-wise name order, as the LSGDDN code)")
-      ->check(CLI::IsMember({"auto", "folder", "list", "kitti", "fabmap", "neu"}));
+      .add_option("--layout", layout, [] {
+        std::string help =
+            "how PATH is laid out: auto (the first layout that recognises PATH, else list for a "
+            "file or a dataset folder, folder for another folder)";
+        for (const io::LayoutType& t : io::layout_types()) {
+          help += std::string(", ") + t.name + " (" + t.summary + ")";
+        }
+        return help;
+      }())
+      ->check(CLI::IsMember(io::layout_names()));
   command.add_option("--kitti-sequence", kitti_sequence,
                      "KITTI: PATH is the dataset root and the frames are sequences/NN");
   command.add_option("--camera", camera, "KITTI: image_0 (default, gray left) .. image_3")
@@ -112,7 +117,7 @@ io::SequenceOptions SequenceFlags::resolve() const {
   options.kitti_sequence = kitti_sequence;
   options.camera = camera;
   if (!side.empty()) {
-    if (options.layout != io::Layout::kFabmap) {
+    if (options.layout != io::kFabmapLayout) {
       throw InvalidArgument("--side " + side +
                             " applies to --layout fabmap only (FAB-MAP "
                             "folders are not detected automatically)");
@@ -120,7 +125,7 @@ io::SequenceOptions SequenceFlags::resolve() const {
     options.side = io::parse_side(side);
   }
   const bool kitti_flags = !kitti_sequence.empty() || camera >= 0;
-  if (kitti_flags && options.layout != io::Layout::kAuto && options.layout != io::Layout::kKitti) {
+  if (kitti_flags && options.layout != io::kAutoLayout && options.layout != io::kKittiLayout) {
     throw InvalidArgument("--kitti-sequence and --camera apply to --layout kitti (or auto), not " +
                           layout);
   }

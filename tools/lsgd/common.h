@@ -39,7 +39,7 @@ struct DetectorFlags {
 // Flags choosing which images are the frames, shared by run and eval:
 // --layout, --kitti-sequence, --camera, --side, --first, --last, --every.
 struct SequenceFlags {
-  std::string layout = "auto";  // auto | folder | list | kitti | fabmap | neu
+  std::string layout = "auto";  // auto or a registered layout (io::layout_names())
   std::string kitti_sequence;   // KITTI: PATH is the dataset root, this is NN
   int camera = -1;              // KITTI image_<camera>; -1: 0 or PATH's image_X
   std::string side;             // FAB-MAP: left | right | both; empty: left

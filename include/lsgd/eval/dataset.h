@@ -18,7 +18,7 @@
 namespace lsgd::eval {
 
 struct GroundTruthOptions {
-  GtFormat format = GtFormat::kAuto;  // detected from the file unless given
+  GtFormat format = kAutoGtFormat;  // detected from the file unless given
   GtRows rows = GtRows::kPair;        // FAB-MAP: a row per left/right pair or per image
   SubsampleMatch match = SubsampleMatch::kExact;  // with first/last/every
 };
@@ -33,7 +33,7 @@ GroundTruth evaluated_groundtruth(const std::string& path, const GroundTruthOpti
                                   std::int64_t rows);
 
 struct Dataset {
-  io::Layout layout = io::Layout::kAuto;  // the layout found (never kAuto)
+  io::Layout layout = io::kAutoLayout;  // the layout found (never "auto")
   io::Sequence all;     // every image of the layout, before first/last/every
   io::Sequence frames;  // the evaluated frames
   GroundTruth gt;       // of `frames`

@@ -3,7 +3,8 @@
 // and summary statistics. Every reader returns a GroundTruth (groundtruth.h);
 // `lsgd gt convert` writes any of them as the pairs text format.
 //
-// Formats (../shared/docs/evaluation.md describes where each comes from):
+// Formats, registered by name (register_gt_format(); the built-in ones first;
+// ../shared/docs/evaluation.md describes where each comes from):
 //   pairs        "q m" per line, 0-based, '#' comments (read_pairs)
 //   mat          MATLAB N x N loop matrix (v4, v5 or v7.3 through matio):
 //                nonzero GT(r, c) = loop between frames r and c
@@ -21,15 +22,23 @@
 
 namespace lsgd::eval {
 
-enum class GtFormat { kAuto, kPairs, kMat, kKittiPoses, kLoopinf };
+// A format is its registered name, or kAutoGtFormat.
+using GtFormat = std::string;
+inline constexpr const char* kAutoGtFormat = "auto";
+inline constexpr const char* kPairsGtFormat = "pairs";
+inline constexpr const char* kMatGtFormat = "mat";
+inline constexpr const char* kKittiPosesGtFormat = "kitti-poses";
+inline constexpr const char* kLoopinfGtFormat = "loopinf";
 
-// "auto", "pairs", "mat", "kitti-poses", "loopinf"; InvalidArgument naming the
-// value otherwise.
+// `name` when it is "auto" or a registered format; InvalidArgument naming the
+// value and every format otherwise.
 GtFormat parse_gt_format(const std::string& name);
-std::string to_string(GtFormat format);
+// "auto" and every registered format, in registration order (the choices of
+// --gt-format).
+std::vector<std::string> gt_format_names();
 
 struct GtOptions {
-  GtFormat format = GtFormat::kAuto;  // kAuto: detect_gt_format()
+  GtFormat format = kAutoGtFormat;  // "auto": detect_gt_format()
   // Expected frame count, [-1, 1e9]; -1 takes it from the file (pairs: max id
   // + 1, mat: N, kitti-poses: poses, loopinf: lines). A file that disagrees
   // with a given count is a FormatError naming both.
@@ -44,7 +53,9 @@ struct GtOptions {
   void check() const;  // InvalidArgument naming the field and value
 };
 
-// Tells the format of a file by its content: a MAT header ("MATLAB 5.0
+// Tells the format of a file by its content. A format registered from outside
+// whose `detect` says so comes first (in registration order); then the
+// built-in ones: a MAT header ("MATLAB 5.0
 // MAT-file" / "MATLAB 7.3 MAT-file") -> mat; every data line with the same
 // count of 12 or 13 numbers -> kitti-poses; two integers per line where line k
 // starts with k and either a -1 appears or the fields are tab-separated ->
@@ -54,8 +65,29 @@ struct GtOptions {
 // first line that fits no format otherwise.
 GtFormat detect_gt_format(const std::string& path);
 
-// Reads `path` in options.format (detected when kAuto). Throws as the readers do.
+// Reads `path` in options.format (detected when "auto"). Throws as the readers do.
 GroundTruth load_groundtruth(const std::string& path, const GtOptions& options = {});
+
+// A ground-truth format (docs/design.md, "Add a dataset layout or a
+// ground-truth format"): how a file lists the loops.
+struct GtFormatType {
+  const char* name;     // what --gt-format and GtOptions::format say
+  const char* summary;  // one line, for help texts
+  // The loops of `path` (options.frames: the expected frame count, -1: the
+  // file's); FormatError / IoError naming the file.
+  GroundTruth (*open)(const std::string& path, const GtOptions& options);
+  // Whether "auto" reads `path` in this format; nullptr: only by name. The
+  // built-in formats are told apart by detect_gt_format() itself.
+  bool (*detect)(const std::string& path) = nullptr;
+};
+
+// Every registered format, in registration order: the built-in ones first.
+std::vector<GtFormatType> gt_format_types();
+// Registers another format, usable by name from then on (GtOptions::format,
+// --gt-format, a sweep dataset's gt-format); call it before reading files
+// with it. InvalidArgument for a missing name, summary or open function, the
+// name "auto" or one already registered. Thread-safe.
+void register_gt_format(const GtFormatType& format);
 
 // Reads a MATLAB loop matrix with matio. The variable is `variable` when given;
 // otherwise the first square 2-D numeric, logical or sparse variable whose name

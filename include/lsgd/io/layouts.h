@@ -1,5 +1,6 @@
 // Dataset layouts on disk and frame subsampling: which image is frame i.
 //
+// A layout is registered by name (register_layout(); the built-in ones first):
 //   folder   every image of a folder, natural order ("2.png" before "10.png")
 //   list     a text file listing image paths (sequence.h)
 //   kitti    KITTI odometry: sequences/NN/image_<camera>/000000.png ..., one
@@ -9,6 +10,7 @@
 //   neu      the LSGDDN authors' NEU indoor set: a folder ordered as their
 //            code orders it (byte-wise file names), so their loopinf frame
 //            numbers apply
+// and "auto" detects one (detect_layout()).
 //
 // Ground truth has to follow the same choices; docs/evaluation.md gives the
 // mapping and lsgd/eval/gt_remap.h implements it.
@@ -22,12 +24,21 @@
 
 namespace lsgd::io {
 
-enum class Layout { kAuto, kFolder, kList, kKitti, kFabmap, kNeu };
+// A layout is its registered name, or kAutoLayout.
+using Layout = std::string;
+inline constexpr const char* kAutoLayout = "auto";
+inline constexpr const char* kFolderLayout = "folder";
+inline constexpr const char* kListLayout = "list";
+inline constexpr const char* kKittiLayout = "kitti";
+inline constexpr const char* kFabmapLayout = "fabmap";
+inline constexpr const char* kNeuLayout = "neu";
 
-// "auto", "folder", "list", "kitti", "fabmap", "neu"; InvalidArgument naming
-// the value otherwise.
+// `name` when it is "auto" or a registered layout; InvalidArgument naming the
+// value and every layout otherwise.
 Layout parse_layout(const std::string& name);
-std::string to_string(Layout layout);
+// "auto" and every registered layout, in registration order (the choices of
+// --layout).
+std::vector<std::string> layout_names();
 
 // FAB-MAP: which camera's images become frames.
 enum class Side {
@@ -58,7 +69,7 @@ struct FrameSelection {
 };
 
 struct SequenceOptions {
-  Layout layout = Layout::kAuto;  // kAuto: detect_layout()
+  Layout layout = kAutoLayout;  // "auto": detect_layout()
   // KITTI: "NN" (digits; "5" means "05") when PATH is the dataset root holding
   // sequences/; empty when PATH is sequences/NN itself or its image_X folder.
   std::string kitti_sequence;
@@ -72,13 +83,14 @@ struct SequenceOptions {
   void check() const;
 };
 
-// The layout PATH has when `options.layout` is kAuto (otherwise that layout):
-// kKitti when options.kitti_sequence is set, when PATH is a folder holding
-// times.txt and an image_0..image_3 folder, or when PATH is an image_X folder
-// whose parent holds times.txt; kList for a file, and for a dataset folder:
-// one holding `sequence.txt` (kDatasetList), read as that list (layout list
-// given a folder does the same); kFolder for another folder (its images).
-// IoError when PATH does not exist.
+// The layout PATH has when `options.layout` is "auto" (otherwise that
+// layout): kitti when options.kitti_sequence is set; else the first
+// registered layout whose `detect` says so (kitti: a folder holding times.txt
+// and an image_0..image_3 folder, or an image_X folder whose parent holds
+// times.txt); else list for a file, and for a dataset folder: one holding
+// `sequence.txt` (kDatasetList), read as that list (layout list given a
+// folder does the same); folder for another folder (its images). IoError
+// when PATH does not exist.
 Layout detect_layout(const std::string& path, const SequenceOptions& options = {});
 
 // The list file of a dataset folder, as lsgd's datasets and `lsgd demo
@@ -93,6 +105,27 @@ inline constexpr const char* kDatasetList = "sequence.txt";
 // and right would no longer alternate); InvalidArgument for options that do
 // not apply to the layout (a KITTI sequence number with --layout folder).
 Sequence open_layout(const std::string& path, const SequenceOptions& options);
+
+// A dataset layout (docs/design.md, "Add a dataset layout"): how PATH lists
+// its frames.
+struct LayoutType {
+  const char* name;     // what --layout and SequenceOptions::layout say
+  const char* summary;  // one line, for help texts
+  // The frames of PATH in this layout, before options.selection; errors name
+  // the files involved.
+  Sequence (*open)(const std::string& path, const SequenceOptions& options);
+  // Whether "auto" opens PATH (it exists) in this layout; nullptr: only by
+  // name. Asked in registration order, before the list and folder catch-alls.
+  bool (*detect)(const std::string& path, const SequenceOptions& options) = nullptr;
+};
+
+// Every registered layout, in registration order: the built-in ones first.
+std::vector<LayoutType> layout_types();
+// Registers another layout, usable by name from then on (SequenceOptions,
+// --layout, the `layout` key of a sweep's dataset); call it before opening
+// sequences with it. InvalidArgument for a missing name, summary or open
+// function, the name "auto" or one already registered. Thread-safe.
+void register_layout(const LayoutType& layout);
 
 // The frames `selection` keeps (see FrameSelection::kept for the errors).
 Sequence subsample(const Sequence& sequence, const FrameSelection& selection);

@@ -10,6 +10,7 @@
 #include <iomanip>
 #include <map>
 #include <opencv2/core.hpp>
+#include <optional>
 #include <sstream>
 #include <string>
 #include <vector>
@@ -23,6 +24,7 @@
 #include "lsgd/eval/metrics.h"
 #include "lsgd/io/config.h"
 #include "lsgd/io/database.h"
+#include "lsgd/io/session.h"
 #include "lsgd/io/files.h"
 #include "lsgd/io/sequence.h"
 #include "lsgd/options.h"
@@ -537,6 +539,16 @@ PYBIND11_MODULE(_lsgd, m) {
            }, py::arg("first_id"), py::arg("last_id"),
            "Forgets the frames whose ids lie in [first_id, last_id], in one transaction (as "
            "Detector.forget); returns how many.")
+      .def("plan_session", [](const PyDatabase& db, const lsgd::Detector& d, const py::list& images,
+                              std::optional<std::int64_t> session) {
+             std::vector<std::string> paths;
+             for (const py::handle& image : images) paths.push_back(path_of(py::reinterpret_borrow<py::object>(image)));
+             return lsgd::io::plan_session(db.get(), d, paths, session);
+           }, py::arg("detector"), py::arg("images"), py::arg("session") = py::none(),
+           "Where a run of `images` (paths) continues, as `lsgd run --database` decides: the last "
+           "session from its next image when the images are that session's, else a new session "
+           "(`session`, or the last + 1). `detector` holds the stored frames (Database.detector()). "
+           "Image i is frame plan.first_id + i; store it under lsgd.stored_image_name(path).")
       .def("forget_session", [](PyDatabase& db, std::int64_t session) {
              return db.get().forget_session(session);
            }, py::arg("session"), "Forgets every frame of the session; returns how many.")
@@ -557,6 +569,21 @@ PYBIND11_MODULE(_lsgd, m) {
         return "Database('" + db.path + "', " +
                (db.db ? std::to_string(db.db->frames()) + " frames)" : std::string("closed)"));
       });
+
+  py::class_<lsgd::io::SessionPlan>(m, "SessionPlan",
+      "Database.plan_session's answer: the session, the id of image 0, the first image to "
+      "process, whether the session is continued, and its last stored frame's id.")
+      .def_readonly("session", &lsgd::io::SessionPlan::session)
+      .def_readonly("first_id", &lsgd::io::SessionPlan::first_id)
+      .def_readonly("first", &lsgd::io::SessionPlan::first)
+      .def_readonly("resume", &lsgd::io::SessionPlan::resume)
+      .def_readonly("last_stored", &lsgd::io::SessionPlan::last_stored)
+      .def("__repr__", [](const lsgd::io::SessionPlan& p) {
+        return "SessionPlan(session=" + std::to_string(p.session) + ", first_id=" + std::to_string(p.first_id) +
+               ", first=" + std::to_string(p.first) + ", resume=" + (p.resume ? "True" : "False") + ")";
+      });
+  m.def("stored_image_name", [](const py::object& path) { return lsgd::io::stored_image_name(path_of(path)); },
+        py::arg("path"), "The name a database keeps for an image (its absolute, normal path), as lsgd run stores it.");
 
   // ---- images and sequences
   m.def("read_image", [](const py::object& path) { return mat_to_array(lsgd::io::read_image(path_of(path))); },

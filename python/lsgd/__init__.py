@@ -32,6 +32,7 @@ from ._lsgd import (  # noqa: F401
     PrPoint,
     Ranking,
     Result,
+    SessionPlan,
     StageVerdict,
     Timings,
     __commit__,
@@ -45,6 +46,7 @@ from ._lsgd import (  # noqa: F401
     options,
     read_image,
     similarity,
+    stored_image_name,
 )
 
 

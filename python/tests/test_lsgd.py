@@ -117,6 +117,49 @@ def test_results_match_lsgd_run_frame_for_frame(tmp_path):
     assert loops > 10
 
 
+def test_database_resumes_a_session_as_lsgd_run_does(tmp_path):
+    """Database.plan_session: the tool's resume policy. lsgd run stores the first 40 images, Python
+    continues the session at image 40 with the same ids, and the tool then finds nothing to do."""
+    if not CLI:
+        pytest.skip("LSGD_CLI (the lsgd tool) not given: run through ctest")
+    frames = route(20, 4)
+    folder = tmp_path / "route"
+    folder.mkdir()
+    images = []
+    for i, f in enumerate(frames):
+        images.append(str(folder / ("%03d.pgm" % i)))
+        write_pgm(images[-1], f)
+    path = str(tmp_path / "map.db")
+    subprocess.run([CLI, "run", "--sequence", str(folder), "--last", "39", "--min-gap", "10",
+                    "--database", path, "--output", str(tmp_path / "a.csv")], check=True, capture_output=True)
+    uninterrupted = lsgd.Detector(search={"min_gap": 10})
+    expected = [uninterrupted.process(f) for f in frames]
+    with lsgd.Database.open(path) as db:
+        d = db.detector()
+        plan = db.plan_session(d, images)
+        assert (plan.session, plan.first_id, plan.first, plan.resume, plan.last_stored) == (0, 0, 40, True, 39)
+        for i in range(plan.first, len(images)):
+            r = d.process(lsgd.read_image(images[i]), id=plan.first_id + i)
+            db.append(d, r, plan.session, lsgd.stored_image_name(images[i]), r.id)
+            e = expected[i]
+            assert (r.frame, r.best.frame, r.loop) == (e.frame, e.best.frame, e.loop)
+        assert db.frame_ids() == list(range(len(images)))
+        # Other images are a new session, numbered after the stored frames; stored images are one
+        # only when asked for.
+        others = [str(tmp_path / ("other-%d.pgm" % k)) for k in range(5)]
+        for k, name in enumerate(others):
+            write_pgm(name, frames[k])
+        other = db.plan_session(d, others)
+        assert (other.session, other.first_id, other.first, other.resume) == (1, 80, 0, False)
+        with pytest.raises(lsgd.InvalidArgument, match="already stored in session 0"):
+            db.plan_session(d, images[::2])
+        assert db.plan_session(d, images[::2], session=7).session == 7
+    done = subprocess.run([CLI, "run", "--sequence", str(folder), "--min-gap", "10", "--database", path],
+                          capture_output=True, text=True)
+    assert done.returncode == 0 and "nothing to do" in done.stderr, done.stderr
+    assert lsgd.stored_image_name(os.path.relpath(images[0])) == images[0]
+
+
 def test_cut_ends_the_loop_it_follows():
     """Detector.cut(): the frame after it continues no loop; without it, the same frame does."""
     frames = route(30, 3)

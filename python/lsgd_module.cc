@@ -22,6 +22,7 @@
 #include "lsgd/eval/gt_formats.h"
 #include "lsgd/eval/groundtruth.h"
 #include "lsgd/eval/metrics.h"
+#include "lsgd/eval/results_csv.h"
 #include "lsgd/io/config.h"
 #include "lsgd/io/database.h"
 #include "lsgd/io/session.h"
@@ -582,6 +583,19 @@ PYBIND11_MODULE(_lsgd, m) {
         return "SessionPlan(session=" + std::to_string(p.session) + ", first_id=" + std::to_string(p.first_id) +
                ", first=" + std::to_string(p.first) + ", resume=" + (p.resume ? "True" : "False") + ")";
       });
+  m.def("write_csv", [](const std::vector<lsgd::Result>& results, const py::list& images, const py::object& path) {
+          if (images.size() != results.size()) {
+            throw lsgd::InvalidArgument("write_csv: " + std::to_string(images.size()) + " image names for " +
+                                        std::to_string(results.size()) + " results (one per result)");
+          }
+          lsgd::eval::CsvWriter csv(path_of(path));
+          for (std::size_t i = 0; i < results.size(); ++i) {
+            csv.write(results[i], path_of(py::reinterpret_borrow<py::object>(images[i])));
+          }
+          return csv.loops();
+        }, py::arg("results"), py::arg("images"), py::arg("path"),
+        "Writes the results as `lsgd run`'s CSV (the same code, one row per result, `images` its image "
+        "column); returns the loops written. Replaces the file.");
   m.def("stored_image_name", [](const py::object& path) { return lsgd::io::stored_image_name(path_of(path)); },
         py::arg("path"), "The name a database keeps for an image (its absolute, normal path), as lsgd run stores it.");
 

@@ -115,6 +115,15 @@ def test_results_match_lsgd_run_frame_for_frame(tmp_path):
             assert float(row["score"]) == pytest.approx(r.best.score, rel=1e-5)
         loops += r.loop
     assert loops > 10
+    # lsgd.write_csv writes the tool's CSV: the same code, the same rows but for the milliseconds.
+    mine = tmp_path / "python.csv"
+    assert lsgd.write_csv(results, [str(folder / ("%03d.pgm" % i)) for i in range(len(frames))], mine) == loops
+    theirs = list(csv.DictReader(open(mine)))
+    assert list(theirs[0].keys()) == list(rows[0].keys())
+    for a, b in zip(rows, theirs):
+        assert {k: v for k, v in a.items() if k != "ms"} == {k: v for k, v in b.items() if k != "ms"}
+    with pytest.raises(lsgd.InvalidArgument, match="one per result"):
+        lsgd.write_csv(results, [], mine)
 
 
 def test_database_resumes_a_session_as_lsgd_run_does(tmp_path):

@@ -190,4 +190,14 @@ void write_output_file(const std::string& path, const std::string& content,
   }
 }
 
+void throw_cannot_write(const std::string& path) {
+  const int error = errno;
+  std::string why = error != 0 ? std::strerror(error) : "unknown reason";
+  char cwd[16];
+  if (!path.empty() && path[0] != '/' && ::getcwd(cwd, sizeof(cwd)) == nullptr && errno == ENOENT) {
+    why += "; the working folder no longer exists (give an absolute path, or cd into a folder)";
+  }
+  throw IoError("cannot write output file '" + path + "': " + why);
+}
+
 }  // namespace lsgd::io

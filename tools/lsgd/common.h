@@ -13,6 +13,8 @@
 #include "lsgd/detector.h"
 #include "lsgd/eval/metrics.h"
 #include "lsgd/eval/runner.h"
+#include "lsgd/eval/results_csv.h"
+#include "lsgd/io/files.h"
 #include "lsgd/io/layouts.h"
 
 #include <CLI/CLI.hpp>
@@ -76,45 +78,8 @@ class Progress {
 // "1:05" (minutes:seconds) or "1:02:03"; "--:--" for a negative or unknown time.
 std::string format_duration(double seconds);
 
-// Writes `lsgd run` rows:
-// frame,image,loop_frame,candidate_frame,score,ms,appearance,inliers,
-// ranked_frame,ranked_score,ranked_confirmed (the ranking, Result::ranking).
-// Each row is flushed, so an error later in the run loses nothing written.
-// Errors name the file.
-class CsvWriter {
- public:
-  // The CSV's newest version: frame, image, loop_frame, candidate_frame,
-  // score, ms, appearance, inliers (0), ranked_frame, ranked_score,
-  // ranked_confirmed (1), status (2, to_string(LoopStatus)), stamp (3:
-  // Result::stamp in its shortest exact text, empty when the frame has none).
-  static constexpr int kCsvNewest = 3;
-  enum Mode { kCreate, kAppend };
-  // Empty path: stdout. kCreate writes the newest header (replacing the
-  // file); kAppend adds rows after the existing ones (a file trim()
-  // accepted) in the columns of the CSV's `version` (Trim::version): a run
-  // written before the ranking's or the status column resumes without them.
-  explicit CsvWriter(const std::string& path, Mode mode = kCreate, int version = kCsvNewest);
-  void write(const Result& result, const std::string& image);
-  std::int64_t loops() const { return loops_; }  // rows written with a loop
-
-  struct Trim {
-    std::int64_t dropped = 0;    // complete rows cut
-    bool partial = false;        // an incomplete last line was cut
-    std::int64_t last_row = -1;  // frame of the last row kept; -1: none
-    int version = kCsvNewest;    // of the header: 0 none of the columns below, 1 ranked_*, 2 status, 3 stamp
-  };
-  // Cuts the rows of frames after `last_frame` (and an incomplete last line)
-  // from an existing CSV this writer wrote, in place. Throws FormatError when
-  // the file is not one (its header differs).
-  static Trim trim(const std::string& path, std::int64_t last_frame);
-
- private:
-  std::string path_;
-  int version_ = kCsvNewest;
-  std::int64_t loops_ = 0;
-  std::unique_ptr<std::ofstream> file_;
-  std::ostream* out_;
-};
+// The `lsgd run` CSV (the library's, lsgd/eval/results_csv.h).
+using eval::CsvWriter;
 
 // A CLI11 check for file arguments: an empty name ('') is an error, not
 // "no file".
@@ -149,7 +114,7 @@ FrameRun run_frames(Detector& detector, const eval::FrameSource& source, const s
 // IoError "cannot write output file 'PATH': <the system's reason>" for an
 // output that failed to open (errno as the open left it), saying so when a
 // relative path's working folder was deleted.
-[[noreturn]] void throw_cannot_write(const std::string& path);
+using io::throw_cannot_write;  // lsgd/io/files.h
 
 nlohmann::json metrics_json(const eval::Metrics& m);
 

@@ -33,6 +33,11 @@ std::vector<unsigned char> read_file(const std::string& path, const std::string&
 // a regular file (a terminal, /dev/null, a pipe: a stream the user chose) is
 // written directly and never replaced. IoError naming the file and the
 // system's reason.
+// IoError "cannot write output file 'PATH': <errno's reason>" (with a hint
+// when a relative PATH's working folder was deleted); call it right after the
+// failed open or write, while errno is the failure's.
+[[noreturn]] void throw_cannot_write(const std::string& path);
+
 void write_output_file(const std::string& path, const std::string& content,
                        const std::string& what);
 

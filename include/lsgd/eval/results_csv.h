@@ -1,0 +1,56 @@
+// The per-frame CSV of `lsgd run` (and `lsgd eval --output`, the demo, Python's
+// lsgd.write_csv): one row per processed frame. Its reader is
+// read_detections() (lsgd/eval/detections.h).
+#pragma once
+
+#include <cstdint>
+#include <fstream>
+#include <memory>
+#include <ostream>
+#include <string>
+
+#include "lsgd/detector.h"
+
+namespace lsgd::eval {
+
+// Writes `lsgd run` rows:
+// frame,image,loop_frame,candidate_frame,score,ms,appearance,inliers,
+// ranked_frame,ranked_score,ranked_confirmed (the ranking, Result::ranking).
+// Each row is flushed, so an error later in the run loses nothing written.
+// Errors name the file.
+class CsvWriter {
+ public:
+  // The CSV's newest version: frame, image, loop_frame, candidate_frame,
+  // score, ms, appearance, inliers (0), ranked_frame, ranked_score,
+  // ranked_confirmed (1), status (2, to_string(LoopStatus)), stamp (3:
+  // Result::stamp in its shortest exact text, empty when the frame has none).
+  static constexpr int kCsvNewest = 3;
+  enum Mode { kCreate, kAppend };
+  // Empty path: stdout. kCreate writes the newest header (replacing the
+  // file); kAppend adds rows after the existing ones (a file trim()
+  // accepted) in the columns of the CSV's `version` (Trim::version): a run
+  // written before the ranking's or the status column resumes without them.
+  explicit CsvWriter(const std::string& path, Mode mode = kCreate, int version = kCsvNewest);
+  void write(const Result& result, const std::string& image);
+  std::int64_t loops() const { return loops_; }  // rows written with a loop
+
+  struct Trim {
+    std::int64_t dropped = 0;    // complete rows cut
+    bool partial = false;        // an incomplete last line was cut
+    std::int64_t last_row = -1;  // frame of the last row kept; -1: none
+    int version = kCsvNewest;    // of the header: 0 none of the columns below, 1 ranked_*, 2 status, 3 stamp
+  };
+  // Cuts the rows of frames after `last_frame` (and an incomplete last line)
+  // from an existing CSV this writer wrote, in place. Throws FormatError when
+  // the file is not one (its header differs).
+  static Trim trim(const std::string& path, std::int64_t last_frame);
+
+ private:
+  std::string path_;
+  int version_ = kCsvNewest;
+  std::int64_t loops_ = 0;
+  std::unique_ptr<std::ofstream> file_;
+  std::ostream* out_;
+};
+
+}  // namespace lsgd::eval

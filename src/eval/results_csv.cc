@@ -1,0 +1,133 @@
+#include "lsgd/eval/results_csv.h"
+
+#include <charconv>
+#include <cmath>
+#include <filesystem>
+#include <iomanip>
+#include <iostream>
+#include <string>
+#include <system_error>
+
+#include "lsgd/error.h"
+#include "lsgd/io/files.h"
+
+namespace lsgd::eval {
+
+using io::throw_cannot_write;
+
+namespace {
+
+// The headers of the CSV's versions, oldest first; a run resumes in the
+// columns of the header its CSV has (CsvWriter::Trim::version).
+constexpr const char* kCsvHeaders[] = {
+    "frame,image,loop_frame,candidate_frame,score,ms,appearance,inliers",
+    "frame,image,loop_frame,candidate_frame,score,ms,appearance,inliers,ranked_frame,ranked_score,"
+    "ranked_confirmed",
+    "frame,image,loop_frame,candidate_frame,score,ms,appearance,inliers,ranked_frame,ranked_score,"
+    "ranked_confirmed,status",
+    "frame,image,loop_frame,candidate_frame,score,ms,appearance,inliers,ranked_frame,ranked_score,"
+    "ranked_confirmed,status,stamp",
+};
+constexpr int kRankingVersion = 1;  // the first with the ranking's columns
+constexpr int kStatusVersion = 2;   // ... with the status
+constexpr int kStampVersion = 3;    // ... with the frame's time stamp
+
+}  // namespace
+
+CsvWriter::CsvWriter(const std::string& path, Mode mode, int version)
+    : path_(path), version_(mode == kCreate ? kCsvNewest : version), out_(&std::cout) {
+  if (version_ < 0 || version_ > kCsvNewest) {
+    throw InvalidArgument("CsvWriter: version " + std::to_string(version) + " of the CSV does not exist");
+  }
+  if (!path.empty()) {
+    file_ = std::make_unique<std::ofstream>(
+        path, mode == kAppend ? std::ios::out | std::ios::app : std::ios::out | std::ios::trunc);
+    if (!*file_) throw_cannot_write(path);
+    out_ = file_.get();
+  }
+  if (mode == kCreate) *out_ << kCsvHeaders[kCsvNewest] << "\n" << std::flush;
+  if (!*out_) throw IoError("error while writing " + (path.empty() ? "the CSV rows to standard output" : "'" + path + "'"));
+}
+
+void CsvWriter::write(const Result& r, const std::string& image) {
+  std::string quoted = image;
+  if (quoted.find_first_of(",\"\n") != std::string::npos) {
+    std::string escaped = "\"";
+    for (char c : image) escaped += c == '"' ? std::string("\"\"") : std::string(1, c);
+    quoted = escaped + "\"";
+  }
+  *out_ << r.frame << ',' << quoted << ',' << (r.loop ? r.best.frame : -1) << ',' << r.best.frame
+        << ',' << std::setprecision(9) << (r.best.frame >= 0 ? r.best.score : 0.0) << ','
+        << std::setprecision(4) << r.timings.total_ms << ',' << std::setprecision(6)
+        << (r.best.frame >= 0 ? r.evidence.appearance : 0.0) << ',' << r.evidence.inliers;
+  if (version_ >= kRankingVersion) {
+    const bool ranked = r.ranking.best.frame >= 0;
+    *out_ << ',' << r.ranking.best.frame << ',' << std::setprecision(9)
+          << (ranked ? r.ranking.best.score : 0.0) << ',' << (ranked && r.ranking.confirmed ? 1 : 0);
+  }
+  if (version_ >= kStatusVersion) *out_ << ',' << to_string(r.status);
+  if (version_ >= kStampVersion) {  // empty when the frame has none; else the shortest exact text
+    *out_ << ',';
+    if (std::isfinite(r.stamp)) {
+      char text[32];
+      const auto end = std::to_chars(text, text + sizeof(text), r.stamp).ptr;
+      out_->write(text, end - text);
+    }
+  }
+  *out_ << '\n' << std::flush;
+  if (!*out_) {
+    throw IoError("error while writing the row of frame " + std::to_string(r.frame) + " to " +
+                  (path_.empty() ? std::string("standard output")
+                                 : "'" + path_ + "' (is the disk full?)"));
+  }
+  loops_ += r.loop ? 1 : 0;
+}
+
+CsvWriter::Trim CsvWriter::trim(const std::string& path, std::int64_t last_frame) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw IoError("cannot read '" + path + "'");
+  std::string line;
+  const bool read = static_cast<bool>(std::getline(in, line));
+  Trim trim;
+  trim.version = -1;
+  for (int v = 0; read && v <= kCsvNewest; ++v) {
+    if (line == kCsvHeaders[v]) trim.version = v;
+  }
+  if (trim.version < 0) {
+    throw FormatError("'" + path + "' is not a CSV of lsgd run (its first line is not '" +
+                      kCsvHeaders[kCsvNewest] + "'); pass another --output");
+  }
+  std::int64_t keep = static_cast<std::int64_t>(line.size()) + 1;  // bytes kept
+  bool cutting = false;
+  while (std::getline(in, line)) {
+    const bool complete = !in.eof();  // the line ended with '\n'
+    std::int64_t frame = -1;
+    const auto comma = line.find(',');
+    try {
+      if (comma != std::string::npos) frame = std::stoll(line.substr(0, comma));
+    } catch (const std::exception&) {
+      frame = -1;
+    }
+    if (!cutting && complete && frame >= 0 && frame <= last_frame) {
+      keep += static_cast<std::int64_t>(line.size()) + 1;
+      trim.last_row = frame;
+      continue;
+    }
+    cutting = true;
+    if (complete) {
+      ++trim.dropped;
+    } else {
+      trim.partial = true;
+    }
+  }
+  if (trim.dropped > 0 || trim.partial) {
+    in.close();
+    std::error_code ec;
+    std::filesystem::resize_file(path, static_cast<std::uintmax_t>(keep), ec);
+    if (ec) throw IoError("cannot cut the rows after frame " + std::to_string(last_frame) +
+                          " from '" + path + "': " + ec.message());
+  }
+  return trim;
+}
+
+}  // namespace lsgd::eval

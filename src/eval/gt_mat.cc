@@ -1,0 +1,239 @@
+// MATLAB loop matrices (read_mat, lsgd/eval/gt_formats.h): matio, and a
+// streaming reader of v5 variables for the published files.
+#include "lsgd/eval/gt_formats.h"
+
+#include "lsgd/io/files.h"
+#include <matio.h>
+#include <zlib.h>
+#include <algorithm>
+#include <array>
+#include <cctype>
+#include <charconv>
+#include <cmath>
+#include <cstdint>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <memory>
+#include <mutex>
+#include <unordered_map>
+#include <utility>
+#include "internal/check.h"
+#include "internal/registry.h"
+#include "internal/numbers.h"
+#include "lsgd/error.h"
+#include "lsgd/io/sequence.h"
+#include "lsgd/limits.h"
+
+#include "eval/mat_internal.h"
+
+namespace lsgd::eval {
+
+using internal::concat;
+using namespace mat;  // mat_internal.h
+
+namespace {
+
+// ---- MAT files (matio) ------------------------------------------------------
+
+// matio reports problems through a log callback (by default printed to
+// stderr). We install one that keeps the last error of this thread instead, so
+// a failed read becomes a FormatError quoting it; warnings are dropped.
+thread_local std::string matio_last_message;
+
+void matio_log(int level, char* message) {
+  if (level & (MATIO_LOG_LEVEL_ERROR | MATIO_LOG_LEVEL_CRITICAL)) {
+    matio_last_message = message ? message : "";
+  }
+}
+
+std::string matio_detail() {
+  return matio_last_message.empty() ? "" : concat(" (matio: ", matio_last_message, ")");
+}
+
+struct MatCloser {
+  void operator()(mat_t* mat) const { Mat_Close(mat); }
+};
+struct VarFreer {
+  void operator()(matvar_t* var) const { Mat_VarFree(var); }
+};
+using MatFile = std::unique_ptr<mat_t, MatCloser>;
+using MatVar = std::unique_ptr<matvar_t, VarFreer>;
+
+bool is_matrix_class(matio_classes c) {
+  return c == MAT_C_SPARSE || (c >= MAT_C_DOUBLE && c <= MAT_C_UINT64);
+}
+
+bool is_square_matrix(const matvar_t& v) {
+  return v.rank == 2 && v.dims && v.dims[0] == v.dims[1] && is_matrix_class(v.class_type) &&
+         !v.isComplex;
+}
+
+std::string describe(const matvar_t& v) {
+  std::string dims;
+  for (int i = 0; i < v.rank && v.dims; ++i) dims += (i ? "x" : "") + std::to_string(v.dims[i]);
+  return concat(v.name ? v.name : "?", " ", dims, " class ", static_cast<int>(v.class_type),
+                v.isLogical ? " logical" : "", v.isComplex ? " complex" : "");
+}
+
+bool looks_like_gt_name(const char* name) {
+  std::string lower = name ? name : "";
+  std::transform(lower.begin(), lower.end(), lower.begin(),
+                 [](unsigned char c) { return std::tolower(c); });
+  return lower.find("gt") != std::string::npos || lower.find("truth") != std::string::npos;
+}
+
+// The name of the variable read_mat() reads (see the header for the rule).
+std::string choose_variable(mat_t* mat, const std::string& path) {
+  std::string first, named, seen;
+  int count = 0;
+  while (MatVar info{Mat_VarReadNextInfo(mat)}) {
+    ++count;
+    seen += (seen.empty() ? "" : ", ") + describe(*info);
+    if (!is_square_matrix(*info) || !info->name) continue;
+    if (first.empty()) first = info->name;
+    if (named.empty() && looks_like_gt_name(info->name)) named = info->name;
+  }
+  if (count == 0) {
+    throw FormatError(concat("'", path, "' holds no readable MAT variable (truncated or corrupt?)",
+                             matio_detail()));
+  }
+  if (first.empty()) {
+    throw FormatError(concat("'", path, "' has no square 2-D real numeric, logical or sparse ",
+                             "matrix (variables: ", seen, ")"));
+  }
+  return named.empty() ? first : named;
+}
+
+// Sparse (compressed column): rows ir[jc[c] .. jc[c+1]) of column c, with
+// values (absent for an all-true logical matrix written without data).
+template <typename T>
+void add_sparse(const matvar_t& v, std::size_t n, GroundTruth& gt, const std::string& path) {
+  const auto* s = static_cast<const mat_sparse_t*>(v.data);
+  const auto corrupt = [&](const char* why) {
+    return FormatError(concat("'", path, "': sparse matrix '", v.name, "' is corrupt: ", why));
+  };
+  if (!s || !s->jc || s->njc != n + 1) throw corrupt("column index has the wrong length");
+  const T* values = static_cast<const T*>(s->data);
+  for (std::size_t c = 0; c < n; ++c) {
+    const std::size_t begin = s->jc[c], end = s->jc[c + 1];
+    if (begin > end || end > s->nir || (end > 0 && !s->ir)) throw corrupt("bad column pointers");
+    for (std::size_t k = begin; k < end; ++k) {
+      const std::size_t r = s->ir[k];
+      if (r >= n) throw corrupt("row index out of range");
+      if (values && k < s->ndata && !is_loop_value(values[k], r, c, path)) continue;
+      gt.add(static_cast<std::int64_t>(r), static_cast<std::int64_t>(c));
+    }
+  }
+}
+
+void add_matrix(const matvar_t& v, std::size_t n, GroundTruth& gt, const std::string& path) {
+  const bool sparse = v.class_type == MAT_C_SPARSE;
+  if (!sparse && (!v.data || v.nbytes < n * n * Mat_SizeOf(v.data_type))) {
+    throw FormatError(concat("'", path, "': variable '", v.name, "' holds fewer values than its ",
+                             n, "x", n, " size (truncated?)", matio_detail()));
+  }
+  const bool known = with_value_type(v.data_type, [&](auto t) {
+    using T = decltype(t);
+    if (sparse) return add_sparse<T>(v, n, gt, path);
+    add_nonzero(static_cast<const T*>(v.data), n * n, 0, n, gt, path);
+  });
+  if (!known) {
+    throw FormatError(concat("'", path, "': variable '", v.name, "' has unsupported data type ",
+                             static_cast<int>(v.data_type)));
+  }
+}
+
+// matio 1.5.23 takes a file without a v5 / v7.3 header for MAT v4 and mallocs
+// the first variable's name length unchecked: 20 corrupt bytes can ask for
+// gigabytes (found by fuzz/fuzz_gt). A v4 name must fit in the file.
+void check_v4_name_length(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  std::array<unsigned char, 128> head{};
+  in.read(reinterpret_cast<char*>(head.data()), head.size());
+  const std::size_t got = static_cast<std::size_t>(in.gcount());
+  if (got == head.size() && ((head[126] == 'I' && head[127] == 'M') ||
+                             (head[126] == 'M' && head[127] == 'I'))) {
+    return;  // v5 / v7.3 header: matio checks those itself
+  }
+  if (got < 20) return;  // matio rejects a header this short
+  auto int32_at = [&](std::size_t at, bool little) {
+    std::uint32_t v = 0;
+    for (int i = 0; i < 4; ++i) v |= std::uint32_t{head[at + (little ? i : 3 - i)]} << (8 * i);
+    return static_cast<std::int32_t>(v);
+  };
+  // The type field (MOPT, < 5000) tells the byte order, as in matio.
+  const std::int32_t type_le = int32_at(0, true);
+  const bool little = type_le >= 0 && type_le < 5000;
+  const std::int64_t name_length = int32_at(16, little);
+  std::error_code ec;
+  const auto size = std::filesystem::file_size(path, ec);
+  if (ec) throw IoError(concat("cannot read MAT file '", path, "': ", ec.message()));
+  if (name_length < 1 || static_cast<std::uint64_t>(name_length) > size - 20) {
+    throw FormatError(concat("'", path, "' is not a readable MAT file: v4 variable name length ",
+                             name_length, " does not fit in the file's ", size, " bytes"));
+  }
+}
+
+}  // namespace
+
+GroundTruth read_mat(const std::string& path, std::int64_t frames, const std::string& variable) {
+  static std::once_flag log_once;
+  std::call_once(log_once, [] { Mat_LogInitFunc("lsgd", matio_log); });
+  io::check_input_file(path, "MAT file");
+  if (!std::ifstream(path)) throw IoError(concat("cannot open MAT file '", path, "'"));
+  check_v4_name_length(path);
+  matio_last_message.clear();
+  MatFile mat{Mat_Open(path.c_str(), MAT_ACC_RDONLY)};
+  if (!mat) {
+    throw FormatError(concat("'", path, "' is not a readable MAT file", matio_detail()));
+  }
+  const mat_ft version = Mat_GetVersion(mat.get());
+  const Container container = check_container(path, version);
+  if (version == MAT_FT_MAT5) check_matrix_headers(path, container);
+  std::string name = variable;
+  if (name.empty()) {
+    name = choose_variable(mat.get(), path);
+  } else {
+    MatVar info{Mat_VarReadInfo(mat.get(), name.c_str())};
+    if (!info) throw FormatError(concat("'", path, "' has no variable '", name, "'"));
+    if (!is_square_matrix(*info)) {
+      throw FormatError(concat("'", path, "': variable ", describe(*info),
+                               " is not a square 2-D real numeric, logical or sparse matrix"));
+    }
+  }
+  MatVar info{Mat_VarReadInfo(mat.get(), name.c_str())};
+  if (!info) {
+    throw FormatError(
+        concat("cannot read variable '", name, "' from '", path, "'", matio_detail()));
+  }
+  const std::size_t n = info->dims[0];
+  if (frames >= 0 && n != static_cast<std::size_t>(frames)) {
+    throw FormatError(concat("'", path, "': matrix '", name, "' is ", n, "x", n,
+                             " but the sequence has ", frames, " frames"));
+  }
+  if (n > 1'000'000) {
+    throw FormatError(
+        concat("'", path, "': matrix '", name, "' is ", n, "x", n, ": more than 1e6 frames"));
+  }
+  GroundTruth gt(static_cast<std::int64_t>(n));
+  if (version == MAT_FT_MAT5) {
+    read_v5(path, container, name, n, gt);  // checks the data against the dimensions
+    return gt;
+  }
+  if (info->class_type != MAT_C_SPARSE &&
+      static_cast<double>(n) * n * Mat_SizeOfClass(info->class_type) > 16e9) {
+    throw FormatError(concat("'", path, "': matrix '", name, "' is ", n, "x", n,
+                             ": too large to read densely (limit 16 GB)"));
+  }
+  matio_last_message.clear();
+  MatVar var{Mat_VarRead(mat.get(), name.c_str())};
+  if (!var || !matio_last_message.empty()) {
+    throw FormatError(concat("cannot read variable '", name, "' from '", path,
+                             "' (truncated or corrupt?)", matio_detail()));
+  }
+  add_matrix(*var, n, gt, path);
+  return gt;
+}
+
+}  // namespace lsgd::eval

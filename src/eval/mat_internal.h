@@ -1,0 +1,125 @@
+// Internals of the MAT reader shared by gt_mat.cc (matio) and mat_v5.cc (the
+// container checks and lsgd's own streaming reader of v5 variables). Not
+// installed.
+#pragma once
+
+#include <matio.h>
+
+#include <cmath>
+#include <cstdint>
+#include <cstring>
+#include <string>
+#include <type_traits>
+#include <vector>
+
+#include "internal/check.h"
+#include "lsgd/error.h"
+#include "lsgd/eval/groundtruth.h"
+
+namespace lsgd::eval::mat {
+
+using internal::concat;
+
+struct V5Element {
+  std::uint64_t offset;  // of the tag
+  std::uint32_t type, bytes;
+};
+
+struct Container {
+  bool swapped = false;             // v5 written with the other byte order
+  std::vector<V5Element> elements;  // v5 top-level elements
+};
+
+// Checks that every top-level element of a v5 file fits in it (matio trusts
+// the byte counts: a truncated file would read as zeros); FormatError naming
+// the file otherwise.
+Container check_container(const std::string& path, mat_ft version);
+// Checks the array headers of every top-level matrix of a v5 file.
+void check_matrix_headers(const std::string& path, const Container& c);
+// Reads top-level variable `name` (n x n) of a v5 file into `gt`.
+void read_v5(const std::string& path, const Container& c, const std::string& name, std::size_t n,
+             GroundTruth& gt);
+
+// The value readers: each .cc file that reads values has its own copies.
+namespace {
+
+// Calls f(T{}) with the C++ type of a MAT numeric data type; false for others.
+template <typename F>
+bool with_value_type(std::uint32_t type, F&& f) {
+  switch (type) {
+    case MAT_T_DOUBLE:
+      f(double{});
+      return true;
+    case MAT_T_SINGLE:
+      f(float{});
+      return true;
+    case MAT_T_INT8:
+      f(std::int8_t{});
+      return true;
+    case MAT_T_UINT8:
+      f(std::uint8_t{});
+      return true;
+    case MAT_T_INT16:
+      f(std::int16_t{});
+      return true;
+    case MAT_T_UINT16:
+      f(std::uint16_t{});
+      return true;
+    case MAT_T_INT32:
+      f(std::int32_t{});
+      return true;
+    case MAT_T_UINT32:
+      f(std::uint32_t{});
+      return true;
+    case MAT_T_INT64:
+      f(std::int64_t{});
+      return true;
+    case MAT_T_UINT64:
+      f(std::uint64_t{});
+      return true;
+    default:
+      return false;
+  }
+}
+
+// True when GT(r, c) = v is a loop; a NaN entry is a FormatError.
+template <typename T>
+bool is_loop_value(T v, std::size_t r, std::size_t c, const std::string& path) {
+  if constexpr (std::is_floating_point_v<T>) {
+    if (std::isnan(v)) {
+      throw FormatError(concat("'", path, "': entry (", r + 1, ", ", c + 1, ") is NaN"));
+    }
+  }
+  return v != T(0);
+}
+
+// Adds the loop GT(k % n, k / n) for each nonzero values[i], k = k0 + i
+// (MATLAB stores column-major). Published matrices are >99.9% zeros, so
+// 1-byte types (uint8, logical) skip zeros eight at a time.
+template <typename T>
+void add_nonzero(const T* values, std::size_t count, std::size_t k0, std::size_t n, GroundTruth& gt,
+                 const std::string& path) {
+  for (std::size_t i = 0; i < count; ++i) {
+    if constexpr (sizeof(T) == 1) {
+      std::uint64_t word = 1;
+      // GCC 12 inlines this into the small-element path of mat_v5.cc (a 5-byte
+      // buffer, count <= 4) and warns, though i + 8 <= count never holds there.
+#pragma GCC diagnostic push
+#pragma GCC diagnostic ignored "-Warray-bounds"
+      if (i + 8 <= count) std::memcpy(&word, values + i, 8);
+#pragma GCC diagnostic pop
+      if (word == 0) {
+        i += 7;
+        continue;
+      }
+    }
+    const std::size_t k = k0 + i;
+    if (is_loop_value(values[i], k % n, k / n, path)) {
+      gt.add(static_cast<std::int64_t>(k % n), static_cast<std::int64_t>(k / n));
+    }
+  }
+}
+
+}  // namespace
+
+}  // namespace lsgd::eval::mat

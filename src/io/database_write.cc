@@ -1,0 +1,365 @@
+#include "lsgd/io/database.h"
+
+#include "io/database_internal.h"
+
+
+#include <errno.h>
+#include <fcntl.h>
+#include <sqlite3.h>
+#include <sys/file.h>
+#include <sys/stat.h>
+#include <unistd.h>
+#include <zlib.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <cstring>
+#include <limits>
+#include <map>
+#include <mutex>
+#include <set>
+#include <sstream>
+#include <type_traits>
+
+#include "internal/check.h"
+#include "lsgd/error.h"
+#include "io/wal_check.h"
+#include "lsgd/io/config.h"
+#include "lsgd/limits.h"
+#include "lsgd/version.h"
+
+
+namespace lsgd::io {
+
+void Database::Impl::insert_frame(const Detector& detector, std::int64_t frame,
+                                  std::int64_t session, const std::string& name,
+                                  std::int64_t caller_id) {
+  const DescriptorView view = detector.store().view(frame);
+  const auto cells = static_cast<std::size_t>(view.cells);
+  hist_bytes.clear();
+  pixel_bytes.clear();
+  if (view.storage() == HistogramStorage::kCompact) {
+    hist_bytes.assign(view.compact, view.compact + cells * kCompactBins);
+  } else {
+    encode_le(view.hist, cells * kBins, hist_bytes);
+    encode_le(view.pixels, cells, pixel_bytes);
+  }
+  const std::vector<std::uint8_t> state = detector.frame_state(frame);
+  RowBytes row;
+  row.id = frame;
+  row.session = session;
+  if (detector.search().has_groups()) row.node = detector.search().group_of(frame);
+  row.frame = caller_id;
+  row.name = name.data();
+  row.name_size = static_cast<std::int64_t>(name.size());
+  row.hist = hist_bytes.data();
+  row.hist_size = static_cast<std::int64_t>(hist_bytes.size());
+  row.pixels = pixel_bytes.data();
+  row.pixels_size = static_cast<std::int64_t>(pixel_bytes.size());
+  row.state = state.data();
+  row.state_size = static_cast<std::int64_t>(state.size());
+  sqlite3_stmt* s = insert.get();
+  sqlite3_reset(s);
+  sqlite3_clear_bindings(s);
+  sqlite3_bind_int64(s, 1, frame);
+  sqlite3_bind_int64(s, 2, session);
+  sqlite3_bind_text(s, 3, name.c_str(), static_cast<int>(name.size()), SQLITE_STATIC);
+  sqlite3_bind_blob(s, 4, hist_bytes.data(), static_cast<int>(hist_bytes.size()), SQLITE_STATIC);
+  if (pixel_bytes.empty()) {  // compact storage: an empty blob, not NULL
+    sqlite3_bind_zeroblob(s, 5, 0);
+  } else {
+    sqlite3_bind_blob(s, 5, pixel_bytes.data(), static_cast<int>(pixel_bytes.size()),
+                      SQLITE_STATIC);
+  }
+  if (row.node != kNull) sqlite3_bind_int64(s, 6, row.node);
+  sqlite3_bind_int64(s, 7, row_checksum(row));
+  sqlite3_bind_int64(s, 8, caller_id);
+  sqlite3_bind_blob(s, 9, state.data(), static_cast<int>(state.size()), SQLITE_STATIC);
+  const int rc = sqlite3_step(s);
+  sqlite3_reset(s);
+  if (rc != SQLITE_DONE)
+    io_error(path, "cannot write frame ", frame, " (", sqlite3_errmsg(db), ")");
+}
+
+namespace {
+
+// Runs `write` in one IMMEDIATE transaction; rolls back if it throws.
+template <typename F>
+void transaction(sqlite3* db, const std::string& path, F&& write) {
+  exec_write(db, path, "BEGIN IMMEDIATE");
+  try {
+    write();
+    exec_write(db, path, "COMMIT");
+  } catch (...) {
+    sqlite3_exec(db, "ROLLBACK", nullptr, nullptr, nullptr);
+    throw;
+  }
+}
+
+}  // namespace
+
+void Database::Impl::check_session(std::int64_t session) const {
+  if (session < 0 || session > kMaxSession) {
+    internal::throw_invalid("database ", path, ": session ", session, " is outside [0, ",
+                            kMaxSession, "]");
+  }
+  if (session != last_session && sessions.count(session) != 0) {
+    internal::throw_invalid("database ", path, ": session ", session,
+                            " has frames before session ", last_session,
+                            "'s: a session's frames stay together, so only the last session "
+                            "can be continued; choose a new session id");
+  }
+}
+
+void Database::append(const Detector& detector, const Result& /*result*/, std::int64_t session,
+                      const std::string& name, std::int64_t frame) {
+  Impl& m = *impl_;
+  m.check_writable();
+  m.check_session(session);
+  if (detector.size() != m.frames + 1) {
+    internal::throw_invalid("database ", m.path, ": append from a detector holding ",
+                            detector.size(), " frames, but the database holds ", m.frames,
+                            " (append each frame right after process())");
+  }
+  // The frame's id is the detector's (Detector::process(frame, id)): a
+  // different one would be refused when the frame is restored.
+  const std::int64_t own = detector.id_of(detector.size() - 1);
+  if (frame < -1) {
+    internal::throw_invalid("database ", m.path, ": frame id ", frame, " is negative (-1: the "
+                            "detector's id of its last frame)");
+  }
+  if (frame >= 0 && frame != own) {
+    internal::throw_invalid("database ", m.path, ": frame id ", frame, " is not the detector's id ", own,
+                            " of its last frame (give the id to Detector::process)");
+  }
+  frame = own;
+  if (frame <= m.last_frame || frame > kMaxFrameId) {
+    internal::throw_invalid("database ", m.path, ": frame id ", frame, " must be above the last ",
+                            "stored id ", m.last_frame, " and at most ", kMaxFrameId);
+  }
+  const std::string yaml = to_yaml(detector.options());
+  if (yaml != m.checked_yaml) {
+    check_compatible(detector.options());
+    m.checked_yaml = yaml;
+  }
+  const std::int64_t dense = m.frames;  // the detector's id of its last frame
+  transaction(m.db, m.path, [&] {
+    std::map<std::string, std::string> saved = m.meta;
+    if (m.frames == 0) {
+      m.meta["width"] = std::to_string(detector.width());
+      m.meta["height"] = std::to_string(detector.height());
+      m.meta["grid_rows"] = std::to_string(detector.store().grid().rows);
+      m.meta["grid_cols"] = std::to_string(detector.store().grid().cols);
+      try {
+        m.write_meta();
+      } catch (...) {
+        m.meta = saved;
+        throw;
+      }
+    }
+    try {
+      m.insert_frame(detector, dense, session, name, frame);
+    } catch (...) {
+      m.meta = saved;
+      throw;
+    }
+  });
+  if (m.frames == 0) {
+    m.width = detector.width();
+    m.height = detector.height();
+    m.grid = detector.store().grid();
+  }
+  ++m.frames;
+  m.last_session = session;
+  m.last_frame = frame;
+  m.sessions.insert(session);
+  if (++m.since_checkpoint >= kCheckpointFrames) m.checkpoint("open");
+}
+
+void Database::append_all(const Detector& detector, std::int64_t session) {
+  Impl& m = *impl_;
+  m.check_writable();
+  m.check_session(session);
+  if (detector.size() < m.frames) {
+    internal::throw_invalid("database ", m.path, ": the detector holds ", detector.size(),
+                            " frames, fewer than the ", m.frames, " stored");
+  }
+  if (detector.size() == m.frames) return;
+  check_compatible(detector.options());
+  const std::int64_t first = m.frames;
+  if (detector.id_of(first) <= m.last_frame) {
+    internal::throw_invalid("database ", m.path, ": the detector's frame ", first, " has id ",
+                            detector.id_of(first), ", not above the last stored id ", m.last_frame);
+  }
+  transaction(m.db, m.path, [&] {
+    const std::map<std::string, std::string> saved = m.meta;
+    try {
+      if (first == 0) {
+        m.meta["width"] = std::to_string(detector.width());
+        m.meta["height"] = std::to_string(detector.height());
+        m.meta["grid_rows"] = std::to_string(detector.store().grid().rows);
+        m.meta["grid_cols"] = std::to_string(detector.store().grid().cols);
+        m.write_meta();
+      }
+      for (std::int64_t f = first; f < detector.size(); ++f) {
+        m.insert_frame(detector, f, session, "", detector.id_of(f));
+      }
+    } catch (...) {
+      m.meta = saved;
+      throw;
+    }
+  });
+  if (first == 0) {
+    m.width = detector.width();
+    m.height = detector.height();
+    m.grid = detector.store().grid();
+  }
+  m.last_frame = detector.id_of(detector.size() - 1);
+  m.frames = detector.size();
+  m.last_session = session;
+  m.sessions.insert(session);
+  m.checkpoint("open");
+}
+
+std::int64_t Database::forget(std::int64_t first_id, std::int64_t last_id) {
+  Impl& m = *impl_;
+  m.check_writable();
+  if (first_id > last_id) {
+    internal::throw_invalid("database ", m.path, ": forget: the first id ", first_id,
+                            " is above the last ", last_id);
+  }
+  struct Row {
+    std::int64_t session;
+    std::string name;
+    std::int64_t id;
+  };
+  std::vector<Row> rows;
+  {
+    Statement stmt(m.db, m.path,
+                   concat("SELECT session, name, ", frame_column(m.format), " FROM frames ORDER BY id")
+                       .c_str());
+    while (step_read(m.db, stmt.get(), m.path)) {
+      rows.push_back({sqlite3_column_int64(stmt.get(), 0), column_text(stmt.get(), 1),
+                      sqlite3_column_int64(stmt.get(), 2)});
+    }
+  }
+  const auto from = std::find_if(rows.begin(), rows.end(), [&](const Row& r) { return r.id >= first_id; });
+  const auto to = std::find_if(from, rows.end(), [&](const Row& r) { return r.id > last_id; });
+  const std::int64_t forgotten = to - from;
+  if (forgotten == 0) return 0;
+  const auto dense = static_cast<std::int64_t>(from - rows.begin());  // the first forgotten frame
+  // The first id of every session as lsgd run numbered it, before any of
+  // its earlier frames are gone.
+  std::map<std::int64_t, std::int64_t> first_ids;
+  for (const std::int64_t s : m.sessions) first_ids[s] = session_frames(s).first_id;
+  // The kept frames' state: what the detector keeps when it forgets them.
+  Detector detector(m.options);
+  restore(detector, IndexUse::kRebuild);
+  if (detector.forget(first_id, last_id) != forgotten) {
+    format_error(m.path, "the rows' ids do not match their frames' state");
+  }
+  rows.erase(from, to);
+  std::set<std::int64_t> sessions;
+  for (const Row& r : rows) sessions.insert(r.session);
+  // Those the frames before them no longer give.
+  std::map<std::int64_t, std::int64_t> session_first;
+  std::string kept_first;
+  for (const auto& [session, id] : first_ids) {
+    if (sessions.count(session) == 0) continue;
+    const std::int64_t s = session;  // (C++17 lambdas cannot capture a structured binding)
+    const auto at = std::find_if(rows.begin(), rows.end(), [s](const Row& r) { return r.session == s; });
+    const std::int64_t before = at == rows.begin() ? 0 : std::prev(at)->id + 1;
+    if (before == id) continue;
+    session_first[session] = id;
+    kept_first += concat(kept_first.empty() ? "" : " ", session, "=", id);
+  }
+  transaction(m.db, m.path, [&] {
+    const std::map<std::string, std::string> saved = m.meta;
+    try {
+      Statement drop(m.db, m.path, "DELETE FROM frames WHERE id >= ?1");
+      sqlite3_bind_int64(drop.get(), 1, dense);
+      if (sqlite3_step(drop.get()) != SQLITE_DONE) io_error(m.path, "cannot write (", sqlite3_errmsg(m.db), ")");
+      // The saved graph numbers the forgotten frames: the next resume builds it again.
+      exec_write(m.db, m.path, "DELETE FROM indexes");
+      for (std::int64_t f = dense; f < detector.size(); ++f) {
+        const Row& r = rows[static_cast<std::size_t>(f)];
+        m.insert_frame(detector, f, r.session, r.name, r.id);
+      }
+      if (kept_first.empty()) {
+        m.meta.erase("session_first_ids");
+        exec_write(m.db, m.path, "DELETE FROM meta WHERE key = 'session_first_ids'");
+      } else {
+        m.meta["session_first_ids"] = kept_first;
+      }
+      if (rows.empty()) {  // the next frame sets the size again
+        for (const char* key : {"width", "height", "grid_rows", "grid_cols"}) m.meta[key] = "0";
+      }
+      m.write_meta();
+    } catch (...) {
+      m.meta = saved;
+      throw;
+    }
+  });
+  m.frames = detector.size();
+  m.sessions = sessions;
+  m.last_session = rows.empty() ? -1 : rows.back().session;
+  m.last_frame = rows.empty() ? -1 : rows.back().id;
+  m.session_first = std::move(session_first);
+  if (rows.empty()) m.width = m.height = 0, m.grid = GridSize{0, 0};
+  m.checkpoint("open");
+  // The freed pages go back to the file system.
+  exec_write(m.db, m.path, "VACUUM");
+  m.checkpoint("open");
+  return forgotten;
+}
+
+std::int64_t Database::forget_session(std::int64_t session) {
+  Impl& m = *impl_;
+  m.check_writable();
+  if (m.sessions.count(session) == 0) {
+    std::string known;
+    for (const std::int64_t s : m.sessions) known += concat(known.empty() ? "" : ", ", s);
+    internal::throw_invalid("database ", m.path, ": session ", session, " has no frames (sessions: ",
+                            known.empty() ? "none" : known, ")");
+  }
+  const SessionFrames frames = session_frames(session);
+  // A session's frames are consecutive: the range of its ids holds no other.
+  return forget(frames.frames.front().frame, frames.frames.back().frame);
+}
+
+std::int64_t Database::save_index(const Detector& detector) {
+  Impl& m = *impl_;
+  m.check_writable();
+  if (detector.size() != m.frames) {
+    internal::throw_invalid("database ", m.path, ": save_index needs the detector of the stored ",
+                            m.frames, " frames; this one holds ", detector.size());
+  }
+  check_compatible(detector.options());
+  std::vector<std::uint8_t> bytes;
+  const std::int64_t covered = detector.save_index(bytes);
+  const std::string mode = detector.search().name();
+  transaction(m.db, m.path, [&] {
+    Statement drop(m.db, m.path, "DELETE FROM indexes WHERE mode = ?1");
+    sqlite3_bind_text(drop.get(), 1, mode.c_str(), static_cast<int>(mode.size()), SQLITE_TRANSIENT);
+    if (sqlite3_step(drop.get()) != SQLITE_DONE) io_error(m.path, "cannot write (", sqlite3_errmsg(m.db), ")");
+    Statement insert(m.db, m.path,
+                     "INSERT INTO indexes(mode, part, frames, data, crc32) VALUES(?1, ?2, ?3, ?4, ?5)");
+    std::int64_t part = 0;
+    for (std::size_t at = 0; at < bytes.size(); at += kIndexPartBytes, ++part) {
+      const std::size_t n = std::min(kIndexPartBytes, bytes.size() - at);
+      sqlite3_stmt* s = insert.get();
+      sqlite3_reset(s);
+      sqlite3_bind_text(s, 1, mode.c_str(), static_cast<int>(mode.size()), SQLITE_TRANSIENT);
+      sqlite3_bind_int64(s, 2, part);
+      sqlite3_bind_int64(s, 3, covered);
+      sqlite3_bind_blob(s, 4, bytes.data() + at, static_cast<int>(n), SQLITE_STATIC);
+      sqlite3_bind_int64(s, 5, crc_of(bytes.data() + at, n));
+      if (sqlite3_step(s) != SQLITE_DONE) io_error(m.path, "cannot write (", sqlite3_errmsg(m.db), ")");
+    }
+  });
+  m.checkpoint("open");
+  return covered;
+}
+
+}  // namespace lsgd::io

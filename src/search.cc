@@ -90,22 +90,22 @@ void IndexOptions::check() const { check_options(fields(), *this, "search.index"
 const OptionTable<SearchOptions>& SearchOptions::fields() {
   using S = SearchOptions;
   static const OptionTable<S> table = [] {
-    OptionField<S> mode;
-    mode.name = "mode";
-    mode.kind = OptionKind::kChoice;
-    mode.doc = "how earlier frames are searched: a registered search mode (search.h)";
-    mode.choices = [] {
+    OptionField<S> mode_field;
+    mode_field.name = "mode";
+    mode_field.kind = OptionKind::kChoice;
+    mode_field.doc = "how earlier frames are searched: a registered search mode (search.h)";
+    mode_field.choices = [] {
       std::vector<std::string> names;
       for (const SearchMode& m : search_modes()) names.emplace_back(m.name);
       return names;
     };
-    mode.text = [](const S& s) { return s.mode; };
-    mode.set_choice = [](S& s, const std::string& name) {
+    mode_field.text = [](const S& s) { return s.mode; };
+    mode_field.set_choice = [](S& s, const std::string& name) {
       check_search_mode(name);
       s.mode = name;
     };
     OptionTable<S> t = {
-        mode,
+        mode_field,
         integer_option<S, std::int64_t>("min_gap", &S::min_gap, 0, kMaxWindowFrames, "frames",
                                         "temporal window w: frame j is a candidate for query i "
                                         "only if j < i - w"),

@@ -37,20 +37,20 @@ void TemporalOptions::check() const {
 const OptionTable<VerificationOptions>& VerificationOptions::fields() {
   using S = VerificationOptions;
   static const OptionTable<S> table = [] {
-    OptionField<S> stages;
-    stages.name = "stages";
-    stages.kind = OptionKind::kChoice;
-    stages.list = true;
-    stages.doc = "verification stages after the search (any order; lsgd/stage.h)";
-    stages.choices = [] {
+    OptionField<S> stages_field;
+    stages_field.name = "stages";
+    stages_field.kind = OptionKind::kChoice;
+    stages_field.list = true;
+    stages_field.doc = "verification stages after the search (any order; lsgd/stage.h)";
+    stages_field.choices = [] {
       std::vector<std::string> names;
       for (const StageType& t : verification_stage_types()) names.emplace_back(t.name);
       return names;
     };
-    stages.text = [](const S& s) { return verification_stages(s); };
-    stages.set_choice = [](S& s, const std::string& text) { parse_verification_stages(text, s); };
+    stages_field.text = [](const S& s) { return verification_stages(s); };
+    stages_field.set_choice = [](S& s, const std::string& text) { parse_verification_stages(text, s); };
     OptionTable<S> t = {
-        stages,
+        stages_field,
         integer_option("max_candidates", &S::max_candidates, 1, 100, "",
                        "candidates examined best first; the first no stage rejects is reported"),
     };

@@ -54,8 +54,11 @@ struct OptionField {
 template <class S>
 using OptionTable = std::vector<OptionField<S>>;
 
-// Shortest decimal text that parses back to exactly `value`, always with a
-// '.' or an exponent so that it reads as a real; .inf, -.inf, .nan.
+// Shortest decimal text that parses back to exactly `value` ("0.1", "3",
+// "1e+300"; "inf", "-inf", "nan").
+std::string shortest_text(double value);
+// The same, always with a '.' or an exponent so that it reads as a real
+// (YAML); .inf, -.inf, .nan.
 std::string format_real(double value);
 
 namespace internal {

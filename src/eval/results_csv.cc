@@ -10,10 +10,18 @@
 
 #include "lsgd/error.h"
 #include "lsgd/io/files.h"
+#include "lsgd/options.h"
 
 namespace lsgd::eval {
 
 using io::throw_cannot_write;
+
+std::string csv_field(const std::string& text) {
+  if (text.find_first_of(",\"\n") == std::string::npos) return text;
+  std::string out = "\"";
+  for (char c : text) out += c == '"' ? std::string("\"\"") : std::string(1, c);
+  return out + "\"";
+}
 
 namespace {
 
@@ -50,13 +58,7 @@ CsvWriter::CsvWriter(const std::string& path, Mode mode, int version)
 }
 
 void CsvWriter::write(const Result& r, const std::string& image) {
-  std::string quoted = image;
-  if (quoted.find_first_of(",\"\n") != std::string::npos) {
-    std::string escaped = "\"";
-    for (char c : image) escaped += c == '"' ? std::string("\"\"") : std::string(1, c);
-    quoted = escaped + "\"";
-  }
-  *out_ << r.frame << ',' << quoted << ',' << (r.loop ? r.best.frame : -1) << ',' << r.best.frame
+  *out_ << r.frame << ',' << csv_field(image) << ',' << (r.loop ? r.best.frame : -1) << ',' << r.best.frame
         << ',' << std::setprecision(9) << (r.best.frame >= 0 ? r.best.score : 0.0) << ','
         << std::setprecision(4) << r.timings.total_ms << ',' << std::setprecision(6)
         << (r.best.frame >= 0 ? r.evidence.appearance : 0.0) << ',' << r.evidence.inliers;
@@ -68,11 +70,7 @@ void CsvWriter::write(const Result& r, const std::string& image) {
   if (version_ >= kStatusVersion) *out_ << ',' << to_string(r.status);
   if (version_ >= kStampVersion) {  // empty when the frame has none; else the shortest exact text
     *out_ << ',';
-    if (std::isfinite(r.stamp)) {
-      char text[32];
-      const auto end = std::to_chars(text, text + sizeof(text), r.stamp).ptr;
-      out_->write(text, end - text);
-    }
+    if (std::isfinite(r.stamp)) *out_ << shortest_text(r.stamp);
   }
   *out_ << '\n' << std::flush;
   if (!*out_) {

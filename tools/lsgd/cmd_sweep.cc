@@ -80,11 +80,7 @@ struct Row {
 };
 
 // Shortest text that reads back to exactly `value`.
-std::string exact(double value) {
-  char buffer[64];
-  const auto [end, ec] = std::to_chars(buffer, buffer + sizeof(buffer), value);
-  return ec == std::errc() ? std::string(buffer, end) : std::to_string(value);
-}
+std::string exact(double value) { return shortest_text(value); }
 
 std::string fixed(double value, int decimals) {
   std::ostringstream out;
@@ -92,12 +88,7 @@ std::string fixed(double value, int decimals) {
   return out.str();
 }
 
-std::string csv_field(const std::string& text) {
-  if (text.find_first_of(",\"\n") == std::string::npos) return text;
-  std::string out = "\"";
-  for (char c : text) out += c == '"' ? std::string("\"\"") : std::string(1, c);
-  return out + "\"";
-}
+using eval::csv_field;
 
 std::ofstream open_output(const std::string& path) {
   std::ofstream out(path);

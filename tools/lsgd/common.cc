@@ -17,21 +17,15 @@
 #include <CLI/CLI.hpp>
 
 #include "bench_support.h"
+#include "internal/clock.h"
 #include "lsgd/io/files.h"
 #include "lsgd/error.h"
 #include "lsgd/io/config.h"
 #include "lsgd/version.h"
 
 namespace lsgd::cli {
-namespace {
 
-std::int64_t now_ns() {
-  return std::chrono::duration_cast<std::chrono::nanoseconds>(
-             std::chrono::steady_clock::now().time_since_epoch())
-      .count();
-}
-
-}  // namespace
+using internal::now_ns;
 
 void DetectorFlags::add_to(CLI::App& command) {
   command.add_option("--config", config, "YAML detector configuration (unknown keys are errors)")

@@ -13,6 +13,10 @@
 
 namespace lsgd::eval {
 
+// `text` as one CSV field: quoted (quotes doubled) when it holds a comma, a
+// quote or a line break, else as it is.
+std::string csv_field(const std::string& text);
+
 // Writes `lsgd run` rows:
 // frame,image,loop_frame,candidate_frame,score,ms,appearance,inliers,
 // ranked_frame,ranked_score,ranked_confirmed (the ranking, Result::ranking).

@@ -382,13 +382,7 @@ PYBIND11_MODULE(_lsgd, m) {
                                       lsgd::parse_similarity_metric(metric.c_str()), query_offset);
           }
           if (!output.is_none()) {  // the CSV lsgd match writes, whole or not at all
-            std::ostringstream out;
-            out << "query,match,score,similarity,rank\n";
-            for (const lsgd::TopMatch& t : found) {
-              out << t.query << ',' << t.match << ',' << std::setprecision(9) << t.score << ','
-                  << t.similarity << ',' << t.rank << '\n';
-            }
-            lsgd::io::write_output_file(path_of(output, "output"), out.str(), "matches CSV");
+            lsgd::io::write_output_file(path_of(output, "output"), lsgd::eval::match_csv(found), "matches CSV");
           }
           const auto n = static_cast<py::ssize_t>(found.size());
           py::array_t<std::int64_t> q(n), j(n), rank(n);

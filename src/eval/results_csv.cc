@@ -5,6 +5,7 @@
 #include <filesystem>
 #include <iomanip>
 #include <iostream>
+#include <sstream>
 #include <string>
 #include <system_error>
 
@@ -15,6 +16,16 @@
 namespace lsgd::eval {
 
 using io::throw_cannot_write;
+
+std::string match_csv(const std::vector<TopMatch>& matches) {
+  std::ostringstream out;
+  out << "query,match,score,similarity,rank\n";
+  for (const TopMatch& m : matches) {
+    out << m.query << ',' << m.match << ',' << std::setprecision(9) << m.score << ',' << m.similarity
+        << ',' << m.rank << '\n';
+  }
+  return out.str();
+}
 
 std::string csv_field(const std::string& text) {
   if (text.find_first_of(",\"\n") == std::string::npos) return text;

@@ -30,6 +30,7 @@
 #include "files.h"
 #include "lsgd/detector.h"
 #include "lsgd/error.h"
+#include "lsgd/eval/results_csv.h"
 #include "lsgd/eval/runner.h"
 #include "lsgd/io/layouts.h"
 #include "lsgd/limits.h"
@@ -128,14 +129,10 @@ void match(const MatchArgs& args) {
     if (!*file) throw_cannot_write(args.output);
     out = file.get();
   }
-  *out << "query,match,score,similarity,rank\n";
   const auto k = static_cast<std::size_t>(std::min<std::int64_t>(args.top_k, references));
   std::vector<DescriptorView> query_views;
   for (const Descriptor& d : queries) query_views.push_back(d.view());
-  for (const TopMatch& m : match_top_k(views, query_views, args.top_k, options.similarity.metric, offset)) {
-    *out << m.query << ',' << m.match << ',' << std::setprecision(9) << m.score << ',' << m.similarity
-         << ',' << m.rank << '\n';
-  }
+  *out << eval::match_csv(match_top_k(views, query_views, args.top_k, options.similarity.metric, offset));
   out->flush();
   if (!*out) throw IoError("error while writing " + (args.output.empty() ? std::string("standard output") : "'" + args.output + "'"));
   std::cerr << "matched " << queries.size() << " query images against " << references

@@ -8,14 +8,20 @@
 #include <memory>
 #include <ostream>
 #include <string>
+#include <vector>
 
 #include "lsgd/detector.h"
+#include "lsgd/similarity.h"
 
 namespace lsgd::eval {
 
 // `text` as one CSV field: quoted (quotes doubled) when it holds a comma, a
 // quote or a line break, else as it is.
 std::string csv_field(const std::string& text);
+
+// The CSV of `lsgd match` and Python's lsgd.match(output=): a header, then
+// query,match,score,similarity,rank per match, in the order given.
+std::string match_csv(const std::vector<TopMatch>& matches);
 
 // Writes `lsgd run` rows:
 // frame,image,loop_frame,candidate_frame,score,ms,appearance,inliers,

@@ -43,56 +43,51 @@ std::string shown_value(const std::string& text) {
   return out;
 }
 
-void throw_out_of_range(const std::string& key, const std::string& value, double lo, double hi,
-                        bool lo_open, bool integer, const std::string& unit) {
-  const std::string range =
-      integer ? concat("[", static_cast<std::int64_t>(lo), ", ", static_cast<std::int64_t>(hi), "]")
-              : concat(lo_open ? "(" : "[", lo, ", ", hi, "]");
-  throw_invalid(key, " = ", shown_value(value), " is out of range: must be in ", range,
-                unit.empty() ? "" : " ", unit);
-}
+namespace {
 
-std::string number_text(double value) { return concat(value); }
-
-void throw_bad_option_text(const std::string& key, const std::string& text,
-                           const std::string& expected) {
+[[noreturn]] void throw_bad_option_text(const std::string& key, const std::string& text,
+                                        const std::string& expected) {
   throw_invalid(key, " = '", shown_value(text), "' is not ", expected);
 }
 
-void throw_bad_integer_text(const std::string& key, const std::string& text) {
+}  // namespace
+
+}  // namespace internal
+
+void check_option_range(const std::string& key, double value, const std::string& text, double lo,
+                        double hi, bool lo_open, bool integer, const std::string& unit) {
+  using internal::concat;
+  if ((lo_open ? value > lo : value >= lo) && value <= hi) return;  // NaN is out of every range
+  const std::string range =
+      integer ? concat("[", static_cast<std::int64_t>(lo), ", ", static_cast<std::int64_t>(hi), "]")
+              : concat(lo_open ? "(" : "[", lo, ", ", hi, "]");
+  internal::throw_invalid(key, " = ", internal::shown_value(text.empty() ? concat(value) : text),
+                          " is out of range: must be in ", range, unit.empty() ? "" : " ", unit);
+}
+
+std::int64_t parse_option_integer(const std::string& key, const std::string& text, std::int64_t lo,
+                                  std::int64_t hi) {
+  std::int64_t v = 0;
+  if (internal::parses_as(text, v) && v >= lo && v <= hi) return v;
   // Digits alone are an integer beyond the option's type (or int64), not "not an integer".
   const std::size_t sign = !text.empty() && (text[0] == '-' || text[0] == '+') ? 1 : 0;
   if (text.size() > sign && text.find_first_not_of("0123456789", sign) == std::string::npos) {
-    throw_invalid(key, " = ", shown_value(text), " is out of range: far beyond the values it takes");
+    internal::throw_invalid(key, " = ", internal::shown_value(text),
+                            " is out of range: far beyond the values it takes");
   }
-  throw_bad_option_text(key, text, "an integer");
+  internal::throw_bad_option_text(key, text, "an integer");
 }
 
-namespace {
-
-using internal::parses_as;
-
-}  // namespace
-
-bool parse_integer_text(const std::string& text, std::int64_t& value) {
-  return parses_as(text, value);
-}
-
-bool parse_real_text(const std::string& text, double& value) {
+double parse_option_real(const std::string& key, const std::string& text) {
   static const std::set<std::string> kInf = {".inf", ".Inf", ".INF", "+.inf", "+.Inf", "+.INF"};
   static const std::set<std::string> kNegInf = {"-.inf", "-.Inf", "-.INF"};
   static const std::set<std::string> kNan = {".nan", ".NaN", ".NAN"};
-  if (kInf.count(text)) {
-    value = std::numeric_limits<double>::infinity();
-  } else if (kNegInf.count(text)) {
-    value = -std::numeric_limits<double>::infinity();
-  } else if (kNan.count(text)) {
-    value = std::numeric_limits<double>::quiet_NaN();
-  } else {
-    return parses_as(text, value);
-  }
-  return true;
+  if (kInf.count(text)) return std::numeric_limits<double>::infinity();
+  if (kNegInf.count(text)) return -std::numeric_limits<double>::infinity();
+  if (kNan.count(text)) return std::numeric_limits<double>::quiet_NaN();
+  double v = 0;
+  if (!internal::parses_as(text, v)) internal::throw_bad_option_text(key, text, "a number");
+  return v;
 }
 
-}  // namespace internal
 }  // namespace lsgd

@@ -61,21 +61,20 @@ std::string shortest_text(double value);
 // (YAML); .inf, -.inf, .nan.
 std::string format_real(double value);
 
-namespace internal {
-// A value as a message shows it, on one line: control characters (a NUL)
-// escaped, cut after 64 bytes with the length said.
-std::string shown_value(const std::string& text);
-[[noreturn]] void throw_out_of_range(const std::string& key, const std::string& value, double lo,
-                                     double hi, bool lo_open, bool integer,
-                                     const std::string& unit);
-[[noreturn]] void throw_bad_option_text(const std::string& key, const std::string& text,
-                                        const std::string& expected);
-// throw_bad_option_text(key, text, "an integer"), or out of range for digits alone.
-[[noreturn]] void throw_bad_integer_text(const std::string& key, const std::string& text);
-bool parse_integer_text(const std::string& text, std::int64_t& value);
-std::string number_text(double value);  // as an ostream prints it, for messages
-bool parse_real_text(const std::string& text, double& value);
-}  // namespace internal
+// What the option tables' templates below call (and an application's own
+// option code may): InvalidArgument naming the key, the value as typed and
+// what it must be.
+//
+// Checks `value` of option `key` against [lo, hi] ((lo, hi] when lo_open),
+// "key = value is out of range: must be in [lo, hi] unit"; `text` is the value
+// as the message shows it (empty: the number itself).
+void check_option_range(const std::string& key, double value, const std::string& text, double lo,
+                        double hi, bool lo_open, bool integer, const std::string& unit);
+// An integer option's text ("50", "-1") within [lo, hi] (its type's range).
+std::int64_t parse_option_integer(const std::string& key, const std::string& text, std::int64_t lo,
+                                  std::int64_t hi);
+// A real option's text ("0.8", "1e-3", YAML's .inf and .nan).
+double parse_option_real(const std::string& key, const std::string& text);
 
 // ---- builders for the tables
 
@@ -181,9 +180,9 @@ void check_options(const OptionTable<S>& table, const S& s, const std::string& p
     if (f.kind == OptionKind::kChoice) continue;
     const double v = f.number(s);
     if (!((f.lo_open ? v > f.lo : v >= f.lo) && v <= f.hi)) {  // also rejects NaN
-      internal::throw_out_of_range(prefix.empty() ? f.name : prefix + "." + f.name,
-                                   f.kind == OptionKind::kReal ? internal::number_text(v) : f.text(s),
-                                   f.lo, f.hi, f.lo_open, f.kind == OptionKind::kInteger, f.unit);
+      check_option_range(prefix.empty() ? f.name : prefix + "." + f.name, v,
+                         f.kind == OptionKind::kReal ? std::string() : f.text(s), f.lo, f.hi,
+                         f.lo_open, f.kind == OptionKind::kInteger, f.unit);
     }
   }
 }
@@ -203,20 +202,12 @@ const OptionField<S>* find_option(const OptionTable<S>& table, const std::string
 template <class S>
 void set_option_text(const OptionField<S>& f, S& s, const std::string& text) {
   switch (f.kind) {
-    case OptionKind::kInteger: {
-      std::int64_t v = 0;
-      if (!internal::parse_integer_text(text, v) || v < f.type_min || v > f.type_max) {
-        internal::throw_bad_integer_text(f.name, text);
-      }
-      f.set_integer(s, v);
+    case OptionKind::kInteger:
+      f.set_integer(s, parse_option_integer(f.name, text, f.type_min, f.type_max));
       return;
-    }
-    case OptionKind::kReal: {
-      double v = 0;
-      if (!internal::parse_real_text(text, v)) internal::throw_bad_option_text(f.name, text, "a number");
-      f.set_real(s, v);
+    case OptionKind::kReal:
+      f.set_real(s, parse_option_real(f.name, text));
       return;
-    }
     case OptionKind::kChoice:
       f.set_choice(s, text);
       return;

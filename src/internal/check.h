@@ -39,4 +39,8 @@ void check_range_open_low(const char* field, T value, T lo, T hi, const char* un
   }
 }
 
+// A value as a message shows it, on one line: control characters (a NUL)
+// escaped, cut after 64 bytes with the length said (src/options.cc).
+std::string shown_value(const std::string& text);
+
 }  // namespace lsgd::internal

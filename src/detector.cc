@@ -619,4 +619,12 @@ void Detector::restore_frame(int width, int height, const Descriptor& descriptor
   height_ = height;
 }
 
+std::int64_t estimated_map_bytes(const DetectorOptions& options, std::int64_t frames, int cells) {
+  const SearchMode mode = find_search_mode(options.search.mode);
+  const auto descriptor =
+      static_cast<std::int64_t>(Descriptor::bytes_per_frame(options.descriptor.storage, cells));
+  const std::int64_t extra = mode.bytes_per_frame != nullptr ? mode.bytes_per_frame(options, cells) : 0;
+  return frames * (descriptor + extra);
+}
+
 }  // namespace lsgd

@@ -19,10 +19,10 @@ internal::Registry<SearchMode>& registry() {
       "search mode",
       {
           {kExhaustiveSearch, "every frame outside the temporal window is scored",
-           make_exhaustive_search},
+           make_exhaustive_search, exhaustive_bytes_per_frame},
           {kNodesSearch, "the paper's dynamic nodes (Algorithm 1)", make_nodes_search},
           {kIndexSearch, "an HNSW graph (hnswlib), its shortlist re-scored exactly",
-           make_index_search},
+           make_index_search, index_bytes_per_frame},
       });
   return modes;
 }
@@ -36,6 +36,8 @@ void register_search_mode(const SearchMode& mode) { registry().add(mode, "regist
 std::string search_mode_names() { return registry().names(); }
 
 void check_search_mode(const std::string& name) { registry().find(name); }
+
+SearchMode find_search_mode(const std::string& name) { return registry().find(name); }
 
 std::unique_ptr<CandidateSearch> make_search(const SearchOptions& options) {
   options.check();

@@ -215,6 +215,10 @@ void register_test_modes() {
     register_search_mode({"test-blocks", "groups of 4 frames",
                           [](const SearchOptions& o) -> std::unique_ptr<CandidateSearch> {
                             return std::make_unique<Blocks>(o);
+                          },
+                          // Its memory model: a group id per frame, and 2 bytes a cell.
+                          [](const DetectorOptions&, int cells) -> std::int64_t {
+                            return 8 + 2 * std::int64_t{cells};
                           }});
     return true;
   }();
@@ -254,6 +258,26 @@ TEST(SearchModes, ARegisteredModeRunsInTheDetectorThroughTheInterfaceAlone) {
   }
   EXPECT_EQ(c.nodes(), 15);
   EXPECT_EQ(c.search().members(3), (std::vector<std::int64_t>{12, 13, 14, 15}));
+}
+
+// The memory a map takes: each frame's descriptor and its mode's own model,
+// a registered mode's included.
+TEST(SearchModes, EstimatedMapBytesAddTheModesOwnMemoryModel) {
+  register_test_modes();
+  DetectorOptions o;
+  const std::int64_t exact = static_cast<std::int64_t>(Descriptor::bytes_per_frame(HistogramStorage::kExact, 80));
+  o.search.mode = kExhaustiveSearch;
+  EXPECT_EQ(estimated_map_bytes(o, 1000, 80), 1000 * (exact + 8 * 48));
+  o.search.mode = kNodesSearch;
+  EXPECT_EQ(estimated_map_bytes(o, 1000, 80), 1000 * exact);
+  o.search.mode = kIndexSearch;
+  EXPECT_EQ(estimated_map_bytes(o, 1000, 80), 1000 * (exact + 16 * 80 + 8 * o.search.index.m + 64));
+  o.search.mode = "test-blocks";
+  EXPECT_EQ(estimated_map_bytes(o, 1000, 80), 1000 * (exact + 8 + 160));
+  o.search.mode = "test-copy";  // no model: the descriptors alone
+  EXPECT_EQ(estimated_map_bytes(o, 10, 80), 10 * exact);
+  o.search.mode = "no-such-mode";
+  EXPECT_THROW(estimated_map_bytes(o, 10, 80), InvalidArgument);
 }
 
 TEST(Detector, Deterministic) {

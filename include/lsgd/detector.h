@@ -297,4 +297,11 @@ class Detector {
   class Exclusive;
 };
 
+// The memory a detector with `options` takes for `frames` stored frames of
+// `cells` cells, bytes: each frame's descriptor in options.descriptor.storage
+// and what its search mode keeps per frame (SearchMode::bytes_per_frame), as
+// measured in docs/performance.md. For planning a map's size (lsgd bench
+// --distractors refuses a run that would not fit).
+std::int64_t estimated_map_bytes(const DetectorOptions& options, std::int64_t frames, int cells);
+
 }  // namespace lsgd

@@ -205,11 +205,17 @@ class CandidateSearch : public Stateful {
                              const std::uint8_t* data, std::size_t size);
 };
 
+struct DetectorOptions;  // lsgd/detector.h
+
 // A registered search mode.
 struct SearchMode {
   const char* name;
   const char* summary;  // one line, for help texts
   std::unique_ptr<CandidateSearch> (*make)(const SearchOptions& options);
+  // Its memory model: the bytes a detector with `options` keeps per stored
+  // frame of `cells` cells beyond the frame's descriptor (estimated_map_bytes(),
+  // docs/performance.md); nullptr: none.
+  std::int64_t (*bytes_per_frame)(const DetectorOptions& options, int cells) = nullptr;
 };
 
 // Every registered mode, in registration order: the built-in ones first.
@@ -223,6 +229,9 @@ void register_search_mode(const SearchMode& mode);
 std::string search_mode_names();
 // Throws InvalidArgument naming `name` and the registered modes unless `name` is one.
 void check_search_mode(const std::string& name);
+// The registered mode named `name` (InvalidArgument naming it and the
+// registered ones when there is none).
+SearchMode find_search_mode(const std::string& name);
 // The mode options.mode names, made with `options` (checked first).
 std::unique_ptr<CandidateSearch> make_search(const SearchOptions& options);
 

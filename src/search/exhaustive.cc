@@ -2,6 +2,7 @@
 
 #include <algorithm>
 
+#include "lsgd/detector.h"
 #include "search/scoring.h"
 
 namespace lsgd {
@@ -47,6 +48,12 @@ class ExhaustiveSearch final : public CandidateSearch {
 
 std::unique_ptr<CandidateSearch> make_exhaustive_search(const SearchOptions& options) {
   return std::make_unique<ExhaustiveSearch>(options);
+}
+
+std::int64_t exhaustive_bytes_per_frame(const DetectorOptions& options, int) {
+  const TemporalOptions& t = options.verification.temporal_options;
+  const int rows = options.verification.has(kTemporalStage) ? std::max(t.frames, t.long_frames) : 1;
+  return 8 * std::int64_t{rows};
 }
 
 }  // namespace lsgd

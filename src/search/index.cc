@@ -18,6 +18,7 @@
 
 #include "internal/check.h"
 #include "internal/clock.h"
+#include "lsgd/detector.h"
 #include "lsgd/evidence.h"
 #include "lsgd/search/exhaustive.h"
 #include "lsgd/state.h"
@@ -472,6 +473,10 @@ class IndexSearch final : public CandidateSearch {
 
 std::unique_ptr<CandidateSearch> make_index_search(const SearchOptions& options) {
   return std::make_unique<IndexSearch>(options);
+}
+
+std::int64_t index_bytes_per_frame(const DetectorOptions& options, int cells) {
+  return 16 * std::int64_t{cells} + 8 * std::int64_t{options.search.index.m} + 64;
 }
 
 }  // namespace lsgd

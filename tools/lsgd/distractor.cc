@@ -57,16 +57,9 @@ void make_distractor(const Descriptor& base, std::int64_t k, std::int64_t run, H
 
 std::int64_t map_bytes(const std::string& mode, std::int64_t frames, int cells,
                        const DetectorOptions& options) {
-  const auto descriptor = static_cast<std::int64_t>(Descriptor::bytes_per_frame(options.descriptor.storage, cells));
-  std::int64_t extra = 0;
-  if (mode == kIndexSearch) {
-    extra = 16 * std::int64_t{cells} + 8 * std::int64_t{options.search.index.m} + 64;
-  } else if (mode == kExhaustiveSearch) {
-    const TemporalOptions& t = options.verification.temporal_options;
-    const int rows = options.verification.has(kTemporalStage) ? std::max(t.frames, t.long_frames) : 1;
-    extra = 8 * std::int64_t{rows};
-  }
-  return frames * (descriptor + extra);
+  DetectorOptions in_mode = options;
+  in_mode.search.mode = mode;
+  return estimated_map_bytes(in_mode, frames, cells);
 }
 
 std::int64_t mem_available_bytes(std::istream& meminfo) {

@@ -23,12 +23,9 @@ namespace lsgd::cli::bench {
 void make_distractor(const Descriptor& base, std::int64_t k, std::int64_t run,
                      HistogramStorage storage, Descriptor& exact, Descriptor& out);
 
-// Memory a detector in search mode `mode` takes for `frames` stored frames of
-// `cells` cells, bytes, as measured (docs/performance.md, resident bytes per
-// frame): each frame's descriptor in `options`' storage; the index's graph
-// key (16 bytes a cell) and bottom-layer links (2 M of 4 bytes) and
-// hnswlib's bookkeeping; exhaustive search's score rows (up to 8 bytes a
-// frame for each of the last long_frames queries).
+// Memory a detector with `options` in search mode `mode` takes for `frames`
+// stored frames of `cells` cells, bytes: lsgd::estimated_map_bytes() (each
+// mode's memory model is its own, SearchMode::bytes_per_frame).
 std::int64_t map_bytes(const std::string& mode, std::int64_t frames, int cells,
                        const DetectorOptions& options);
 

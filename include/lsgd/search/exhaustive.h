@@ -21,5 +21,9 @@ void search_exhaustive(const FrameStore& store, const DescriptorView& query, std
 
 // The registered mode (SearchMode::make).
 std::unique_ptr<CandidateSearch> make_exhaustive_search(const SearchOptions& options);
+// Its memory per stored frame beyond the descriptor (SearchMode::bytes_per_frame):
+// the sequence evidence's score rows, up to 8 bytes a frame for each of the
+// last max(frames, long_frames) queries (1 without the temporal stage).
+std::int64_t exhaustive_bytes_per_frame(const DetectorOptions& options, int cells);
 
 }  // namespace lsgd

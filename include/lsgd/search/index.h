@@ -32,5 +32,9 @@ namespace lsgd {
 
 // The registered mode (SearchMode::make).
 std::unique_ptr<CandidateSearch> make_index_search(const SearchOptions& options);
+// Its memory per stored frame beyond the descriptor (SearchMode::bytes_per_frame):
+// the graph's key (16 bytes a cell), its bottom-layer links (2 M of 4
+// bytes) and hnswlib's bookkeeping (64 bytes), as measured (docs/performance.md).
+std::int64_t index_bytes_per_frame(const DetectorOptions& options, int cells);
 
 }  // namespace lsgd

@@ -182,7 +182,7 @@ TEST_F(LayoutTest, ALayoutRegisteredFromOutsideIsDetectedOpenedAndListed) {
   SequenceOptions unknown;
   unknown.layout = "upside-down";
   expect_error<InvalidArgument>([&] { open_sequence(path, unknown); },
-                                {"layout 'upside-down' is not one of auto, folder", "reversed"});
+                                {"layout 'upside-down' is unknown: expected auto, folder", "or reversed"});
 }
 
 TEST_F(LayoutTest, ExplicitLayoutMustFitThePath) {

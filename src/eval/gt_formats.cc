@@ -211,24 +211,9 @@ void register_gt_format(const GtFormatType& format) {
   registry().add(format, "register_gt_format", kAutoGtFormat);
 }
 
-std::vector<std::string> gt_format_names() {
-  std::vector<std::string> names{kAutoGtFormat};
-  for (const GtFormatType& t : gt_format_types()) names.emplace_back(t.name);
-  return names;
-}
+std::vector<std::string> gt_format_names() { return registry().name_list(kAutoGtFormat); }
 
-GtFormat parse_gt_format(const std::string& name) {
-  if (name == kAutoGtFormat) return name;
-  for (const GtFormatType& t : gt_format_types()) {
-    if (name == t.name) return name;
-  }
-  std::string all;
-  const std::vector<std::string> names = gt_format_names();
-  for (std::size_t k = 0; k < names.size(); ++k) {
-    all += (k == 0 ? "" : k + 1 == names.size() ? " or " : ", ") + names[k];
-  }
-  internal::throw_invalid("ground-truth format '", name, "' is unknown: expected ", all);
-}
+GtFormat parse_gt_format(const std::string& name) { return registry().parse(name, kAutoGtFormat); }
 
 void GtOptions::check() const {
   internal::check_range<std::int64_t>("ground truth frames", frames, -1, kMaxFrames);

@@ -59,6 +59,28 @@ class Registry {
     return out;
   }
 
+  // `first` (when given: "auto") and every entry's name, in registration order.
+  std::vector<std::string> name_list(const char* first = nullptr) const {
+    std::vector<std::string> out;
+    if (first != nullptr) out.emplace_back(first);
+    for (const Entry& e : entries()) out.emplace_back(e.name);
+    return out;
+  }
+
+  // `name` when it is `also` ("auto") or a registered name; InvalidArgument
+  // "<what> 'name' is unknown: expected auto, a, b or c" otherwise.
+  std::string parse(const std::string& name, const char* also) const {
+    const std::vector<std::string> names = name_list(also);
+    for (const std::string& n : names) {
+      if (n == name) return name;
+    }
+    std::string all;
+    for (std::size_t k = 0; k < names.size(); ++k) {
+      all += (k == 0 ? "" : k + 1 == names.size() ? " or " : ", ") + names[k];
+    }
+    throw_invalid(what_, " '", name, "' is unknown: expected ", all);
+  }
+
   // The entry named `name`; InvalidArgument naming it and the registered
   // ones when there is none.
   Entry find(const std::string& name) const {

@@ -277,23 +277,9 @@ void register_layout(const LayoutType& layout) {
   registry().add(layout, "register_layout", kAutoLayout);
 }
 
-std::vector<std::string> layout_names() {
-  std::vector<std::string> names{kAutoLayout};
-  for (const LayoutType& t : layout_types()) names.emplace_back(t.name);
-  return names;
-}
+std::vector<std::string> layout_names() { return registry().name_list(kAutoLayout); }
 
-Layout parse_layout(const std::string& name) {
-  if (name == kAutoLayout) return name;
-  try {
-    registry().find(name);
-  } catch (const InvalidArgument&) {
-    std::string all;
-    for (const std::string& n : layout_names()) all += (all.empty() ? "" : ", ") + n;
-    internal::throw_invalid("layout '", name, "' is not one of ", all);
-  }
-  return name;
-}
+Layout parse_layout(const std::string& name) { return registry().parse(name, kAutoLayout); }
 
 Side parse_side(const std::string& name) {
   if (name == "left") return Side::kLeft;

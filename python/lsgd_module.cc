@@ -7,6 +7,7 @@
 #include <pybind11/stl.h>
 
 #include <cstring>
+#include <filesystem>
 #include <iomanip>
 #include <map>
 #include <opencv2/core.hpp>
@@ -582,10 +583,17 @@ PYBIND11_MODULE(_lsgd, m) {
             throw lsgd::InvalidArgument("write_csv: " + std::to_string(images.size()) + " image names for " +
                                         std::to_string(results.size()) + " results (one per result)");
           }
-          lsgd::eval::CsvWriter csv(path_of(path));
-          for (std::size_t i = 0; i < results.size(); ++i) {
-            csv.write(results[i], path_of(py::reinterpret_borrow<py::object>(images[i])));
+          const std::string out = path_of(path);
+          std::vector<std::string> names;
+          for (const py::handle& image : images) {
+            names.push_back(path_of(py::reinterpret_borrow<py::object>(image)));
+            std::error_code ec;  // an output never overwrites an input
+            if (std::filesystem::equivalent(out, names.back(), ec)) {
+              throw lsgd::InvalidArgument("write_csv: the output " + out + " is the input image " + names.back());
+            }
           }
+          lsgd::eval::CsvWriter csv(out);
+          for (std::size_t i = 0; i < results.size(); ++i) csv.write(results[i], names[i]);
           return csv.loops();
         }, py::arg("results"), py::arg("images"), py::arg("path"),
         "Writes the results as `lsgd run`'s CSV (the same code, one row per result, `images` its image "

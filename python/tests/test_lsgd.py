@@ -124,6 +124,11 @@ def test_results_match_lsgd_run_frame_for_frame(tmp_path):
         assert {k: v for k, v in a.items() if k != "ms"} == {k: v for k, v in b.items() if k != "ms"}
     with pytest.raises(lsgd.InvalidArgument, match="one per result"):
         lsgd.write_csv(results, [], mine)
+    image = folder / "000.pgm"
+    before = image.read_bytes()
+    with pytest.raises(lsgd.InvalidArgument, match="is the input image"):
+        lsgd.write_csv(results, [str(folder / ("%03d.pgm" % i)) for i in range(len(frames))], image)
+    assert image.read_bytes() == before
 
 
 def test_database_resumes_a_session_as_lsgd_run_does(tmp_path):

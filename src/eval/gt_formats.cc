@@ -195,14 +195,6 @@ internal::Registry<GtFormatType>& registry() {
   return formats;
 }
 
-// The built-in formats are told apart by detect_gt_format() itself.
-bool builtin(const GtFormatType& t) {
-  for (const char* name : {kPairsGtFormat, kMatGtFormat, kKittiPosesGtFormat, kLoopinfGtFormat}) {
-    if (std::strcmp(t.name, name) == 0) return true;
-  }
-  return false;
-}
-
 }  // namespace
 
 std::vector<GtFormatType> gt_format_types() { return registry().entries(); }
@@ -227,8 +219,10 @@ void GtOptions::check() const {
 
 GtFormat detect_gt_format(const std::string& path) {
   io::check_input_file(path, "ground-truth file");
+  // Only formats registered from outside have a `detect`: the built-in ones
+  // are told apart below.
   for (const GtFormatType& t : gt_format_types()) {
-    if (!builtin(t) && t.detect != nullptr && t.detect(path)) return t.name;
+    if (t.detect != nullptr && t.detect(path)) return t.name;
   }
   std::ifstream in = open_text(path, "ground-truth file");
   std::string head(128, '\0');

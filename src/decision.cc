@@ -31,6 +31,8 @@ const OptionTable<DecisionOptions>& DecisionOptions::fields() {
                     "strong_inliers inliers (0: off)"),
         integer_option("strong_inliers", &S::strong_inliers, 1, 100000, "inliers",
                        "the geometric support a confirmed candidate needs for strong_bonus"),
+        integer_option("continuity_gap", &S::continuity_gap, 0, 100, "frames",
+                       "a loop is continued after at most this many frames that declared none"),
     };
     for (OptionField<S>& f : t) f.resumable = true;  // the decision may change on resume
     return t;
@@ -40,8 +42,13 @@ const OptionTable<DecisionOptions>& DecisionOptions::fields() {
 
 void DecisionOptions::check() const { check_options(fields(), *this, "decision"); }
 
-bool ContinuityState::continues(std::int64_t q, std::int64_t frame, int tolerance) const {
-  return loop >= 0 && query == q - 1 && frame >= loop && frame <= loop + 1 + tolerance;
+bool ContinuityState::continues(std::int64_t q, std::int64_t frame, int tolerance, int gap) const {
+  return held.loop >= 0 && held.query < q && q - held.query <= 1 + gap && frame >= held.loop &&
+         frame <= window_end(q, tolerance);
+}
+
+std::int64_t ContinuityState::window_end(std::int64_t q, int tolerance) const {
+  return held.loop + (q - held.query) + tolerance;
 }
 
 void ContinuityState::record(std::int64_t q, std::int64_t frame, int frame_inliers,
@@ -52,7 +59,8 @@ void ContinuityState::record(std::int64_t q, std::int64_t frame, int frame_inlie
     inliers = 0;
   } else {
     const double v = frame_inliers > 0 ? frame_inliers : 0;
-    inliers = continued ? 0.8 * inliers + 0.2 * v : v;
+    inliers = continued ? 0.8 * held.inliers + 0.2 * v : v;
+    held = {q, frame, inliers};
   }
 }
 
@@ -97,7 +105,7 @@ double LoopDecision::rank(const DecisionQuery& q, const Candidate& best,
   first_checks_.clear();
   out.ranking.best = best;
   out.ranking.confirmed = best.frame >= 0;
-  bool tracking = q.continuity && best.frame >= 0 && track_.continues(q.frame, best.frame, q.tolerance);
+  bool tracking = q.continuity && best.frame >= 0 && track_.continues(q.frame, best.frame, q.tolerance, 0);
   if (tracking && q.single_frame && !confirms.empty()) {
     tracking = !(q.single_frame(best.frame) < kRankingTrackMinZ);  // a scene cut; NaN: not unlike
   }
@@ -165,25 +173,29 @@ Decision LoopDecision::decide(const DecisionQuery& q, const std::vector<Verifica
     // query (its single-frame score below continuity_min_z: a new place, not
     // the revisit going on) continues nothing.
     unlike_.clear();  // the window's frames loop .. loop + 1 + tolerance, 1: unlike
-    if (continuity && state_.continues(q.frame, state_.loop + 1, q.tolerance) && q.single_frame) {
-      for (std::int64_t j = state_.loop; j <= state_.loop + 1 + q.tolerance; ++j) {
+    const int gap = d.continuity_gap;
+    const std::int64_t held = state_.held.loop;  // the loop a candidate may continue
+    const bool open = continuity && state_.continues(q.frame, held, q.tolerance, gap);
+    const std::int64_t window_end = state_.window_end(q.frame, q.tolerance);
+    if (open && q.single_frame) {
+      for (std::int64_t j = held; j <= window_end; ++j) {
         const double z = j < q.frame - q.min_gap ? q.single_frame(j) : std::nan("");
         unlike_.push_back(z < d.continuity_min_z ? 1 : 0);  // NaN: not unlike
       }
     }
     const auto unlike = [&](std::int64_t j) {
-      const std::int64_t k = j - state_.loop;
+      const std::int64_t k = j - held;
       return k >= 0 && k < static_cast<std::int64_t>(unlike_.size()) && unlike_[static_cast<std::size_t>(k)];
     };
     const auto continues = [&](const Candidate& c) {
-      return continuity && state_.continues(q.frame, c.frame, q.tolerance) && !unlike(c.frame);
+      return open && state_.continues(q.frame, c.frame, q.tolerance, gap) && !unlike(c.frame);
     };
     // The best-scored frame that continues the previous frame's loop,
     // outside the temporal window; frame -1 when there is none.
     Candidate continuation;
-    if (continuity && state_.continues(q.frame, state_.loop + 1, q.tolerance)) {
+    if (open) {
       const std::int64_t limit = q.frame - q.min_gap;
-      for (std::int64_t j = state_.loop; j <= std::min(limit - 1, state_.loop + 1 + q.tolerance); ++j) {
+      for (std::int64_t j = held; j <= std::min(limit - 1, window_end); ++j) {
         if (unlike(j)) continue;
         const double score = q.appearance(j);
         if (std::isnan(score)) {
@@ -257,11 +269,11 @@ Decision LoopDecision::decide(const DecisionQuery& q, const std::vector<Verifica
         StageCheck check = cached ? first_checks_[k] : stage->check(q.frame, c);
         const bool listed = cached && !(continuing && check.support >= 0);
         if (continuing && check.support >= 0) {
-          const double needed = d.continuity_inliers * state_.inliers;
+          const double needed = d.continuity_inliers * state_.held.inliers;
           check.accepted = check.support > 0 && check.support >= needed;
-          check.reason += internal::concat("; continues the loop of frame ", q.frame - 1,
+          check.reason += internal::concat("; continues the loop of frame ", state_.held.query,
                                            ": needs ", needed, " inliers (", d.continuity_inliers,
-                                           " of its average ", state_.inliers, ")");
+                                           " of its average ", state_.held.inliers, ")");
           if (cached) check.ms = 0;  // counted once, by the ranking
         }
         if (!listed) {
@@ -368,12 +380,19 @@ void LoopDecision::restore_frame(std::int64_t frame, int, int, std::uint32_t ver
 
 void LoopDecision::restore_renumbered(std::int64_t frame, int, int, std::uint32_t version,
                                       StateReader in, const FrameRenumbering& renumbered) {
-  ContinuityState s{frame, -1, 0}, t{frame, -1, 0};
+  // As record() leaves it: a frame without a loop keeps the last one held
+  // (the frames are restored in order), a loop to a forgotten frame is none.
+  ContinuityState s{frame, -1, 0, state_.held}, t{frame, -1, 0, track_.held};
   const auto read = [&](ContinuityState& c) {
     const std::int64_t loop = in.get_i64();
     c.inliers = in.get_f64();
     c.loop = renumbered.after(loop);
-    if (loop >= 0 && c.loop < 0) c.inliers = 0;  // forgotten
+    if (c.loop >= 0) {
+      c.held = {frame, c.loop, c.inliers};
+    } else if (loop >= 0) {
+      c.inliers = 0;  // forgotten
+      c.held = {};
+    }
   };
   if (in.present()) {
     read(s);

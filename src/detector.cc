@@ -285,7 +285,7 @@ std::int64_t Detector::forget(std::int64_t first_id, std::int64_t last_id) {
     after[static_cast<std::size_t>(f)] = f < from ? f : f < from + forgotten ? -1 : f - forgotten;
   }
   const bool last_kept = after.back() >= 0;
-  const bool cut_pending = continuity().loop < 0 && decision_.ranking_track().loop < 0;
+  const bool cut_pending = continuity().held.loop < 0 && decision_.ranking_track().held.loop < 0;
   auto kept = std::make_unique<Detector>(options_);
   kept->restore_kept(*this, FrameRenumbering(std::move(after)));
   // A cut() since the last frame still holds for the next one.

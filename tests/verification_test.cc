@@ -280,6 +280,61 @@ TEST(LoopDecision, NothingContinuesAcrossACut) {
   }
 }
 
+// decision.continuity_gap: a loop is continued over a frame that declared
+// none (frame 51: its candidate has no geometric support), not over two; the
+// held loop survives a restore frame by frame, and a cut() ends it.
+TEST(LoopDecision, ContinuesOverAGapOfOneFrame) {
+  // 0: continued, 1: gap 0, 2: two frames without a loop, 3: restored, 4: cut
+  for (const int variant : {0, 1, 2, 3, 4}) {
+    SCOPED_TRACE(testing::Message() << "variant " << variant);
+    DecisionOptions d;
+    d.continuity_gap = variant == 1 ? 0 : 1;
+    auto decision = std::make_unique<LoopDecision>(d);
+    FixedSupport stage(std::map<std::int64_t, int>{{10, 60}, {11, 0}, {12, 0}, {13, 13}});
+    DecisionQuery q;
+    q.cells = 12;
+    q.continuity = true;
+    q.tolerance = 2;
+    q.min_gap = 5;
+    std::vector<Candidate> candidates = {{10, 4.0}};  // a first loop: 4 + 3.5 + 1.5
+    // Only the query's own candidate looks like it (the rest of the window
+    // cannot reach the threshold: 0 + 3.5 + 2.5).
+    q.appearance = [&](std::int64_t j) { return j == candidates[0].frame ? candidates[0].score : 0.0; };
+    q.single_frame = [](std::int64_t) { return 0.0; };
+    q.frame = 50;
+    q.candidates = &candidates;
+    ASSERT_TRUE(decision->decide(q, {&stage}).loop);
+    std::int64_t frame = 51;
+    for (const std::int64_t j : variant == 2 ? std::vector<std::int64_t>{11, 12} : std::vector<std::int64_t>{11}) {
+      candidates = {{j, 2.0}};
+      q.frame = frame++;
+      EXPECT_FALSE(decision->decide(q, {&stage}).loop) << "no support for " << j;
+    }
+    if (variant == 3) {  // a new process restores the frames' states in order
+      auto restored = std::make_unique<LoopDecision>(d);
+      for (std::int64_t f = 0; f < frame; ++f) {
+        StateWriter out;
+        decision->save_frame(f, out);
+        restored->restore_frame(f, 64, 48, 2, StateReader(out.bytes().data(), out.bytes().size(), "t"));
+      }
+      EXPECT_EQ(restored->continuity().loop, -1);
+      EXPECT_EQ(restored->continuity().held.loop, 10);
+      EXPECT_DOUBLE_EQ(restored->continuity().held.inliers, 60);
+      decision = std::move(restored);
+    }
+    if (variant == 4) decision->cut();
+    // Frame 13: 2 + 3.5 + 2.5 with 13 inliers, 0.2 of the loop's 60 (12)
+    // needed for a continuation, 20 for a first loop.
+    candidates = {{13, 2.0}};
+    q.frame = frame;
+    const Decision out = decision->decide(q, {&stage});
+    const bool continues = variant == 0 || variant == 3;
+    EXPECT_EQ(out.loop, continues);
+    EXPECT_EQ(out.evidence.continues, continues);
+    if (continues) EXPECT_EQ(decision->continuity().held.query, frame);
+  }
+}
+
 // The ranking (decision.h): the best candidate, checked on every query; one
 // that tracks the ranking's confirmed candidate of the previous frame passes
 // with kRankingTrackInliers of the track's inliers, unless it looks unlike
@@ -353,20 +408,43 @@ TEST(LoopDecision, RestoresAVersion1StateWithoutATrack) {
 // frames skipped), never backwards, and only right after the declared loop.
 TEST(ContinuityState, ContinuesForwardFromTheLastLoop) {
   ContinuityState s;
-  EXPECT_FALSE(s.continues(0, 0, 2));
+  EXPECT_FALSE(s.continues(0, 0, 2, 0));
   s.record(10, 40, 30, false);
   EXPECT_EQ(s.inliers, 30);
-  for (std::int64_t f = 40; f <= 43; ++f) EXPECT_TRUE(s.continues(11, f, 2)) << f;
-  EXPECT_FALSE(s.continues(11, 39, 2));  // backwards
-  EXPECT_FALSE(s.continues(11, 44, 2));
-  EXPECT_FALSE(s.continues(12, 41, 2));  // not the next frame
-  s.record(11, 41, 10, true);            // continued: the average moves by 0.2
+  for (std::int64_t f = 40; f <= 43; ++f) EXPECT_TRUE(s.continues(11, f, 2, 0)) << f;
+  EXPECT_FALSE(s.continues(11, 39, 2, 0));  // backwards
+  EXPECT_FALSE(s.continues(11, 44, 2, 0));
+  EXPECT_FALSE(s.continues(12, 41, 2, 0));  // not the next frame
+  s.record(11, 41, 10, true);               // continued: the average moves by 0.2
   EXPECT_DOUBLE_EQ(s.inliers, 0.8 * 30 + 0.2 * 10);
   s.record(12, 90, 50, false);  // a new loop starts its own average
   EXPECT_DOUBLE_EQ(s.inliers, 50);
   s.record(13, -1, -1, false);
-  EXPECT_FALSE(s.continues(14, 91, 2));
+  EXPECT_FALSE(s.continues(14, 91, 2, 0));
   EXPECT_EQ(s.inliers, 0);
+  EXPECT_EQ(s.loop, -1);
+}
+
+// With a gap, the last loop declared is continued over frames that declared
+// none: its window moves on by the frames since, and the average is the
+// held loop's.
+TEST(ContinuityState, ContinuesOverAGapOfFramesWithoutLoop) {
+  ContinuityState s;
+  s.record(10, 40, 30, false);
+  s.record(11, -1, -1, false);
+  s.record(12, -1, -1, false);
+  EXPECT_EQ(s.loop, -1);  // the last frame declared none
+  EXPECT_EQ(s.held.query, 10);
+  EXPECT_EQ(s.window_end(13, 2), 45);
+  for (std::int64_t f = 40; f <= 45; ++f) EXPECT_TRUE(s.continues(13, f, 2, 2)) << f;
+  EXPECT_FALSE(s.continues(13, 46, 2, 2));
+  EXPECT_FALSE(s.continues(13, 39, 2, 2));
+  EXPECT_FALSE(s.continues(13, 42, 2, 1));  // two frames without a loop: gap 1 is too short
+  EXPECT_FALSE(s.continues(14, 42, 2, 2));  // three
+  s.record(13, 43, 10, true);
+  EXPECT_DOUBLE_EQ(s.inliers, 0.8 * 30 + 0.2 * 10);
+  EXPECT_EQ(s.held.query, 13);
+  EXPECT_TRUE(s.continues(14, 44, 2, 0));
 }
 
 // A route through 30 places, then the same places again. Place p is noise over

@@ -67,6 +67,13 @@ struct DecisionOptions {
   // [-1000, 1000]. True continuations score -1.3 at the lowest on every
   // sequence measured, the cut of a two-place map -2.7 (docs/results.md).
   double continuity_min_z = -2.0;
+  // A loop is continued after at most this many frames that declared none
+  // (a frame whose geometric check failed: one blurred or occluded frame
+  // need not end the revisit); frames, [0, 100] (0: only the previous
+  // frame's loop is continued). 1 by leave-one-sequence-out; 2 already
+  // carries lip6-outdoor's tracks 2-3 frames past their revisit
+  // (docs/results.md).
+  int continuity_gap = 1;
   // Added to the candidate appearance ranks first when it is confirmed with
   // at least strong_inliers (its geometric support) as a first loop: a
   // weak ranking (a viewpoint change, another lens) that geometry holds
@@ -109,14 +116,25 @@ const char* to_string(LoopStatus status);
 LoopStatus parse_loop_status(const std::string& name);
 
 // The state the decision carries from frame to frame: the loop declared for
-// the last processed frame and its loop's average inliers.
+// the last processed frame and its loop's average inliers, and the last loop
+// declared at all (which a loop may continue over `gap` frames).
 struct ContinuityState {
   std::int64_t query = -1;  // last processed frame (-1: none)
   std::int64_t loop = -1;   // the frame declared as its loop, -1: none
   double inliers = 0;       // the loop's inlier average (exponential, weight 0.2 for each new frame)
+  struct Held {
+    std::int64_t query = -1;  // the last frame that declared a loop (-1: none)
+    std::int64_t loop = -1;   // its loop
+    double inliers = 0;       // its loop's inlier average
+  } held;
 
-  // True when candidate `frame` of query `query` continues the loop.
-  bool continues(std::int64_t query, std::int64_t frame, int tolerance) const;
+  // True when candidate `frame` of query `query` continues the last loop
+  // declared: it was declared at most 1 + gap frames before `query`, and
+  // `frame` lies between its loop and window_end().
+  bool continues(std::int64_t query, std::int64_t frame, int tolerance, int gap) const;
+  // The last frame that may continue the held loop for query `query`: the
+  // loop moved on by the frames since, plus `tolerance`.
+  std::int64_t window_end(std::int64_t query, int tolerance) const;
   // Records the decision for `query`: a loop to `frame` with `inliers`
   // (frame -1: no loop).
   void record(std::int64_t query, std::int64_t frame, int inliers, bool continued);
@@ -207,7 +225,7 @@ class LoopDecision final : public Stateful {
   void restore(const Checkpoint& c) { state_ = c.state, track_ = c.track, history_.resize(c.decided); }
 
   // The next frame continues no loop, and tracks no ranked candidate (Detector::cut()).
-  void cut() { state_.loop = -1, state_.inliers = 0, track_.loop = -1, track_.inliers = 0; }
+  void cut() { state_ = {state_.query, -1, 0, {}}, track_ = {track_.query, -1, 0, {}}; }
 
   const char* name() const override { return "decision"; }
   bool has_state() const override { return true; }

@@ -31,6 +31,9 @@ const OptionTable<DecisionOptions>& DecisionOptions::fields() {
                     "strong_inliers inliers (0: off)"),
         integer_option("strong_inliers", &S::strong_inliers, 1, 100000, "inliers",
                        "the geometric support a confirmed candidate needs for strong_bonus"),
+        real_option("track_bonus", &S::track_bonus, 0.0, 1000.0, false, "sigma",
+                    "added to the best-ranked candidate, confirmed as a first loop, when it tracks "
+                    "the ranking's confirmed candidate of the previous frame (0: off)"),
         integer_option("continuity_gap", &S::continuity_gap, 0, 100, "frames",
                        "a loop is continued after at most this many frames that declared none"),
     };
@@ -109,6 +112,7 @@ double LoopDecision::rank(const DecisionQuery& q, const Candidate& best,
   if (tracking && q.single_frame && !confirms.empty()) {
     tracking = !(q.single_frame(best.frame) < kRankingTrackMinZ);  // a scene cut; NaN: not unlike
   }
+  first_tracks_ = tracking && !confirms.empty();
   double support = -1;
   for (VerificationStage* stage : confirms) {
     if (best.frame < 0) break;
@@ -241,12 +245,19 @@ Decision LoopDecision::decide(const DecisionQuery& q, const std::vector<Verifica
     // strong_bonus is for the candidate appearance ranks first (after the
     // gates), as a first loop: geometry confirms a weak ranking, and a
     // continuation keeps its own bar.
-    const auto strong = [&](const Candidate& c) {
-      return first < n && c.frame == candidates[first].frame && !continues(c) ? d.strong_bonus : 0.0;
+    // track_bonus alike, when it tracks the ranking's candidate of the last
+    // frame (its own check must accept it: a first loop has no relaxed bar).
+    const auto first_loop = [&](const Candidate& c) {
+      return first < n && c.frame == candidates[first].frame && !continues(c);
+    };
+    const auto strong = [&](const Candidate& c) { return first_loop(c) ? d.strong_bonus : 0.0; };
+    const auto tracked = [&](const Candidate& c) {
+      return first_loop(c) && first_tracks_ ? d.track_bonus : 0.0;
     };
     // The most a candidate can score once confirmed.
     const auto potential = [&](const Candidate& c) {
-      return c.score + d.geometric_bonus + strong(c) + (continues(c) ? d.continuity_bonus : 0.0);
+      return c.score + d.geometric_bonus + strong(c) + tracked(c) +
+             (continues(c) ? d.continuity_bonus : 0.0);
     };
     std::stable_sort(examined_.begin(), examined_.end(),
                      [&](const Candidate& a, const Candidate& b) { return potential(a) > potential(b); });

@@ -331,7 +331,44 @@ TEST(LoopDecision, ContinuesOverAGapOfOneFrame) {
     const bool continues = variant == 0 || variant == 3;
     EXPECT_EQ(out.loop, continues);
     EXPECT_EQ(out.evidence.continues, continues);
-    if (continues) EXPECT_EQ(decision->continuity().held.query, frame);
+    if (continues) {
+      EXPECT_EQ(decision->continuity().held.query, frame);
+    }
+  }
+}
+
+// decision.track_bonus: a first loop whose candidate tracks the ranking's
+// confirmed candidate of the previous frame needs track_bonus sigma less.
+TEST(LoopDecision, TheRankingsTrackLowersAFirstLoopsBar) {
+  // 0: tracked, 1: frame 50's candidate not confirmed, 2: no temporal stage,
+  // 3: track_bonus 0, 4: frame 51's own check fails
+  for (const int variant : {0, 1, 2, 3, 4}) {
+    SCOPED_TRACE(testing::Message() << "variant " << variant);
+    DecisionOptions d;
+    if (variant == 3) d.track_bonus = 0;
+    LoopDecision decision(d);
+    FixedSupport stage(std::map<std::int64_t, int>{{10, variant == 1 ? 5 : 25}, {11, variant == 4 ? 15 : 25}});
+    DecisionQuery q;
+    q.cells = 12;
+    q.continuity = variant != 2;
+    q.tolerance = 2;
+    q.min_gap = 5;
+    q.appearance = [](std::int64_t) { return 0.0; };
+    q.single_frame = [](std::int64_t) { return 0.0; };
+    // Frame 50: 3 + 3.5 < 7, confirmed: the ranking's track.
+    std::vector<Candidate> candidates = {{10, 3.0}};
+    q.frame = 50;
+    q.candidates = &candidates;
+    EXPECT_FALSE(decision.decide(q, {&stage}).loop);
+    EXPECT_EQ(decision.ranking_track().loop, variant == 1 ? -1 : 10);
+    // Frame 51: 3.3 + 3.5 + 0.25 (tracked) reaches 7, 3.3 + 3.5 does not.
+    candidates = {{11, 3.3}};
+    q.frame = 51;
+    const Decision out = decision.decide(q, {&stage});
+    EXPECT_EQ(out.loop, variant == 0);
+    if (variant == 0) {
+      EXPECT_DOUBLE_EQ(out.best.score, 3.3 + 3.5 + 0.25);
+    }
   }
 }
 

@@ -35,7 +35,8 @@ const OptionTable<DecisionOptions>& DecisionOptions::fields() {
                     "added to the best-ranked candidate, confirmed as a first loop, when it tracks "
                     "the ranking's confirmed candidate of the previous frame (0: off)"),
         integer_option("continuity_gap", &S::continuity_gap, 0, 100, "frames",
-                       "a loop is continued after at most this many frames that declared none"),
+                       "a loop is continued after at most this many frames that declared none (after more "
+                       "than one, by the candidate ranked first only)"),
     };
     for (OptionField<S>& f : t) f.resumable = true;  // the decision may change on resume
     return t;
@@ -191,7 +192,12 @@ Decision LoopDecision::decide(const DecisionQuery& q, const std::vector<Verifica
       const std::int64_t k = j - held;
       return k >= 0 && k < static_cast<std::int64_t>(unlike_.size()) && unlike_[static_cast<std::size_t>(k)];
     };
+    // Over more than one frame without a loop, only the candidate appearance
+    // ranks first continues it (a track kept by weaker candidates falls
+    // behind the revisit).
+    const bool long_gap = open && q.frame - state_.held.query > 2;
     const auto continues = [&](const Candidate& c) {
+      if (long_gap && !(first < n && c.frame == candidates[first].frame)) return false;
       return open && state_.continues(q.frame, c.frame, q.tolerance, gap) && !unlike(c.frame);
     };
     // The best-scored frame that continues the previous frame's loop,

@@ -281,14 +281,17 @@ TEST(LoopDecision, NothingContinuesAcrossACut) {
 }
 
 // decision.continuity_gap: a loop is continued over a frame that declared
-// none (frame 51: its candidate has no geometric support), not over two; the
-// held loop survives a restore frame by frame, and a cut() ends it.
-TEST(LoopDecision, ContinuesOverAGapOfOneFrame) {
-  // 0: continued, 1: gap 0, 2: two frames without a loop, 3: restored, 4: cut
-  for (const int variant : {0, 1, 2, 3, 4}) {
+// none (frame 51: its candidate has no geometric support), not over more
+// than the gap; over two frames or more only by the candidate ranked first;
+// the held loop survives a restore frame by frame, and a cut() ends it.
+TEST(LoopDecision, ContinuesOverAGapOfFrames) {
+  // 0: continued, 1: gap 0, 2: two frames without a loop, gap 1, 3:
+  // restored, 4: cut, 5: two frames, gap 3, 6: two frames, gap 3, another
+  // candidate ranked first
+  for (const int variant : {0, 1, 2, 3, 4, 5, 6}) {
     SCOPED_TRACE(testing::Message() << "variant " << variant);
     DecisionOptions d;
-    d.continuity_gap = variant == 1 ? 0 : 1;
+    d.continuity_gap = variant == 1 ? 0 : variant >= 5 ? 3 : 1;
     auto decision = std::make_unique<LoopDecision>(d);
     FixedSupport stage(std::map<std::int64_t, int>{{10, 60}, {11, 0}, {12, 0}, {13, 13}});
     DecisionQuery q;
@@ -299,13 +302,19 @@ TEST(LoopDecision, ContinuesOverAGapOfOneFrame) {
     std::vector<Candidate> candidates = {{10, 4.0}};  // a first loop: 4 + 3.5 + 1.5
     // Only the query's own candidate looks like it (the rest of the window
     // cannot reach the threshold: 0 + 3.5 + 2.5).
-    q.appearance = [&](std::int64_t j) { return j == candidates[0].frame ? candidates[0].score : 0.0; };
+    q.appearance = [&](std::int64_t j) {
+      for (const Candidate& c : candidates) {
+        if (c.frame == j) return c.score;
+      }
+      return 0.0;
+    };
     q.single_frame = [](std::int64_t) { return 0.0; };
     q.frame = 50;
     q.candidates = &candidates;
     ASSERT_TRUE(decision->decide(q, {&stage}).loop);
     std::int64_t frame = 51;
-    for (const std::int64_t j : variant == 2 ? std::vector<std::int64_t>{11, 12} : std::vector<std::int64_t>{11}) {
+    const bool two = variant == 2 || variant >= 5;
+    for (const std::int64_t j : two ? std::vector<std::int64_t>{11, 12} : std::vector<std::int64_t>{11}) {
       candidates = {{j, 2.0}};
       q.frame = frame++;
       EXPECT_FALSE(decision->decide(q, {&stage}).loop) << "no support for " << j;
@@ -326,9 +335,10 @@ TEST(LoopDecision, ContinuesOverAGapOfOneFrame) {
     // Frame 13: 2 + 3.5 + 2.5 with 13 inliers, 0.2 of the loop's 60 (12)
     // needed for a continuation, 20 for a first loop.
     candidates = {{13, 2.0}};
+    if (variant == 6) candidates = {{40, 2.5}, {13, 2.0}};  // 40: no support
     q.frame = frame;
     const Decision out = decision->decide(q, {&stage});
-    const bool continues = variant == 0 || variant == 3;
+    const bool continues = variant == 0 || variant == 3 || variant == 5;
     EXPECT_EQ(out.loop, continues);
     EXPECT_EQ(out.evidence.continues, continues);
     if (continues) {

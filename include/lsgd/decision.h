@@ -68,12 +68,13 @@ struct DecisionOptions {
   // sequence measured, the cut of a two-place map -2.7 (docs/results.md).
   double continuity_min_z = -2.0;
   // A loop is continued after at most this many frames that declared none
-  // (a frame whose geometric check failed: one blurred or occluded frame
-  // need not end the revisit); frames, [0, 100] (0: only the previous
-  // frame's loop is continued). 1 by leave-one-sequence-out; 2 already
-  // carries lip6-outdoor's tracks 2-3 frames past their revisit
+  // (frames whose geometric check failed: a blurred or occluded frame need
+  // not end the revisit); over more than one such frame only the candidate
+  // appearance ranks first continues it. Frames, [0, 100] (0: only the
+  // previous frame's loop is continued). 3 by leave-one-sequence-out with a
+  // margin: 5 and 6 carry lip6-outdoor's tracks past their revisit
   // (docs/results.md).
-  int continuity_gap = 1;
+  int continuity_gap = 3;
   // Added to the candidate appearance ranks first when it is confirmed with
   // at least strong_inliers (its geometric support) as a first loop: a
   // weak ranking (a viewpoint change, another lens) that geometry holds

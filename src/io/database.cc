@@ -318,8 +318,22 @@ Database Database::open(const std::string& path, Mode mode) {
                  "what the log holds, move '",
                  path, "-wal' away");
   }
-  const int flags = writable ? SQLITE_OPEN_READWRITE : SQLITE_OPEN_READONLY;
-  if (sqlite3_open_v2(path.c_str(), &impl->db, flags, nullptr) != SQLITE_OK) {
+  // A reader where FILE-shm cannot be created (database_read_only.cc): the
+  // file as immutable when its log holds nothing; else say what to do.
+  bool immutable = false;
+  if (!writable && !writer_active && companions_cannot_be_created(path)) {
+    if (file_size(path + "-wal") > 0) {
+      io_error(path, "cannot be read where it is: its write-ahead log '", path, "-wal' holds "
+               "frames not yet in the file, and SQLite cannot create '", path, "-shm' to read "
+               "them (a read-only file system or folder); copy the database and its -wal to a "
+               "writable folder, or open it for writing once where it was written");
+    }
+    immutable = true;
+  }
+  const int flags = writable ? SQLITE_OPEN_READWRITE
+                             : SQLITE_OPEN_READONLY | (immutable ? SQLITE_OPEN_URI : 0);
+  const std::string name = immutable ? immutable_uri(path) : path;
+  if (sqlite3_open_v2(name.c_str(), &impl->db, flags, nullptr) != SQLITE_OK) {
     io_error(path, "cannot open (", impl->db ? sqlite3_errmsg(impl->db) : "out of memory", ")");
   }
   sqlite3_extended_result_codes(impl->db, 1);

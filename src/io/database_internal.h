@@ -398,4 +398,10 @@ struct Database::Impl {
   void check_session(std::int64_t session) const;
 };
 
+// True when FILE-wal and FILE-shm cannot be created beside `path`: a
+// read-only file system, or a folder this user cannot write.
+bool companions_cannot_be_created(const std::string& path);
+// SQLite's URI opening `path` as immutable (database_read_only.cc).
+std::string immutable_uri(const std::string& path);
+
 }  // namespace lsgd::io

@@ -1,0 +1,137 @@
+// A database on a read-only file system (docs/reliability.md, issue 35):
+// readable where SQLite cannot create its FILE-shm, exactly, and a log that
+// would need one is refused saying what to do. The read-only file system is
+// a bind mount of the test's folder in a mount namespace of a child process;
+// where the machine allows none (no CAP_SYS_ADMIN), the test is skipped.
+#include <errno.h>
+#include <fcntl.h>
+#include <gtest/gtest.h>
+#include <sched.h>
+#include <sys/mount.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <cstdio>
+#include <functional>
+#include <filesystem>
+#include <string>
+#include <vector>
+
+#include "detector_util.h"
+#include "lsgd/error.h"
+#include "lsgd/io/database.h"
+#include "test_util.h"
+
+namespace lsgd::io {
+namespace {
+
+namespace fs = std::filesystem;
+using test::frame;
+
+constexpr int kSkip = 77;
+
+// A folder of its own with a database of `frames` frames, closed (every
+// frame in the file) or, with `log`, copied while its writer runs (frames in
+// FILE-wal).
+std::string database_in_folder(const std::string& name, int frames, bool log) {
+  const std::string folder = std::string(LSGD_TEST_TMP) + "/read_only_" + name;
+  fs::remove_all(folder);
+  fs::create_directories(folder);
+  const std::string path = folder + "/map ?#%.db";  // URI-special characters
+  DetectorOptions o;
+  o.search.min_gap = 2;
+  o.verification.geometric_options.max_features = 32;
+  const std::string live = std::string(LSGD_TEST_TMP) + "/read_only_" + name + "_live.db";
+  for (const char* suffix : {"", "-wal", "-shm"}) fs::remove(live + suffix);
+  {
+    Database db = Database::create(log ? live : path, o);
+    Detector d(o);
+    for (int i = 0; i < frames; ++i) db.append(d, d.process(frame(i)), 0, "f" + std::to_string(i));
+    if (log) {
+      fs::copy_file(live, path);
+      fs::copy_file(live + "-wal", path + "-wal");
+    }
+  }
+  return path;
+}
+
+// Runs `check` in a child whose mount namespace has `folder` read-only; its
+// exit code (kSkip: no namespace here).
+int in_read_only_folder(const std::string& folder, const std::function<int()>& check) {
+  std::fflush(nullptr);
+  const pid_t pid = ::fork();
+  if (pid == 0) {
+    if (::unshare(CLONE_NEWNS) != 0) ::_exit(kSkip);
+    if (::mount("none", "/", nullptr, MS_REC | MS_PRIVATE, nullptr) != 0) ::_exit(kSkip);
+    if (::mount(folder.c_str(), folder.c_str(), nullptr, MS_BIND, nullptr) != 0) ::_exit(kSkip);
+    if (::mount(nullptr, folder.c_str(), nullptr, MS_REMOUNT | MS_BIND | MS_RDONLY, nullptr) != 0) {
+      ::_exit(kSkip);
+    }
+    const int fd = ::open((folder + "/probe").c_str(), O_CREAT | O_WRONLY, 0600);
+    if (fd >= 0 || errno != EROFS) ::_exit(kSkip);
+    int code = 0;
+    try {
+      code = check();
+    } catch (const std::exception& e) {
+      std::fprintf(stderr, "%s\n", e.what());
+      code = 3;
+    }
+    std::fflush(nullptr);
+    ::_exit(code);
+  }
+  int status = 0;
+  if (pid < 0 || ::waitpid(pid, &status, 0) != pid || !WIFEXITED(status)) return -1;
+  return WEXITSTATUS(status);
+}
+
+TEST(DatabaseReadOnly, AReadOnlyFileSystemIsReadExactly) {
+  const std::string path = database_in_folder("closed", 12, false);
+  const std::string folder = fs::path(path).parent_path().string();
+  ASSERT_FALSE(fs::exists(path + "-shm"));  // a closed writer leaves none
+  const int code = in_read_only_folder(folder, [&] {
+    const Database db = Database::open(path, Database::Mode::kReadOnly);
+    if (db.frames() != 12) return 1;
+    db.verify();
+    Detector d(db.options());
+    db.restore(d);
+    if (d.size() != 12) return 2;
+    return fs::exists(path + "-shm") ? 4 : 0;  // nothing written beside it
+  });
+  if (code == kSkip) GTEST_SKIP() << "no mount namespace on this machine (needs CAP_SYS_ADMIN)";
+  EXPECT_EQ(code, 0);
+  // A writer still gets the file system's own refusal, naming the file.
+  const int writer = in_read_only_folder(folder, [&] {
+    try {
+      Database db = Database::open(path, Database::Mode::kReadWrite);
+    } catch (const IoError& e) {
+      return std::string(e.what()).find(path) != std::string::npos ? 0 : 5;
+    }
+    return 6;
+  });
+  EXPECT_EQ(writer, 0);
+}
+
+TEST(DatabaseReadOnly, ALogThatNeedsItsIndexIsRefusedSayingWhatToDo) {
+  const std::string path = database_in_folder("log", 40, true);  // frames 32 .. 39 in the log
+  const std::string folder = fs::path(path).parent_path().string();
+  const int code = in_read_only_folder(folder, [&] {
+    try {
+      const Database db = Database::open(path, Database::Mode::kReadOnly);
+    } catch (const IoError& e) {
+      const std::string m = e.what();
+      const bool says = m.find(path + "-wal") != std::string::npos &&
+                        m.find("copy the database and its -wal to a writable folder") != std::string::npos;
+      if (!says) std::fprintf(stderr, "%s\n", m.c_str());
+      return says ? 0 : 7;
+    }
+    return 8;
+  });
+  if (code == kSkip) GTEST_SKIP() << "no mount namespace on this machine (needs CAP_SYS_ADMIN)";
+  EXPECT_EQ(code, 0);
+  // Writable again, the log is read: every frame.
+  const Database db = Database::open(path, Database::Mode::kReadOnly);
+  EXPECT_EQ(db.frames(), 40);
+}
+
+}  // namespace
+}  // namespace lsgd::io

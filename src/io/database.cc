@@ -190,61 +190,12 @@ void Database::Impl::load_header() {
   }
 }
 
-void Database::Impl::checkpoint(const char* state) {
-  exec_write(db, path, "BEGIN IMMEDIATE");
-  try {
-    const std::map<std::string, std::string> saved = meta;
-    meta["writer"] = state;
-    meta["checkpoint_frames"] = std::to_string(frames);
-    try {
-      write_meta();
-    } catch (...) {
-      meta = saved;
-      throw;
-    }
-    exec_write(db, path, "COMMIT");
-  } catch (...) {
-    sqlite3_exec(db, "ROLLBACK", nullptr, nullptr, nullptr);
-    throw;
-  }
-  // TRUNCATE waits (busy timeout) for readers of the log; if one still holds
-  // it, the frames stay in the log until the next checkpoint.
-  int log = -1, moved = -1;
-  const int rc = sqlite3_wal_checkpoint_v2(db, nullptr, SQLITE_CHECKPOINT_TRUNCATE, &log, &moved);
-  if (rc != SQLITE_OK && (rc & 0xFF) != SQLITE_BUSY) {
-    io_error(path, "cannot checkpoint its write-ahead log (", sqlite3_errmsg(db), ")");
-  }
-  since_checkpoint = 0;
-}
 
 Database::Database(std::unique_ptr<Impl> impl) : impl_(std::move(impl)) {}
 Database::~Database() = default;
 Database::Database(Database&& other) noexcept = default;
 Database& Database::operator=(Database&& other) noexcept = default;
 
-namespace {
-
-// SQLite keeps a database's write-ahead log and its index beside the name it
-// was opened by (FILE-wal, FILE-shm) and trusts whatever it finds there.
-// Refuses a companion that is not a regular file (a folder, a FIFO, a link
-// elsewhere), naming it.
-void check_companions(const std::string& path) {
-  for (const char* suffix : {"-wal", "-shm"}) {
-    const std::string companion = path + suffix;
-    struct stat st;
-    if (::lstat(companion.c_str(), &st) != 0) continue;
-    if (S_ISREG(st.st_mode)) continue;
-    const char* kind = S_ISDIR(st.st_mode)    ? "a directory"
-                       : S_ISLNK(st.st_mode)  ? "a symbolic link"
-                       : S_ISFIFO(st.st_mode) ? "a FIFO"
-                                              : "not a regular file";
-    io_error(path, "'", companion, "' is ", kind, ", where SQLite keeps the database's ",
-             suffix[1] == 'w' ? "write-ahead log" : "shared index of the log",
-             ": move it away (nothing was changed)");
-  }
-}
-
-}  // namespace
 
 Database Database::open(const std::string& path, Mode mode) {
   struct stat st;
@@ -318,6 +269,7 @@ Database Database::open(const std::string& path, Mode mode) {
                  "what the log holds, move '",
                  path, "-wal' away");
   }
+  if (!writer_active && log.committed_frames > 0) check_log_belongs(path);
   // A reader where FILE-shm cannot be created (database_read_only.cc): the
   // file as immutable when its log holds nothing; else say what to do.
   bool immutable = false;
@@ -389,6 +341,7 @@ Database Database::open(const std::string& path, Mode mode) {
                "PRAGMA journal_mode=WAL; PRAGMA synchronous=FULL; PRAGMA wal_autocheckpoint=0;");
     Statement insert(m.db, path, kInsertFrame);
     m.insert = std::move(insert);
+    if (m.meta.find("database_id") == m.meta.end()) m.meta["database_id"] = new_database_id();
     m.checkpoint("open");
     m.opened = true;
   }
@@ -428,7 +381,8 @@ Database Database::create(const std::string& path, const DetectorOptions& option
                    {"width", "0"},
                    {"height", "0"},
                    {"grid_rows", "0"},
-                   {"grid_cols", "0"}};
+                   {"grid_cols", "0"},
+                   {"database_id", new_database_id()}};
       impl.write_meta();
       exec_write(impl.db, path, "COMMIT; PRAGMA journal_mode=WAL;");
     } catch (...) {

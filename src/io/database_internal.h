@@ -326,6 +326,7 @@ struct Database::Impl {
   int format = kDatabaseFormatVersion;
   int lock_fd = -1;                 // holds the writer's lock (flock) while open
   std::int64_t since_checkpoint = 0;
+  bool log_named = false;  // meta is in the log since the last checkpoint
   std::string note;                 // what open() found about the last writer
   bool opened = false;              // open() completed: the destructor may checkpoint
   std::string checked_yaml;  // options YAML already found compatible
@@ -390,6 +391,23 @@ struct Database::Impl {
     }
   }
 
+  // Runs `write` in one IMMEDIATE transaction; rolls back if it throws. The
+  // first transaction of a log writes meta first, so that the log carries
+  // the database's id (check_log_belongs).
+  template <typename F>
+  void transaction(F&& write) {
+    exec_write(db, path, "BEGIN IMMEDIATE");
+    try {
+      if (!log_named) write_meta();
+      write();
+      exec_write(db, path, "COMMIT");
+    } catch (...) {
+      sqlite3_exec(db, "ROLLBACK", nullptr, nullptr, nullptr);
+      throw;
+    }
+    log_named = true;
+  }
+
   void load_header();
   // `frame`: the detector's id of the frame; `caller_id`: the caller's.
   void insert_frame(const Detector& detector, std::int64_t frame, std::int64_t session,
@@ -398,10 +416,21 @@ struct Database::Impl {
   void check_session(std::int64_t session) const;
 };
 
+// Refuses a companion of `path` (FILE-wal, FILE-shm) that is not a regular
+// file (a folder, a FIFO, a link elsewhere), naming it.
+void check_companions(const std::string& path);
 // True when FILE-wal and FILE-shm cannot be created beside `path`: a
 // read-only file system, or a folder this user cannot write.
 bool companions_cannot_be_created(const std::string& path);
-// SQLite's URI opening `path` as immutable (database_read_only.cc).
+// SQLite's URI opening `path` as immutable (database_companions.cc).
 std::string immutable_uri(const std::string& path);
+// A new database's meta database_id: 32 random hex digits. The writer
+// writes meta in the first transaction of every log (database_write.cc), so a log
+// carries the id of the database that wrote it.
+std::string new_database_id();
+// IoError, saying to move it away, when FILE-wal holds committed
+// transactions of another database (its meta's database_id differs from
+// the file's own); nothing to compare for files written before ids.
+void check_log_belongs(const std::string& path);
 
 }  // namespace lsgd::io

@@ -82,22 +82,6 @@ void Database::Impl::insert_frame(const Detector& detector, std::int64_t frame,
     io_error(path, "cannot write frame ", frame, " (", sqlite3_errmsg(db), ")");
 }
 
-namespace {
-
-// Runs `write` in one IMMEDIATE transaction; rolls back if it throws.
-template <typename F>
-void transaction(sqlite3* db, const std::string& path, F&& write) {
-  exec_write(db, path, "BEGIN IMMEDIATE");
-  try {
-    write();
-    exec_write(db, path, "COMMIT");
-  } catch (...) {
-    sqlite3_exec(db, "ROLLBACK", nullptr, nullptr, nullptr);
-    throw;
-  }
-}
-
-}  // namespace
 
 void Database::Impl::check_session(std::int64_t session) const {
   if (session < 0 || session > kMaxSession) {
@@ -144,7 +128,7 @@ void Database::append(const Detector& detector, const Result& /*result*/, std::i
     m.checked_yaml = yaml;
   }
   const std::int64_t dense = m.frames;  // the detector's id of its last frame
-  transaction(m.db, m.path, [&] {
+  m.transaction([&] {
     std::map<std::string, std::string> saved = m.meta;
     if (m.frames == 0) {
       m.meta["width"] = std::to_string(detector.width());
@@ -192,7 +176,7 @@ void Database::append_all(const Detector& detector, std::int64_t session) {
     internal::throw_invalid("database ", m.path, ": the detector's frame ", first, " has id ",
                             detector.id_of(first), ", not above the last stored id ", m.last_frame);
   }
-  transaction(m.db, m.path, [&] {
+  m.transaction([&] {
     const std::map<std::string, std::string> saved = m.meta;
     try {
       if (first == 0) {
@@ -274,7 +258,7 @@ std::int64_t Database::forget(std::int64_t first_id, std::int64_t last_id) {
     session_first[session] = id;
     kept_first += concat(kept_first.empty() ? "" : " ", session, "=", id);
   }
-  transaction(m.db, m.path, [&] {
+  m.transaction([&] {
     const std::map<std::string, std::string> saved = m.meta;
     try {
       Statement drop(m.db, m.path, "DELETE FROM frames WHERE id >= ?1");
@@ -339,7 +323,7 @@ std::int64_t Database::save_index(const Detector& detector) {
   std::vector<std::uint8_t> bytes;
   const std::int64_t covered = detector.save_index(bytes);
   const std::string mode = detector.search().name();
-  transaction(m.db, m.path, [&] {
+  m.transaction([&] {
     Statement drop(m.db, m.path, "DELETE FROM indexes WHERE mode = ?1");
     sqlite3_bind_text(drop.get(), 1, mode.c_str(), static_cast<int>(mode.size()), SQLITE_TRANSIENT);
     if (sqlite3_step(drop.get()) != SQLITE_DONE) io_error(m.path, "cannot write (", sqlite3_errmsg(m.db), ")");
@@ -360,6 +344,34 @@ std::int64_t Database::save_index(const Detector& detector) {
   });
   m.checkpoint("open");
   return covered;
+}
+
+void Database::Impl::checkpoint(const char* state) {
+  exec_write(db, path, "BEGIN IMMEDIATE");
+  try {
+    const std::map<std::string, std::string> saved = meta;
+    meta["writer"] = state;
+    meta["checkpoint_frames"] = std::to_string(frames);
+    try {
+      write_meta();
+    } catch (...) {
+      meta = saved;
+      throw;
+    }
+    exec_write(db, path, "COMMIT");
+  } catch (...) {
+    sqlite3_exec(db, "ROLLBACK", nullptr, nullptr, nullptr);
+    throw;
+  }
+  // TRUNCATE waits (busy timeout) for readers of the log; if one still holds
+  // it, the frames stay in the log until the next checkpoint.
+  int log = -1, moved = -1;
+  const int rc = sqlite3_wal_checkpoint_v2(db, nullptr, SQLITE_CHECKPOINT_TRUNCATE, &log, &moved);
+  if (rc != SQLITE_OK && (rc & 0xFF) != SQLITE_BUSY) {
+    io_error(path, "cannot checkpoint its write-ahead log (", sqlite3_errmsg(db), ")");
+  }
+  since_checkpoint = 0;
+  log_named = false;  // a new log: its first transaction writes meta
 }
 
 }  // namespace lsgd::io

@@ -1,6 +1,7 @@
-// A database on a read-only file system (docs/reliability.md, issue 35):
-// readable where SQLite cannot create its FILE-shm, exactly, and a log that
-// would need one is refused saying what to do. The read-only file system is
+// The files SQLite keeps beside a database (docs/reliability.md, issue 35).
+// A log of another database is refused. A database on a read-only file
+// system is readable where SQLite cannot create its FILE-shm, exactly, and
+// a log that would need one is refused saying what to do. The read-only file system is
 // a bind mount of the test's folder in a mount namespace of a child process;
 // where the machine allows none (no CAP_SYS_ADMIN), the test is skipped.
 #include <errno.h>
@@ -12,7 +13,9 @@
 #include <unistd.h>
 
 #include <cstdio>
+#include <fstream>
 #include <functional>
+#include <iterator>
 #include <filesystem>
 #include <string>
 #include <vector>
@@ -30,10 +33,15 @@ using test::frame;
 
 constexpr int kSkip = 77;
 
+std::string read_bytes(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
+}
+
 // A folder of its own with a database of `frames` frames, closed (every
 // frame in the file) or, with `log`, copied while its writer runs (frames in
 // FILE-wal).
-std::string database_in_folder(const std::string& name, int frames, bool log) {
+std::string database_in_folder(const std::string& name, int frames, bool log, int first = 0) {
   const std::string folder = std::string(LSGD_TEST_TMP) + "/read_only_" + name;
   fs::remove_all(folder);
   fs::create_directories(folder);
@@ -46,7 +54,7 @@ std::string database_in_folder(const std::string& name, int frames, bool log) {
   {
     Database db = Database::create(log ? live : path, o);
     Detector d(o);
-    for (int i = 0; i < frames; ++i) db.append(d, d.process(frame(i)), 0, "f" + std::to_string(i));
+    for (int i = 0; i < frames; ++i) db.append(d, d.process(frame(first + i)), 0, "f" + std::to_string(i));
     if (log) {
       fs::copy_file(live, path);
       fs::copy_file(live + "-wal", path + "-wal");
@@ -131,6 +139,29 @@ TEST(DatabaseReadOnly, ALogThatNeedsItsIndexIsRefusedSayingWhatToDo) {
   // Writable again, the log is read: every frame.
   const Database db = Database::open(path, Database::Mode::kReadOnly);
   EXPECT_EQ(db.frames(), 40);
+}
+
+// Two databases of the same options: A's file (32 frames checkpointed) and
+// B's log (its frames 32 .. 39, other images) beside it would replay without
+// damage, mixing B's frames into A; refused by the database ids, readers
+// and writers alike, nothing changed. Moved away, A opens as it was.
+TEST(DatabaseLog, AnotherDatabasesLogIsRefusedSayingToMoveItAway) {
+  const std::string a = database_in_folder("a", 40, true);
+  const std::string b = database_in_folder("b", 40, true, 100);
+  fs::remove(a + "-wal");
+  fs::copy_file(b + "-wal", a + "-wal");
+  const std::string before = read_bytes(a);
+  for (const auto mode : {Database::Mode::kReadOnly, Database::Mode::kReadWrite}) {
+    const std::string m = test::message_of<IoError>([&] { Database::open(a, mode); });
+    EXPECT_NE(m.find("'" + a + "-wal' is the write-ahead log of another database"), std::string::npos) << m;
+    EXPECT_NE(m.find("move '" + a + "-wal' and '" + a + "-shm' away"), std::string::npos) << m;
+  }
+  EXPECT_EQ(read_bytes(a), before);
+  // B's own log is B's.
+  EXPECT_EQ(Database::open(b, Database::Mode::kReadOnly).frames(), 40);
+  fs::rename(a + "-wal", a + "-wal.b");
+  fs::remove(a + "-shm");
+  EXPECT_EQ(Database::open(a, Database::Mode::kReadOnly).frames(), 32);
 }
 
 }  // namespace

@@ -1,0 +1,129 @@
+// The files SQLite keeps beside a database. A database on a read-only file
+// system or in a folder this user cannot write (a map shipped on read-only media, a container's read-only volume).
+// SQLite reads a WAL database through its shared index, FILE-shm, which it
+// creates beside the file; where that cannot be created, the file is read
+// as immutable (SQLite's `immutable=1`: no locks, no -shm), which is exact
+// as long as nothing is in the log and nobody writes.
+#include <errno.h>
+#include <sys/stat.h>
+#include <sys/statvfs.h>
+#include <unistd.h>
+
+#include <sqlite3.h>
+
+#include <cctype>
+#include <cstdlib>
+#include <optional>
+#include <random>
+#include <string>
+
+#include "io/database_internal.h"
+
+#include <memory>
+
+namespace lsgd::io {
+
+// SQLite keeps a database's write-ahead log and its index beside the name it
+// was opened by (FILE-wal, FILE-shm) and trusts whatever it finds there.
+// Refuses a companion that is not a regular file (a folder, a FIFO, a link
+// elsewhere), naming it.
+void check_companions(const std::string& path) {
+  for (const char* suffix : {"-wal", "-shm"}) {
+    const std::string companion = path + suffix;
+    struct stat st;
+    if (::lstat(companion.c_str(), &st) != 0) continue;
+    if (S_ISREG(st.st_mode)) continue;
+    const char* kind = S_ISDIR(st.st_mode)    ? "a directory"
+                       : S_ISLNK(st.st_mode)  ? "a symbolic link"
+                       : S_ISFIFO(st.st_mode) ? "a FIFO"
+                                              : "not a regular file";
+    io_error(path, "'", companion, "' is ", kind, ", where SQLite keeps the database's ",
+             suffix[1] == 'w' ? "write-ahead log" : "shared index of the log",
+             ": move it away (nothing was changed)");
+  }
+}
+
+bool companions_cannot_be_created(const std::string& path) {
+  struct statvfs fs {};
+  if (::statvfs(path.c_str(), &fs) == 0 && (fs.f_flag & ST_RDONLY) != 0) return true;
+  const std::size_t slash = path.find_last_of('/');
+  const std::string folder = slash == std::string::npos ? "." : slash == 0 ? "/" : path.substr(0, slash);
+  return ::access(folder.c_str(), W_OK) != 0 && errno != ENOENT;
+}
+
+std::string immutable_uri(const std::string& path) {
+  std::string absolute = path;
+  if (path.empty() || path[0] != '/') {
+    if (char* cwd = ::getcwd(nullptr, 0)) {
+      absolute = std::string(cwd) + "/" + path;
+      std::free(cwd);
+    }
+  }
+  // file:///a/b for /a/b (an empty authority, so that //a/b stays a path);
+  // a relative path (no working folder) as file:a/b. Every byte but the
+  // unreserved ones and '/' is percent-encoded ('?', '#' and '%' must be).
+  std::string uri = absolute[0] == '/' ? "file://" : "file:";
+  static const char kHex[] = "0123456789ABCDEF";
+  for (const unsigned char c : absolute) {
+    if (std::isalnum(c) || c == '/' || c == '.' || c == '-' || c == '_' || c == '~') {
+      uri += static_cast<char>(c);
+    } else {
+      uri += '%';
+      uri += kHex[c >> 4];
+      uri += kHex[c & 15];
+    }
+  }
+  return uri + "?immutable=1";
+}
+
+std::string new_database_id() {
+  std::random_device random;
+  static const char kHex[] = "0123456789abcdef";
+  std::string id;
+  for (int i = 0; i < 8; ++i) {
+    const unsigned v = random();
+    for (int k = 0; k < 4; ++k) id += kHex[(v >> (4 * k)) & 15];
+  }
+  return id;
+}
+
+namespace {
+
+// meta's database_id as `name` reads it (a path, or an immutable URI: the
+// file alone, without its log); none for a file written before ids.
+std::optional<std::string> read_database_id(const std::string& path, const std::string& name,
+                                            bool uri) {
+  sqlite3* db = nullptr;
+  const int flags = SQLITE_OPEN_READONLY | (uri ? SQLITE_OPEN_URI : 0);
+  const std::unique_ptr<sqlite3, int (*)(sqlite3*)> owner(
+      sqlite3_open_v2(name.c_str(), &db, flags, nullptr) == SQLITE_OK ? db : (sqlite3_close(db), nullptr),
+      sqlite3_close);
+  if (!owner) io_error(path, "cannot open (", uri ? "the file alone" : "with its log", ")");
+  sqlite3_busy_timeout(db, 5000);
+  sqlite3_stmt* raw = nullptr;
+  if (sqlite3_prepare_v2(db, "SELECT value FROM meta WHERE key = 'database_id'", -1, &raw, nullptr) !=
+      SQLITE_OK) {
+    sqlite3_finalize(raw);
+    return std::nullopt;  // damage: the open's own checks name it
+  }
+  const std::unique_ptr<sqlite3_stmt, int (*)(sqlite3_stmt*)> stmt(raw, sqlite3_finalize);
+  if (sqlite3_step(stmt.get()) != SQLITE_ROW) return std::nullopt;
+  const unsigned char* text = sqlite3_column_text(stmt.get(), 0);
+  return text ? std::optional<std::string>(reinterpret_cast<const char*>(text)) : std::nullopt;
+}
+
+}  // namespace
+
+void check_log_belongs(const std::string& path) {
+  const std::optional<std::string> own = read_database_id(path, immutable_uri(path), true);
+  if (!own) return;  // written before database ids: nothing to compare
+  const std::optional<std::string> logged = read_database_id(path, path, false);
+  if (logged && *logged != *own) {
+    io_error(path, "'", path, "-wal' is the write-ahead log of another database (", *logged,
+             "; this file is ", *own, "): SQLite would replay that database's frames into this "
+             "one. Nothing was changed; move '", path, "-wal' and '", path, "-shm' away to open "
+             "the file as of its last checkpoint");
+  }
+}
+
+}  // namespace lsgd::io

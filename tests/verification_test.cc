@@ -148,6 +148,18 @@ class FixedSupport final : public VerificationStage {
   std::map<std::int64_t, int> inliers_;
 };
 
+// A query of a sequence (continuity, with the temporal stage's tolerance 2),
+// a 12-cell grid, min_gap 5; appearance and single-frame scores are the
+// test's to set.
+DecisionQuery sequence_query(bool continuity) {
+  DecisionQuery q;
+  q.cells = 12;
+  q.continuity = continuity;
+  q.tolerance = 2;
+  q.min_gap = 5;
+  return q;
+}
+
 Decision decide_one(LoopDecision& decision, FixedSupport& stage, std::int64_t frame,
                     const std::vector<Candidate>& candidates, bool young = false) {
   DecisionQuery q;
@@ -253,11 +265,7 @@ TEST(LoopDecision, NothingContinuesAcrossACut) {
       SCOPED_TRACE(testing::Message() << "z " << z << (cut ? " cut" : ""));
       LoopDecision decision(DecisionOptions{});
       FixedSupport stage(std::map<std::int64_t, int>{{10, 60}, {11, 8}});
-      DecisionQuery q;
-      q.cells = 12;
-      q.continuity = true;
-      q.tolerance = 2;
-      q.min_gap = 5;
+      DecisionQuery q = sequence_query(true);
       q.appearance = [](std::int64_t j) { return j == 11 ? 1.5 : 0.0; };
       q.single_frame = [&](std::int64_t j) { return j == 11 ? z : 0.0; };
       // Frame 50: a first loop to 10 (appearance 4 + 3.5).
@@ -294,11 +302,7 @@ TEST(LoopDecision, ContinuesOverAGapOfFrames) {
     d.continuity_gap = variant == 1 ? 0 : variant >= 5 ? 3 : 1;
     auto decision = std::make_unique<LoopDecision>(d);
     FixedSupport stage(std::map<std::int64_t, int>{{10, 60}, {11, 0}, {12, 0}, {13, 13}});
-    DecisionQuery q;
-    q.cells = 12;
-    q.continuity = true;
-    q.tolerance = 2;
-    q.min_gap = 5;
+    DecisionQuery q = sequence_query(true);
     std::vector<Candidate> candidates = {{10, 4.0}};  // a first loop: 4 + 3.5 + 1.5
     // Only the query's own candidate looks like it (the rest of the window
     // cannot reach the threshold: 0 + 3.5 + 2.5).
@@ -358,11 +362,7 @@ TEST(LoopDecision, TheRankingsTrackLowersAFirstLoopsBar) {
     if (variant == 3) d.track_bonus = 0;
     LoopDecision decision(d);
     FixedSupport stage(std::map<std::int64_t, int>{{10, variant == 1 ? 5 : 25}, {11, variant == 4 ? 15 : 25}});
-    DecisionQuery q;
-    q.cells = 12;
-    q.continuity = variant != 2;
-    q.tolerance = 2;
-    q.min_gap = 5;
+    DecisionQuery q = sequence_query(variant != 2);
     q.appearance = [](std::int64_t) { return 0.0; };
     q.single_frame = [](std::int64_t) { return 0.0; };
     // Frame 50: 3 + 3.5 < 7, confirmed: the ranking's track.
@@ -396,11 +396,7 @@ TEST(LoopDecision, TheRankingTracksItsOwnConfirmedCandidates) {
       d.threshold = threshold;
       LoopDecision decision(d);
       FixedSupport stage(std::map<std::int64_t, int>{{10, 60}, {11, 13}});
-      DecisionQuery q;
-      q.cells = 12;
-      q.continuity = variant != 1;
-      q.tolerance = 2;
-      q.min_gap = 5;
+      DecisionQuery q = sequence_query(variant != 1);
       q.appearance = [](std::int64_t) { return 0.5; };
       q.single_frame = [&](std::int64_t j) { return variant == 3 && j == 11 ? -2.7 : 0.0; };
       std::vector<Candidate> first = {{10, 0.5}};  // weak: never a loop

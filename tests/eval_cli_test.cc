@@ -201,8 +201,10 @@ TEST_F(ShortStreet, RunCsvScoredAsDetectionsMatchesEval) {
 // reported apart and do move.
 TEST_F(ShortStreet, RankingMetricsDoNotMoveWithTheDecisionSettings) {
   std::vector<nlohmann::json> runs;
-  for (const std::string flags : {"", " --threshold 5 --option decision.continuity_bonus=1",
-                                  " --threshold 12 --option decision.strong_bonus=0"}) {
+  for (const std::string flags :
+       {"", " --threshold 5 --option decision.continuity_bonus=1 --option decision.continuity_gap=0",
+        " --threshold 12 --option decision.strong_bonus=0 --option decision.track_bonus=3 "
+        "--option decision.continuity_gap=10"}) {
     const fs::path json = kTmp / ("threshold-" + std::to_string(runs.size()) + ".json");
     const CmdResult r = lsgd("eval --sequence " + q(dir_ / "sequence.txt") + common(json) + flags);
     ASSERT_EQ(r.code, 0) << r.err;

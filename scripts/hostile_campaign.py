@@ -2874,6 +2874,55 @@ def class11():
         c.check(read(wal) == before, 'the log was changed', r)
     c.done()
 
+    # Another database's log beside a file (two killed writers of the same
+    # options, other images): it would replay without damage; refused.
+    cwd = fresh(os.path.join(root, 'foreign'))
+    c = Case(11, "a killed writer's file beside another killed writer's log (same options)",
+             'refused by readers and writers naming the log; nothing changed; moved away, the file opens')
+    for name, first in (('a', '0'), ('b', '60')):
+        c.run(['run', '--sequence', seq, '--database', name + '.db', '--output', name + '.csv',
+               '--min-gap', '20', '--first', first], cwd, timeout=120,
+              kill_when=wait_rows(os.path.join(cwd, name + '.csv'), 45))
+    logs = [os.path.join(cwd, n + '.db-wal') for n in ('a', 'b')]
+    if c.check(all(os.path.isfile(w) and os.path.getsize(w) > 0 for w in logs),
+               'a killed writer left no log (harness)'):
+        shutil.copyfile(logs[1], logs[0])
+        for f in ('a.db-shm',):
+            if os.path.exists(os.path.join(cwd, f)):
+                os.remove(os.path.join(cwd, f))
+        before = read(os.path.join(cwd, 'a.db'))
+        for args in (['db', 'info', 'a.db'],
+                     ['run', '--sequence', seq, '--database', 'a.db', '--output', 'a2.csv', '--min-gap', '20']):
+            r = c.run(args, cwd, skip_inputs=['a.db-wal'])
+            msg(11, c.name, r)
+            c.check(r.rc != 0 and 'a.db-wal' in r.stderr and 'another database' in r.stderr,
+                    '%s: not refused naming the log' % args[0], r)
+        c.check(read(os.path.join(cwd, 'a.db')) == before, 'the file was changed')
+        if os.path.exists(logs[0]):  # a writer that took the log in has emptied it
+            os.rename(logs[0], logs[0] + '.b')
+        r = c.run(['db', 'info', 'a.db'], cwd)
+        c.check(r.rc == 0, 'the file alone does not open', r)
+    c.done()
+
+    # A database on a read-only file system (a mount namespace; skipped where
+    # the machine allows none): readable, exactly.
+    cwd = fresh(os.path.join(root, 'readonly'))
+    c = Case(11, 'db info and run --localize on a database on a read-only file system',
+             'read (the file as immutable), the same frames as where it was written')
+    r = c.run(['run', '--sequence', seq, '--database', 'd.db', '--output', 'c.csv', '--last', '30'], cwd)
+    probe = subprocess.run(['unshare', '-m', 'true'], capture_output=True)
+    if probe.returncode != 0:
+        print('  (skipped: no mount namespace here)', flush=True)
+    else:
+        script = ('mount --bind "$0" "$0" && mount -o remount,ro,bind "$0" && '
+                  '"$1" db info "$0/d.db" && "$1" run --database "$0/d.db" --localize --sequence "$2" '
+                  '--output "$3" --last 5')
+        p2 = subprocess.run(['unshare', '-m', 'sh', '-c', script, cwd, LSGD, seq, os.path.join(root, 'loc.csv')],
+                            capture_output=True, text=True, timeout=120)
+        c.check(p2.returncode == 0 and 'frames: 31' in p2.stdout,
+                'not read: rc %d, %s' % (p2.returncode, (p2.stderr or p2.stdout)[-300:]))
+    c.done()
+
     # A companion that is a folder.
     cwd = fresh(os.path.join(root, 'walfolder'))
     c = Case(11, 'db info with d.db-wal a folder', 'refused naming d.db-wal')

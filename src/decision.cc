@@ -177,7 +177,7 @@ Decision LoopDecision::decide(const DecisionQuery& q, const std::vector<Verifica
     // A scene cut: a frame that would continue the loop but looks unlike the
     // query (its single-frame score below continuity_min_z: a new place, not
     // the revisit going on) continues nothing.
-    unlike_.clear();  // the window's frames loop .. loop + 1 + tolerance, 1: unlike
+    unlike_.clear();  // the window's frames held .. window_end, 1: unlike
     const int gap = d.continuity_gap;
     const std::int64_t held = state_.held.loop;  // the loop a candidate may continue
     const bool open = continuity && state_.continues(q.frame, held, q.tolerance, gap);
@@ -200,8 +200,8 @@ Decision LoopDecision::decide(const DecisionQuery& q, const std::vector<Verifica
       if (long_gap && !(first < n && c.frame == candidates[first].frame)) return false;
       return open && state_.continues(q.frame, c.frame, q.tolerance, gap) && !unlike(c.frame);
     };
-    // The best-scored frame that continues the previous frame's loop,
-    // outside the temporal window; frame -1 when there is none.
+    // The best-scored frame that continues the held loop, outside the
+    // temporal window; frame -1 when there is none.
     Candidate continuation;
     if (open) {
       const std::int64_t limit = q.frame - q.min_gap;

@@ -8,9 +8,12 @@
 //                             lsgd/stage.h) confirmed the candidate
 //         + strong_bonus      when it is the best-ranked candidate, confirmed as a
 //                             first loop with at least strong_inliers inliers
+//         + track_bonus       when that first loop also tracks the ranking's
+//                             confirmed candidate of the previous frame
 //         + continuity_bonus  when, confirmed, it continues the loop declared for
-//                             the previous frame: it is that loop's frame j or
-//                             one of the next 1 + verification.temporal.tolerance
+//                             the previous frame (or up to continuity_gap frames
+//                             before it): it is that loop's frame j or one of the
+//                             next frames since + verification.temporal.tolerance
 //                             (a revisit may be slower or faster, never backwards)
 //
 // A stage can also sink a candidate: one a confirming stage or a gate (the
@@ -56,7 +59,8 @@ struct DecisionOptions {
   // Added to the score of a candidate the geometric stage confirmed; sigma, [0, 1000].
   double geometric_bonus = 3.5;
   // Added to the score of a confirmed candidate that continues the loop
-  // declared for the previous frame; sigma, [0, 1000] (0: no continuity).
+  // declared for the previous frame (or continuity_gap frames before); sigma,
+  // [0, 1000] (0: no continuity).
   double continuity_bonus = 2.5;
   // A continuing candidate passes the geometric check with at least this
   // fraction of its loop's average inliers; (0, 1].
@@ -100,7 +104,7 @@ struct LoopEvidence {
   double appearance = 0;   // its appearance score, sigma (NaN: none reported)
   int inliers = -1;        // geometric inliers; -1: not checked
   bool confirmed = false;  // the geometric stage accepted it
-  bool continues = false;  // confirmed and continuing the previous frame's loop
+  bool continues = false;  // confirmed and continuing the last declared loop (continuity_gap)
 };
 
 // Why a query has a loop or none (Result::status), for a program to branch

@@ -270,7 +270,7 @@ Database Database::open(const std::string& path, Mode mode) {
                  path, "-wal' away");
   }
   if (!writer_active && log.committed_frames > 0) check_log_belongs(path);
-  // A reader where FILE-shm cannot be created (database_read_only.cc): the
+  // A reader where FILE-shm cannot be created (database_companions.cc): the
   // file as immutable when its log holds nothing; else say what to do.
   bool immutable = false;
   if (!writable && !writer_active && companions_cannot_be_created(path)) {
@@ -412,10 +412,7 @@ Database Database::create(const std::string& path, const DetectorOptions& option
     ::unlink(tmp.c_str());
   }
   // Make the new name durable.
-  const auto slash = path.find_last_of('/');
-  const std::string dir = slash == std::string::npos ? "."
-                          : slash == 0               ? "/"
-                                                     : path.substr(0, slash);
+  const std::string dir = parent_folder(path);
   const int fd = ::open(dir.c_str(), O_RDONLY | O_DIRECTORY);
   if (fd >= 0) {
     ::fsync(fd);

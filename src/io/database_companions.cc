@@ -1,6 +1,6 @@
 // The files SQLite keeps beside a database. A database on a read-only file
-// system or in a folder this user cannot write (a map shipped on read-only media, a container's read-only volume).
-// SQLite reads a WAL database through its shared index, FILE-shm, which it
+// system or in a folder this user cannot write (a map shipped on read-only
+// media, a container's read-only volume): SQLite reads a WAL database through its shared index, FILE-shm, which it
 // creates beside the file; where that cannot be created, the file is read
 // as immutable (SQLite's `immutable=1`: no locks, no -shm), which is exact
 // as long as nothing is in the log and nobody writes.
@@ -46,9 +46,7 @@ void check_companions(const std::string& path) {
 bool companions_cannot_be_created(const std::string& path) {
   struct statvfs fs {};
   if (::statvfs(path.c_str(), &fs) == 0 && (fs.f_flag & ST_RDONLY) != 0) return true;
-  const std::size_t slash = path.find_last_of('/');
-  const std::string folder = slash == std::string::npos ? "." : slash == 0 ? "/" : path.substr(0, slash);
-  return ::access(folder.c_str(), W_OK) != 0 && errno != ENOENT;
+  return ::access(parent_folder(path).c_str(), W_OK) != 0 && errno != ENOENT;
 }
 
 std::string immutable_uri(const std::string& path) {

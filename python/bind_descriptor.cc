@@ -1,0 +1,133 @@
+// A frame's Descriptor (its histograms as numpy arrays, and back), the
+// similarity of two descriptors, and place recognition between two
+// traverses (match, as lsgd match).
+#include <algorithm>
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "bindings.h"
+#include "convert.h"
+#include "lsgd/descriptor.h"
+#include "lsgd/error.h"
+#include "lsgd/eval/results_csv.h"
+#include "lsgd/io/files.h"
+#include "lsgd/options.h"
+#include "lsgd/similarity.h"
+
+namespace lsgd::python {
+
+namespace {
+
+lsgd::Descriptor descriptor_from_arrays(py::array histograms, const py::object& pixels, py::tuple grid,
+                                        double cell_pixels) {
+  lsgd::Descriptor d;
+  if (grid.size() != 2) throw lsgd::InvalidArgument("grid is (rows, cols)");
+  d.grid = {grid[0].cast<int>(), grid[1].cast<int>()};
+  if (d.grid.rows <= 0 || d.grid.cols <= 0 || d.grid.cells() > 1 << 20) {
+    throw lsgd::InvalidArgument("grid " + std::to_string(d.grid.rows) + " x " +
+                                std::to_string(d.grid.cols) + " is not a descriptor's grid");
+  }
+  if (py::isinstance<py::array_t<std::uint8_t>>(histograms)) {
+    const auto h = py::array_t<std::uint8_t, py::array::c_style | py::array::forcecast>::ensure(histograms);
+    d.storage = lsgd::HistogramStorage::kCompact;
+    d.compact.assign(h.data(), h.data() + h.size());
+    d.cell_pixels = cell_pixels;
+  } else {
+    const auto h = py::array_t<std::uint16_t, py::array::c_style | py::array::forcecast>::ensure(histograms);
+    if (!h) throw lsgd::InvalidArgument("histograms is not an array of counts");
+    d.hist.assign(h.data(), h.data() + h.size());
+    const auto p = py::array_t<std::uint32_t, py::array::c_style | py::array::forcecast>::ensure(pixels);
+    if (!p) throw lsgd::InvalidArgument("an exact descriptor needs its pixels per cell");
+    d.pixels.assign(p.data(), p.data() + p.size());
+  }
+  d.check_consistent("Descriptor.from_arrays");
+  return d;
+}
+
+py::dict match_descriptors(const std::vector<lsgd::Descriptor>& reference, const std::vector<lsgd::Descriptor>& query,
+                           int top_k, const std::string& metric, std::int64_t query_offset, const py::object& output) {
+  std::vector<lsgd::DescriptorView> refs, queries;
+  for (const lsgd::Descriptor& d : reference) refs.push_back(d.view());
+  for (const lsgd::Descriptor& d : query) queries.push_back(d.view());
+  std::vector<lsgd::TopMatch> found;
+  {
+    py::gil_scoped_release release;
+    found = lsgd::match_top_k(refs, queries, top_k,
+                              lsgd::parse_similarity_metric(metric.c_str()), query_offset);
+  }
+  if (!output.is_none()) {  // the CSV lsgd match writes, whole or not at all
+    lsgd::io::write_output_file(path_of(output, "output"), lsgd::eval::match_csv(found), "matches CSV");
+  }
+  const auto n = static_cast<py::ssize_t>(found.size());
+  py::array_t<std::int64_t> q(n), j(n), rank(n);
+  py::array_t<double> score(n), sim(n);
+  for (py::ssize_t i = 0; i < n; ++i) {
+    const lsgd::TopMatch& t = found[static_cast<std::size_t>(i)];
+    q.mutable_at(i) = t.query;
+    j.mutable_at(i) = t.match;
+    score.mutable_at(i) = t.score;
+    sim.mutable_at(i) = t.similarity;
+    rank.mutable_at(i) = t.rank;
+  }
+  py::dict d;
+  d["query"] = q;
+  d["match"] = j;
+  d["score"] = score;
+  d["similarity"] = sim;
+  d["rank"] = rank;
+  return d;
+}
+
+void bind_descriptor_class(py::module_& m) {
+  py::class_<lsgd::Descriptor>(m, "Descriptor",
+      "A frame's descriptor (Detector.describe): one histogram per cell of its grid. "
+      "Descriptor.from_arrays builds one back from numpy arrays.")
+      .def_property_readonly("grid", [](const lsgd::Descriptor& d) { return py::make_tuple(d.grid.rows, d.grid.cols); })
+      .def_property_readonly("storage", [](const lsgd::Descriptor& d) { return std::string(lsgd::to_string(d.storage)); })
+      .def_property_readonly("histograms", [](const lsgd::Descriptor& d) -> py::array {
+             const auto cells = static_cast<py::ssize_t>(d.grid.cells());
+             if (d.storage == lsgd::HistogramStorage::kCompact) {
+               py::array_t<std::uint8_t> out({cells, py::ssize_t{lsgd::kCompactBins}});
+               std::copy(d.compact.begin(), d.compact.end(), out.mutable_data());
+               return out;
+             }
+             py::array_t<std::uint16_t> out({cells, py::ssize_t{lsgd::kBins}});
+             std::copy(d.hist.begin(), d.hist.end(), out.mutable_data());
+             return out;
+           }, "cells x 256 uint16 counts (exact), or cells x 128 uint8 (compact), cell-major")
+      .def_property_readonly("pixels", [](const lsgd::Descriptor& d) {
+             py::array_t<std::uint32_t> out(static_cast<py::ssize_t>(d.pixels.size()));
+             std::copy(d.pixels.begin(), d.pixels.end(), out.mutable_data());
+             return out;
+           }, "pixels per cell (exact; empty when compact)")
+      .def_readonly("cell_pixels", &lsgd::Descriptor::cell_pixels, "mean pixels per cell (compact)")
+      .def_static("from_arrays", &descriptor_from_arrays,
+           py::arg("histograms"), py::arg("pixels") = py::none(), py::arg("grid"), py::arg("cell_pixels") = 0.0,
+           "A descriptor from its arrays: uint16 histograms (cells x 256) with uint32 pixels per cell "
+           "(exact), or uint8 histograms (cells x 128) with cell_pixels (compact)");
+}
+
+}  // namespace
+
+void bind_descriptor(py::module_& m) {
+  bind_descriptor_class(m);
+  m.def("similarity", [](const lsgd::Descriptor& a, const lsgd::Descriptor& b, const std::string& metric) {
+          if (a.grid != b.grid || a.storage != b.storage) {
+            throw lsgd::InvalidArgument("the descriptors differ in grid or storage");
+          }
+          return lsgd::similarity(a.view(), b.view(), lsgd::parse_similarity_metric(metric.c_str()));
+        }, py::arg("a"), py::arg("b"), py::arg("metric") = std::string(lsgd::to_string(lsgd::SimilarityOptions{}.metric)),
+        "Similarity of two descriptors (the detector's similarity.metric by default).");
+  m.def("match", &match_descriptors,
+        py::arg("reference"), py::arg("query"), py::arg("top_k") = 1,
+        py::arg("metric") = std::string(lsgd::to_string(lsgd::SimilarityOptions{}.metric)),
+        py::arg("query_offset") = 0, py::arg("output") = py::none(),
+        "Place recognition between two traverses, as lsgd match: the top_k reference "
+        "descriptors of every query descriptor (Detector.describe), as numpy arrays query "
+        "(query_offset + index), match (reference index), score (sigma of the query's "
+        "similarities to the reference), similarity and rank (1: best); output: also write "
+        "lsgd match's CSV there (lsgd.evaluate_detections reads it).");
+}
+
+}  // namespace lsgd::python

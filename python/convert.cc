@@ -1,0 +1,163 @@
+// The conversions the binders share (convert.h).
+#include "convert.h"
+
+#include <cstring>
+#include <map>
+#include <string>
+#include <vector>
+
+#include "lsgd/error.h"
+#include "lsgd/io/config.h"
+
+namespace lsgd::python {
+
+std::string path_of(const py::handle& value, const char* what) {
+  const py::module_ os = py::module_::import("os");
+  py::object text;
+  try {
+    text = os.attr("fsdecode")(os.attr("fspath")(value));
+  } catch (const py::error_already_set&) {
+    throw lsgd::InvalidArgument(std::string(what) + ": " + std::string(py::str(py::type::of(value).attr("__name__"))) +
+                                " is not a path (str, bytes or os.PathLike such as pathlib.Path)");
+  }
+  const std::string path = text.cast<std::string>();
+  if (path.find('\0') != std::string::npos) {
+    throw lsgd::InvalidArgument(std::string(what) + " '" + path.substr(0, path.find('\0')) +
+                                "\\0...' has a NUL character inside: no file has such a name");
+  }
+  return path;
+}
+
+namespace {
+
+std::string option_value_text(const py::handle& value) {
+  if (py::isinstance<py::bool_>(value)) {
+    throw lsgd::InvalidArgument("an option value is a bool; options take numbers or names");
+  }
+  if (py::isinstance<py::float_>(value)) {
+    return lsgd::format_real(value.cast<double>());
+  }
+  if (py::isinstance<py::list>(value) || py::isinstance<py::tuple>(value)) {
+    std::string text;  // verification.stages as a list of names
+    for (const py::handle& item : value) text += (text.empty() ? "" : ",") + py::str(item).cast<std::string>();
+    return text.empty() ? "none" : text;
+  }
+  return py::str(value).cast<std::string>();
+}
+
+// `given`: the keys set so far from this dict, with their values: a key
+// given twice ({"search": {"min_gap": 5}, "search.min_gap": 7}) is refused.
+void set_options(lsgd::DetectorOptions& options, const py::dict& values, const std::string& prefix,
+                 std::map<std::string, std::string>& given) {
+  for (const auto& [k, v] : values) {
+    const std::string key = prefix + py::str(k).cast<std::string>();
+    if (py::isinstance<py::dict>(v)) {
+      set_options(options, v.cast<py::dict>(), key + ".", given);
+      continue;
+    }
+    const std::string text = option_value_text(v);
+    const auto [at, added] = given.emplace(key, text);
+    if (!added) {
+      throw lsgd::InvalidArgument("option " + key + " is given twice (" + at->second + " and " + text +
+                                  "), nested and dotted: give it once");
+    }
+    lsgd::set_option(options, key, text);
+  }
+}
+
+void set_options(lsgd::DetectorOptions& options, const py::dict& values) {
+  std::map<std::string, std::string> given;
+  set_options(options, values, "", given);
+}
+
+}  // namespace
+
+lsgd::DetectorOptions make_options(const py::object& options, const py::kwargs& kwargs) {
+  lsgd::DetectorOptions o;
+  if (!options.is_none()) {
+    if (py::isinstance<py::dict>(options)) {
+      set_options(o, options.cast<py::dict>());
+    } else {
+      o = lsgd::io::load_config(path_of(options, "options"));  // a YAML file
+    }
+  }
+  set_options(o, kwargs);
+  o.check();
+  return o;
+}
+
+py::dict options_dict(const lsgd::DetectorOptions& o) {
+  py::dict out;
+  for (const auto& f : lsgd::DetectorOptions::fields()) out[py::str(f.name)] = f.text(o);
+  return out;
+}
+
+namespace {
+
+// Each row's pixels packed (a dimension of size 1 may have any stride: numpy
+// calls such arrays contiguous whatever it holds there).
+bool rows_dense(const py::array& a) {
+  if (a.ndim() < 2) return false;
+  const py::ssize_t channels = a.ndim() == 3 ? a.shape(2) : 1;
+  return (a.ndim() == 2 || a.shape(2) == 1 || a.strides(2) == 1) &&
+         (a.shape(1) == 1 || a.strides(1) == channels) &&
+         (a.shape(0) == 1 || a.strides(0) >= a.shape(1) * channels);
+}
+
+}  // namespace
+
+lsgd::ImageView image_view(py::array& a) {
+  if (a.dtype().kind() != 'u' || a.itemsize() != 1) {
+    throw lsgd::InvalidArgument("the image is a numpy array of " + py::str(a.dtype()).cast<std::string>() +
+                                ": expected uint8 (convert 16-bit or float images first)");
+  }
+  const int channels = a.ndim() == 2 ? 1 : a.ndim() == 3 ? static_cast<int>(a.shape(2)) : 0;
+  if (channels != 1 && channels != 3 && channels != 4) {
+    std::string shape;
+    for (py::ssize_t i = 0; i < a.ndim(); ++i) shape += (i ? ", " : "") + std::to_string(a.shape(i));
+    throw lsgd::InvalidArgument("the image has shape (" + shape +
+                                "): expected (H, W) gray, (H, W, 3) BGR or (H, W, 4) BGRA");
+  }
+  for (py::ssize_t i = 0; i < 2; ++i) {
+    if (a.shape(i) == 0 || a.shape(i) > lsgd::kMaxImageSide) {
+      throw lsgd::InvalidArgument("the image is " + std::to_string(a.shape(0)) + " x " +
+                                  std::to_string(a.shape(1)) + " pixels: " +
+                                  (a.shape(i) == 0 ? std::string("empty")
+                                                   : "a side above " + std::to_string(lsgd::kMaxImageSide)));
+    }
+  }
+  if (!rows_dense(a)) a = py::array::ensure(a, py::array::c_style);
+  if (!a || !rows_dense(a)) throw lsgd::InvalidArgument("the image's rows are not contiguous");
+  lsgd::ImageView v;
+  v.data = static_cast<const std::uint8_t*>(a.data());
+  v.width = static_cast<int>(a.shape(1));
+  v.height = static_cast<int>(a.shape(0));
+  v.stride_bytes = a.shape(0) == 1 ? static_cast<std::size_t>(a.shape(1)) * static_cast<std::size_t>(channels)
+                                    : static_cast<std::size_t>(a.strides(0));
+  v.format = channels == 1 ? lsgd::PixelFormat::kGray8
+             : channels == 3 ? lsgd::PixelFormat::kBgr8 : lsgd::PixelFormat::kBgra8;
+  return v;
+}
+
+py::array mat_to_array(const cv::Mat& m) {
+  std::vector<py::ssize_t> shape = {m.rows, m.cols};
+  if (m.channels() > 1) shape.push_back(m.channels());
+  py::array_t<std::uint8_t> out(shape);
+  for (int y = 0; y < m.rows; ++y) {
+    std::memcpy(out.mutable_data(y), m.ptr(y), static_cast<std::size_t>(m.cols) * m.channels());
+  }
+  return out;
+}
+
+lsgd::eval::FrameRecord record_of(const lsgd::Result& r) {
+  lsgd::eval::FrameRecord rec;
+  rec.frame = r.frame;
+  rec.reported = r.best;
+  rec.loop = r.loop;
+  rec.ranking = r.ranking;
+  rec.candidates = r.candidates;
+  rec.timings = r.timings;
+  return rec;
+}
+
+}  // namespace lsgd::python

@@ -136,18 +136,44 @@ double LoopDecision::rank(const DecisionQuery& q, const Candidate& best,
 }
 
 Decision LoopDecision::decide(const DecisionQuery& q, const std::vector<VerificationStage*>& stages) {
-  const DecisionOptions& d = options_;
   const std::vector<Candidate>& candidates = *q.candidates;
   Decision out;
   out.evidence.appearance = std::numeric_limits<double>::quiet_NaN();
   const std::size_t n = std::min(candidates.size(), static_cast<std::size_t>(q.max_candidates));
-  std::vector<VerificationStage*>& confirms = confirms_;
-  confirms.clear();
+  confirms_.clear();
   for (VerificationStage* s : stages) {
-    if (s->role() == VerificationStage::Role::kConfirm && s->examines()) confirms.push_back(s);
+    if (s->role() == VerificationStage::Role::kConfirm && s->examines()) confirms_.push_back(s);
   }
-
   // 1. The gates, in rank order.
+  const std::size_t first = gate(q, stages, n, out);  // the best candidate they let through
+
+  // 2. The ranking (no decision setting changes it): the best candidate
+  // through the gates, examined by every confirming stage on every query.
+  // The decision reuses these checks. The verdict on candidates[first] as its
+  // stages gave it (the decision's continuity rule may change it below).
+  FirstVerdict verdict;
+  verdict.support = rank(q, first < n ? candidates[first] : Candidate{}, confirms_, out);
+  verdict.rejected = std::any_of(first_checks_.begin(), first_checks_.end(),
+                                 [](const StageCheck& c) { return !c.accepted; });
+
+  // 3. Confirmation, continuation first when it could score higher.
+  if (!confirms_.empty()) examine(q, stages, first, n, verdict, out);
+
+  // 4. Nothing confirmed: the best candidate through the gates, unconfirmed
+  // (a young query with a confirming stage reports nothing unconfirmed).
+  if (out.best.frame < 0 && first < n && !(q.young && !confirms_.empty())) {
+    report_unconfirmed(q, candidates[first], verdict, out);
+  }
+  out.loop = out.best.frame >= 0 && out.best.score >= options_.threshold;
+  out.status = status(q, first, n, verdict, out);
+  record(q.frame, out.loop ? out.best.frame : -1, out.evidence.inliers,
+         out.loop && out.evidence.continues);
+  return out;
+}
+
+std::size_t LoopDecision::gate(const DecisionQuery& q, const std::vector<VerificationStage*>& stages,
+                               std::size_t n, Decision& out) {
+  const std::vector<Candidate>& candidates = *q.candidates;
   gated_.assign(n, 0);  // 1: a gate rejected it
   for (VerificationStage* gate : stages) {
     if (gate->role() != VerificationStage::Role::kGate || !gate->examines()) continue;
@@ -159,205 +185,223 @@ Decision LoopDecision::decide(const DecisionQuery& q, const std::vector<Verifica
       gated_[i] = check.accepted ? 0 : 1;
     }
   }
-  std::size_t first = 0;  // the best candidate the gates let through
+  std::size_t first = 0;
   while (first < n && gated_[first]) ++first;
+  return first;
+}
 
-  // 2. The ranking (no decision setting changes it): the best candidate
-  // through the gates, examined by every confirming stage on every query.
-  // The decision reuses these checks.
-  // Support and verdict of candidates[first] as its stages gave them (the
-  // decision's continuity rule may change them below).
-  double first_support = rank(q, first < n ? candidates[first] : Candidate{}, confirms, out);
-  bool first_rejected = std::any_of(first_checks_.begin(), first_checks_.end(),
-                                    [](const StageCheck& c) { return !c.accepted; });
-
-  // 3. Confirmation, continuation first when it could score higher.
-  if (!confirms.empty()) {
-    const bool continuity = q.continuity && d.continuity_bonus > 0;
-    // A scene cut: a frame that would continue the loop but looks unlike the
-    // query (its single-frame score below continuity_min_z: a new place, not
-    // the revisit going on) continues nothing.
-    unlike_.clear();  // the window's frames held .. window_end, 1: unlike
-    const int gap = d.continuity_gap;
-    const std::int64_t held = state_.held.loop;  // the loop a candidate may continue
-    const bool open = continuity && state_.continues(q.frame, held, q.tolerance, gap);
-    const std::int64_t window_end = state_.window_end(q.frame, q.tolerance);
-    if (open && q.single_frame) {
-      for (std::int64_t j = held; j <= window_end; ++j) {
-        const double z = j < q.frame - q.min_gap ? q.single_frame(j) : std::nan("");
-        unlike_.push_back(z < d.continuity_min_z ? 1 : 0);  // NaN: not unlike
-      }
-    }
-    const auto unlike = [&](std::int64_t j) {
-      const std::int64_t k = j - held;
-      return k >= 0 && k < static_cast<std::int64_t>(unlike_.size()) && unlike_[static_cast<std::size_t>(k)];
-    };
-    // Over more than one frame without a loop, only the candidate appearance
-    // ranks first continues it (a track kept by weaker candidates falls
-    // behind the revisit).
-    const bool long_gap = open && q.frame - state_.held.query > 2;
-    const auto continues = [&](const Candidate& c) {
-      if (long_gap && !(first < n && c.frame == candidates[first].frame)) return false;
-      return open && state_.continues(q.frame, c.frame, q.tolerance, gap) && !unlike(c.frame);
-    };
-    // The best-scored frame that continues the held loop, outside the
-    // temporal window; frame -1 when there is none.
-    Candidate continuation;
-    if (open) {
-      const std::int64_t limit = q.frame - q.min_gap;
-      for (std::int64_t j = held; j <= std::min(limit - 1, window_end); ++j) {
-        if (unlike(j)) continue;
-        const double score = q.appearance(j);
-        if (std::isnan(score)) {
-          continuation = {};
-          break;
-        }
-        const Candidate c{j, score};
-        if (continuation.frame < 0 || better(c, continuation)) continuation = c;
-      }
-    }
-    // The gates judge the continuation too: a rejected candidate is never
-    // reported, whichever way it came.
-    if (continuation.frame >= 0) {
-      bool seen = false;
-      for (std::size_t i = 0; i < n && !seen; ++i) {
-        if (candidates[i].frame != continuation.frame) continue;
-        seen = true;
-        if (gated_[i]) continuation = {};
-      }
-      for (VerificationStage* gate : stages) {
-        if (seen || continuation.frame < 0) break;
-        if (gate->role() != VerificationStage::Role::kGate || !gate->examines()) continue;
-        const StageCheck check = gate->check(q.frame, continuation);
-        out.verdicts.push_back(
-            {continuation.frame, gate->name(), check.accepted, check.reason, check.ms});
-        if (!check.accepted) continuation = {};
-      }
-    }
-    examined_.clear();
-    bool has_continuation = false;
-    for (std::size_t i = 0; i < n; ++i) {
-      if (gated_[i]) continue;
-      const Candidate& c = candidates[i];
-      if (continuation.frame >= 0 && continues(c)) {
-        if (has_continuation) continue;  // the window is examined once
-        has_continuation = true;
-        examined_.push_back(better(continuation, c) ? continuation : c);
-      } else {
-        examined_.push_back(c);
-      }
-    }
-    if (continuation.frame >= 0 && !has_continuation) examined_.push_back(continuation);
-    // strong_bonus is for the candidate appearance ranks first (after the
-    // gates), as a first loop: geometry confirms a weak ranking, and a
-    // continuation keeps its own bar.
-    // track_bonus alike, when it tracks the ranking's candidate of the last
-    // frame (its own check must accept it: a first loop has no relaxed bar).
-    const auto first_loop = [&](const Candidate& c) {
-      return first < n && c.frame == candidates[first].frame && !continues(c);
-    };
-    const auto strong = [&](const Candidate& c) { return first_loop(c) ? d.strong_bonus : 0.0; };
-    const auto tracked = [&](const Candidate& c) {
-      return first_loop(c) && first_tracks_ ? d.track_bonus : 0.0;
-    };
-    // The most a candidate can score once confirmed.
-    const auto potential = [&](const Candidate& c) {
-      return c.score + d.geometric_bonus + strong(c) + tracked(c) +
-             (continues(c) ? d.continuity_bonus : 0.0);
-    };
-    std::stable_sort(examined_.begin(), examined_.end(),
-                     [&](const Candidate& a, const Candidate& b) { return potential(a) > potential(b); });
-    for (const Candidate& c : examined_) {
-      const double score = potential(c);
-      // Sorted: no later one can reach the threshold either. A young query's
-      // best candidate is examined whatever it could score.
-      const bool young_first = q.young && first < n && c.frame == candidates[first].frame;
-      if (score < d.threshold && !young_first) break;
-      const bool continuing = continues(c);
-      const bool is_first = first < n && c.frame == candidates[first].frame;
-      bool accepted = true;
-      double support = -1;
-      std::shared_ptr<const LoopGeometry> geometry;
-      for (std::size_t k = 0; k < confirms.size(); ++k) {
-        VerificationStage* stage = confirms[k];
-        // The ranking checked the best candidate already (its verdict is
-        // listed again only when the continuity rule changes it).
-        const bool cached = is_first && k < first_checks_.size();
-        StageCheck check = cached ? first_checks_[k] : stage->check(q.frame, c);
-        const bool listed = cached && !(continuing && check.support >= 0);
-        if (continuing && check.support >= 0) {
-          const double needed = d.continuity_inliers * state_.held.inliers;
-          check.accepted = check.support > 0 && check.support >= needed;
-          check.reason += internal::concat("; continues the loop of frame ", state_.held.query,
-                                           ": needs ", needed, " inliers (", d.continuity_inliers,
-                                           " of its average ", state_.held.inliers, ")");
-          if (cached) check.ms = 0;  // counted once, by the ranking
-        }
-        if (!listed) {
-          out.verdicts.push_back({c.frame, stage->name(), check.accepted, check.reason, check.ms});
-        }
-        if (check.geometry) geometry = check.geometry;
-        if (check.support >= 0) support = support < 0 ? check.support : std::min(support, check.support);
-        if (!check.accepted) {
-          accepted = false;
-          break;
-        }
-      }
-      if (is_first) {
-        first_support = support;
-        first_rejected = !accepted;
-      }
-      if (!accepted) continue;
-      // What it scores with its support: strong_bonus needs strong_inliers.
-      const double scored = support >= d.strong_inliers ? score : score - strong(c);
-      if (out.best.frame < 0 || scored >= d.threshold) {
-        out.best = {c.frame, scored};
-        out.evidence = {c.score, static_cast<int>(support), true, continuing};
-        out.geometry = geometry;
-      }
-      // A confirmed candidate below the threshold is reported unless a later
-      // one (a lower potential) reaches it.
-      if (scored >= d.threshold) break;
+LoopDecision::Window LoopDecision::open_window(const DecisionQuery& q, const Candidate* first) {
+  const DecisionOptions& d = options_;
+  Window w;
+  w.first = first;
+  w.held = state_.held.loop;  // the loop a candidate may continue
+  w.open = q.continuity && d.continuity_bonus > 0 &&
+           state_.continues(q.frame, w.held, q.tolerance, d.continuity_gap);
+  w.end = state_.window_end(q.frame, q.tolerance);
+  // Over more than one frame without a loop, only the candidate appearance
+  // ranks first continues it (a track kept by weaker candidates falls
+  // behind the revisit).
+  w.long_gap = w.open && q.frame - state_.held.query > 2;
+  // A scene cut: a frame that would continue the loop but looks unlike the
+  // query (its single-frame score below continuity_min_z: a new place, not
+  // the revisit going on) continues nothing.
+  unlike_.clear();  // the window's frames held .. end, 1: unlike
+  if (w.open && q.single_frame) {
+    for (std::int64_t j = w.held; j <= w.end; ++j) {
+      const double z = j < q.frame - q.min_gap ? q.single_frame(j) : std::nan("");
+      unlike_.push_back(z < d.continuity_min_z ? 1 : 0);  // NaN: not unlike
     }
   }
+  return w;
+}
 
-  // 4. Nothing confirmed: the best candidate through the gates, unconfirmed
-  // (a young query with a confirming stage reports nothing unconfirmed).
-  if (out.best.frame < 0 && first < n && !(q.young && !confirms.empty())) {
-    const Candidate& c = candidates[first];
-    double score = c.score;
-    // Rejected by a confirming stage, or appearance alone on a degenerate
-    // grid: never a loop.
-    // A young query on appearance alone: its scores come from the prior, and
-    // are never a loop either.
-    const bool untrusted = confirms.empty() && (q.cells < kMinAppearanceCells || q.young);
-    if (first_rejected || untrusted) score = std::min(score, std::nextafter(d.threshold, -1.0));
-    out.best = {c.frame, score};
-    out.evidence.appearance = c.score;
-    out.evidence.inliers = static_cast<int>(first_support);
-    for (const StageCheck& check : first_checks_) {
-      if (check.geometry) out.geometry = check.geometry;
+bool LoopDecision::unlike(const Window& w, std::int64_t frame) const {
+  const std::int64_t k = frame - w.held;
+  return k >= 0 && k < static_cast<std::int64_t>(unlike_.size()) && unlike_[static_cast<std::size_t>(k)];
+}
+
+bool LoopDecision::continues(const DecisionQuery& q, const Window& w, const Candidate& c) const {
+  if (w.long_gap && !(w.first != nullptr && c.frame == w.first->frame)) return false;
+  return w.open && state_.continues(q.frame, c.frame, q.tolerance, options_.continuity_gap) &&
+         !unlike(w, c.frame);
+}
+
+// The best-scored frame that continues the held loop, outside the temporal
+// window; frame -1 when there is none.
+Candidate LoopDecision::continuation(const DecisionQuery& q, const Window& w) const {
+  Candidate best;
+  if (!w.open) return best;
+  const std::int64_t limit = q.frame - q.min_gap;
+  for (std::int64_t j = w.held; j <= std::min(limit - 1, w.end); ++j) {
+    if (unlike(w, j)) continue;
+    const double score = q.appearance(j);
+    if (std::isnan(score)) return {};
+    const Candidate c{j, score};
+    if (best.frame < 0 || better(c, best)) best = c;
+  }
+  return best;
+}
+
+// The gates judge the continuation too: a rejected candidate is never
+// reported, whichever way it came.
+void LoopDecision::gate_continuation(const DecisionQuery& q, const std::vector<VerificationStage*>& stages,
+                                     std::size_t n, Candidate& c, Decision& out) const {
+  if (c.frame < 0) return;
+  const std::vector<Candidate>& candidates = *q.candidates;
+  for (std::size_t i = 0; i < n; ++i) {
+    if (candidates[i].frame != c.frame) continue;
+    if (gated_[i]) c = {};
+    return;  // a candidate: the gates have judged it
+  }
+  for (VerificationStage* gate : stages) {
+    if (c.frame < 0) break;
+    if (gate->role() != VerificationStage::Role::kGate || !gate->examines()) continue;
+    const StageCheck check = gate->check(q.frame, c);
+    out.verdicts.push_back({c.frame, gate->name(), check.accepted, check.reason, check.ms});
+    if (!check.accepted) c = {};
+  }
+}
+
+// The candidates the confirming stages may check: those through the gates,
+// the window's frames (the continuation, or a candidate in the window when it
+// scores better) examined once.
+void LoopDecision::list_examined(const DecisionQuery& q, const Window& w, std::size_t n,
+                                 const Candidate& continuation) {
+  const std::vector<Candidate>& candidates = *q.candidates;
+  examined_.clear();
+  bool has_continuation = false;
+  for (std::size_t i = 0; i < n; ++i) {
+    if (gated_[i]) continue;
+    const Candidate& c = candidates[i];
+    if (continuation.frame >= 0 && continues(q, w, c)) {
+      if (has_continuation) continue;  // the window is examined once
+      has_continuation = true;
+      examined_.push_back(better(continuation, c) ? continuation : c);
+    } else {
+      examined_.push_back(c);
     }
   }
-  out.loop = out.best.frame >= 0 && out.best.score >= d.threshold;
-  if (out.loop) {
-    out.status = LoopStatus::kLoop;
-  } else if (q.frame - q.min_gap <= 0) {
-    out.status = LoopStatus::kTooFewFrames;
-  } else if (n == 0) {
-    out.status = LoopStatus::kNoCandidate;
-  } else if (first == n) {
-    out.status = LoopStatus::kGated;
-  } else if (out.best.frame < 0 || (q.young && !out.evidence.confirmed)) {
-    out.status = LoopStatus::kYoung;  // nothing unconfirmed is a loop while statistics are young
-  } else if (first_rejected && !out.evidence.confirmed) {
-    out.status = LoopStatus::kNotConfirmed;
-  } else {
-    out.status = LoopStatus::kBelowThreshold;
+  if (continuation.frame >= 0 && !has_continuation) examined_.push_back(continuation);
+}
+
+// strong_bonus is for the candidate appearance ranks first (after the gates),
+// as a first loop: geometry confirms a weak ranking, and a continuation keeps
+// its own bar.
+double LoopDecision::strong(const DecisionQuery& q, const Window& w, const Candidate& c) const {
+  const bool first_loop = w.first != nullptr && c.frame == w.first->frame && !continues(q, w, c);
+  return first_loop ? options_.strong_bonus : 0.0;
+}
+
+// The most a candidate can score once confirmed. track_bonus is for the
+// first loop strong_bonus is for, when it tracks the ranking's candidate of
+// the last frame (its own check must accept it: a first loop has no relaxed bar).
+double LoopDecision::potential(const DecisionQuery& q, const Window& w, const Candidate& c) const {
+  const DecisionOptions& d = options_;
+  const bool first_loop = w.first != nullptr && c.frame == w.first->frame && !continues(q, w, c);
+  const double tracked = first_loop && first_tracks_ ? d.track_bonus : 0.0;
+  return c.score + d.geometric_bonus + strong(q, w, c) + tracked +
+         (continues(q, w, c) ? d.continuity_bonus : 0.0);
+}
+
+// Every confirming stage on one candidate, in order, until one rejects it.
+// A continuing candidate needs a fraction of its loop's inliers instead of
+// the stage's own bar.
+LoopDecision::Confirmation LoopDecision::confirm(const DecisionQuery& q, const Candidate& c,
+                                                 bool continuing, bool is_first, Decision& out) {
+  const DecisionOptions& d = options_;
+  Confirmation result;
+  for (std::size_t k = 0; k < confirms_.size(); ++k) {
+    VerificationStage* stage = confirms_[k];
+    // The ranking checked the best candidate already (its verdict is listed
+    // again only when the continuity rule changes it).
+    const bool cached = is_first && k < first_checks_.size();
+    StageCheck check = cached ? first_checks_[k] : stage->check(q.frame, c);
+    const bool listed = cached && !(continuing && check.support >= 0);
+    if (continuing && check.support >= 0) {
+      const double needed = d.continuity_inliers * state_.held.inliers;
+      check.accepted = check.support > 0 && check.support >= needed;
+      check.reason += internal::concat("; continues the loop of frame ", state_.held.query,
+                                       ": needs ", needed, " inliers (", d.continuity_inliers,
+                                       " of its average ", state_.held.inliers, ")");
+      if (cached) check.ms = 0;  // counted once, by the ranking
+    }
+    if (!listed) out.verdicts.push_back({c.frame, stage->name(), check.accepted, check.reason, check.ms});
+    if (check.geometry) result.geometry = check.geometry;
+    if (check.support >= 0) {
+      result.support = result.support < 0 ? check.support : std::min(result.support, check.support);
+    }
+    if (!check.accepted) {
+      result.accepted = false;
+      break;
+    }
   }
-  record(q.frame, out.loop ? out.best.frame : -1, out.evidence.inliers,
-         out.loop && out.evidence.continues);
-  return out;
+  return result;
+}
+
+// Step 3: the candidates that could reach the threshold, by what they could
+// score, until one confirmed reaches it.
+void LoopDecision::examine(const DecisionQuery& q, const std::vector<VerificationStage*>& stages,
+                           std::size_t first, std::size_t n, FirstVerdict& verdict, Decision& out) {
+  const DecisionOptions& d = options_;
+  const Candidate* best = first < n ? &(*q.candidates)[first] : nullptr;
+  const Window w = open_window(q, best);
+  Candidate next = continuation(q, w);
+  gate_continuation(q, stages, n, next, out);
+  list_examined(q, w, n, next);
+  std::stable_sort(examined_.begin(), examined_.end(), [&](const Candidate& a, const Candidate& b) {
+    return potential(q, w, a) > potential(q, w, b);
+  });
+  for (const Candidate& c : examined_) {
+    const double score = potential(q, w, c);
+    const bool is_first = best != nullptr && c.frame == best->frame;
+    // Sorted: no later one can reach the threshold either. A young query's
+    // best candidate is examined whatever it could score.
+    if (score < d.threshold && !(q.young && is_first)) break;
+    const bool continuing = continues(q, w, c);
+    const Confirmation confirmed = confirm(q, c, continuing, is_first, out);
+    if (is_first) verdict = {confirmed.support, !confirmed.accepted};
+    if (!confirmed.accepted) continue;
+    // What it scores with its support: strong_bonus needs strong_inliers.
+    const double scored = confirmed.support >= d.strong_inliers ? score : score - strong(q, w, c);
+    if (out.best.frame < 0 || scored >= d.threshold) {
+      out.best = {c.frame, scored};
+      out.evidence = {c.score, static_cast<int>(confirmed.support), true, continuing};
+      out.geometry = confirmed.geometry;
+    }
+    // A confirmed candidate below the threshold is reported unless a later
+    // one (a lower potential) reaches it.
+    if (scored >= d.threshold) break;
+  }
+}
+
+// Step 4: the best candidate through the gates, with its appearance score.
+void LoopDecision::report_unconfirmed(const DecisionQuery& q, const Candidate& c,
+                                      const FirstVerdict& verdict, Decision& out) const {
+  double score = c.score;
+  // Rejected by a confirming stage, or appearance alone on a degenerate
+  // grid: never a loop.
+  // A young query on appearance alone: its scores come from the prior, and
+  // are never a loop either.
+  const bool untrusted = confirms_.empty() && (q.cells < kMinAppearanceCells || q.young);
+  if (verdict.rejected || untrusted) score = std::min(score, std::nextafter(options_.threshold, -1.0));
+  out.best = {c.frame, score};
+  out.evidence.appearance = c.score;
+  out.evidence.inliers = static_cast<int>(verdict.support);
+  for (const StageCheck& check : first_checks_) {
+    if (check.geometry) out.geometry = check.geometry;
+  }
+}
+
+LoopStatus LoopDecision::status(const DecisionQuery& q, std::size_t first, std::size_t n,
+                                const FirstVerdict& verdict, const Decision& out) const {
+  if (out.loop) return LoopStatus::kLoop;
+  if (q.frame - q.min_gap <= 0) return LoopStatus::kTooFewFrames;
+  if (n == 0) return LoopStatus::kNoCandidate;
+  if (first == n) return LoopStatus::kGated;
+  // Nothing unconfirmed is a loop while statistics are young.
+  if (out.best.frame < 0 || (q.young && !out.evidence.confirmed)) return LoopStatus::kYoung;
+  if (verdict.rejected && !out.evidence.confirmed) return LoopStatus::kNotConfirmed;
+  return LoopStatus::kBelowThreshold;
 }
 
 // State, version 2: the loop declared for the frame (int64, -1: none) and its

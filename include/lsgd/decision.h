@@ -259,6 +259,45 @@ class LoopDecision final : public Stateful {
   double rank(const DecisionQuery& q, const Candidate& best, const std::vector<VerificationStage*>& confirms,
             Decision& out);
 
+  // The steps of decide(), in its order (decision.cc).
+  // The held loop as this query sees it: whether a candidate may continue it.
+  struct Window {
+    bool open = false;      // a candidate may continue the held loop
+    bool long_gap = false;  // more than one frame since it: only the first-ranked one may
+    std::int64_t held = -1, end = -1;  // its frames: held .. end
+    const Candidate* first = nullptr;  // the best candidate through the gates
+  };
+  // The best candidate's verdicts (the ranking's, or the decision's own check).
+  struct FirstVerdict {
+    double support = -1;
+    bool rejected = false;
+  };
+  // A candidate through every confirming stage, or not.
+  struct Confirmation {
+    bool accepted = true;
+    double support = -1;
+    std::shared_ptr<const LoopGeometry> geometry;
+  };
+  std::size_t gate(const DecisionQuery& q, const std::vector<VerificationStage*>& stages,
+                   std::size_t n, Decision& out);
+  Window open_window(const DecisionQuery& q, const Candidate* first);
+  bool unlike(const Window& w, std::int64_t frame) const;
+  bool continues(const DecisionQuery& q, const Window& w, const Candidate& c) const;
+  Candidate continuation(const DecisionQuery& q, const Window& w) const;
+  void gate_continuation(const DecisionQuery& q, const std::vector<VerificationStage*>& stages,
+                         std::size_t n, Candidate& c, Decision& out) const;
+  void list_examined(const DecisionQuery& q, const Window& w, std::size_t n, const Candidate& continuation);
+  double potential(const DecisionQuery& q, const Window& w, const Candidate& c) const;
+  double strong(const DecisionQuery& q, const Window& w, const Candidate& c) const;
+  Confirmation confirm(const DecisionQuery& q, const Candidate& c, bool continuing, bool is_first,
+                       Decision& out);
+  void examine(const DecisionQuery& q, const std::vector<VerificationStage*>& stages, std::size_t first,
+               std::size_t n, FirstVerdict& verdict, Decision& out);
+  void report_unconfirmed(const DecisionQuery& q, const Candidate& c, const FirstVerdict& verdict,
+                          Decision& out) const;
+  LoopStatus status(const DecisionQuery& q, std::size_t first, std::size_t n, const FirstVerdict& verdict,
+                    const Decision& out) const;
+
   DecisionOptions options_;
   ContinuityState state_;
   ContinuityState track_;  // the ranking's track: its confirmed candidate of the last frame

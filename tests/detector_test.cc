@@ -1,6 +1,8 @@
 // Tests of the online detector (include/lsgd/detector.h): frame ids, self
 // matches, determinism, agreement of the two search modes, rejection of bad
-// frames without side effects, result fields, memory accounting.
+// frames without side effects, result fields, memory accounting. A search
+// mode registered from outside: detector_modes_test.cc; threads, status,
+// geometry, the caller's ids and describe(): detector_results_test.cc.
 #include "lsgd/detector.h"
 
 #include <gtest/gtest.h>
@@ -8,12 +10,10 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
-#include <atomic>
 #include <limits>
 #include <map>
-#include <utility>
 #include <string>
-#include <thread>
+#include <utility>
 #include <vector>
 
 #include <opencv2/core.hpp>
@@ -21,73 +21,19 @@
 
 #include "lsgd/error.h"
 #include "lsgd/image.h"
-#include "lsgd/search/exhaustive.h"
-#include "detector_util.h"
+#include "detector_test_support.h"
 #include "test_util.h"
 
 namespace lsgd {
 namespace {
 
 using test::message_of;
-using test::splitmix64;
-
-constexpr int kW = 96;
-constexpr int kH = 64;
-
-// Textured random frame: a smooth random gradient plus noise, so frames from
-// different seeds differ but are not pure noise.
-cv::Mat random_frame(std::uint64_t seed, int type = CV_8UC3, int width = kW, int height = kH) {
-  std::uint64_t s = seed * 7919 + 1;
-  const double a = static_cast<double>(splitmix64(s) % 1000) / 1000.0;
-  const double b = static_cast<double>(splitmix64(s) % 1000) / 1000.0;
-  const double ph = static_cast<double>(splitmix64(s) % 628) / 100.0;
-  cv::Mat m(height, width, type);
-  const int ch = m.channels();
-  for (int y = 0; y < height; ++y) {
-    std::uint8_t* row = m.ptr<std::uint8_t>(y);
-    for (int x = 0; x < width; ++x) {
-      const double base = 128 + 80 * std::sin((0.05 + 0.2 * a) * x + ph) *
-                                    std::cos((0.05 + 0.2 * b) * y - ph);
-      for (int c = 0; c < ch; ++c) {
-        const int v = static_cast<int>(base) + static_cast<int>(splitmix64(s) % 41) - 20 + 10 * c;
-        row[x * ch + c] = static_cast<std::uint8_t>(std::max(0, std::min(255, v)));
-      }
-    }
-  }
-  return m;
-}
-
-DetectorOptions small_options(const std::string& mode = kExhaustiveSearch, std::int64_t min_gap = 3,
-                              int top_n = 5) {
-  DetectorOptions o;
-  o.segmentation.superpixel_size = 16;  // 96x64 -> 3 x 4 = 12 cells
-  o.search.mode = mode;
-  o.search.min_gap = min_gap;
-  o.search.top_n = top_n;
-  // The faithful method: these tests check the search itself.
-  o.verification.stages = {};
-  return o;
-}
-
-// Processes `n` distinct frames: scores are standardised only once a query
-// has kMinCalibration candidates (evidence.h).
-void calibrate(Detector& det, int n = static_cast<int>(kMinCalibration) + 4) {
-  for (int i = 0; i < n; ++i) det.process(random_frame(5000 + i));
-}
-
-void expect_same_result(const Result& a, const Result& b) {
-  EXPECT_EQ(a.frame, b.frame);
-  EXPECT_EQ(a.loop, b.loop);
-  EXPECT_EQ(a.best.frame, b.best.frame);
-  EXPECT_EQ(a.best.score, b.best.score);
-  EXPECT_EQ(a.node, b.node);
-  EXPECT_EQ(a.node_created, b.node_created);
-  ASSERT_EQ(a.candidates.size(), b.candidates.size());
-  for (std::size_t i = 0; i < a.candidates.size(); ++i) {
-    EXPECT_EQ(a.candidates[i].frame, b.candidates[i].frame) << "rank " << i;
-    EXPECT_EQ(a.candidates[i].score, b.candidates[i].score) << "rank " << i;
-  }
-}
+using detector_test_support::calibrate;
+using detector_test_support::expect_same_result;
+using detector_test_support::kH;
+using detector_test_support::kW;
+using detector_test_support::random_frame;
+using detector_test_support::small_options;
 
 ImageView view_of_mat(const cv::Mat& m) {
   ImageView v;
@@ -156,128 +102,6 @@ TEST(Detector, GrayVersionOfABgrFrameMatchesIt) {
   const Result ra = det.process(bgra);
   EXPECT_EQ(ra.best.frame, 0);
   EXPECT_EQ(det.similarity(0, ra.frame), 1.0);
-}
-
-// The extension point: a mode registered from outside the library runs in
-// the detector through CandidateSearch alone.
-// "test-copy": exhaustive search under another name (it forwards to the
-// built-in one); results must be identical.
-class CopyOfExhaustive final : public CandidateSearch {
- public:
-  explicit CopyOfExhaustive(const SearchOptions& o) : inner_(make_exhaustive_search(o)) {}
-  const char* name() const override { return "test-copy"; }
-  bool scores_every_frame() const override { return inner_->scores_every_frame(); }
-  Outcome search(const Query& q, std::vector<Candidate>& out, std::vector<double>& row) override {
-    return inner_->search(q, out, row);
-  }
-
- private:
-  std::unique_ptr<CandidateSearch> inner_;
-};
-
-// "test-blocks": a shortlist with groups: frame i is in group i / 4, and the
-// candidates are the frames of the newest group outside the window.
-class Blocks final : public CandidateSearch {
- public:
-  explicit Blocks(const SearchOptions& o) : options_(o) {}
-  const char* name() const override { return "test-blocks"; }
-  bool scores_every_frame() const override { return false; }
-  Outcome search(const Query& q, std::vector<Candidate>& out, std::vector<double>&) override {
-    out.clear();
-    const std::int64_t limit = q.id - options_.min_gap;
-    for (std::int64_t j = std::max<std::int64_t>(0, (limit - 1) / 4 * 4); j < limit; ++j) {
-      out.push_back({j, similarity(q.descriptor, q.store.view(j), q.metric)});
-    }
-    std::sort(out.begin(), out.end(), better);
-    if (out.size() > static_cast<std::size_t>(options_.top_n)) out.resize(options_.top_n);
-    const std::int64_t group = q.id / 4;
-    if (group == static_cast<std::int64_t>(groups_.size())) groups_.emplace_back();
-    groups_.back().push_back(q.id);
-    return {group, q.id % 4 == 0};
-  }
-  bool has_groups() const override { return true; }
-  std::int64_t groups() const override { return static_cast<std::int64_t>(groups_.size()); }
-  const std::vector<std::int64_t>& members(std::int64_t g) const override {
-    return groups_.at(static_cast<std::size_t>(g));
-  }
-
- private:
-  SearchOptions options_;
-  std::vector<std::vector<std::int64_t>> groups_;
-};
-
-void register_test_modes() {
-  static const bool once = [] {
-    register_search_mode({"test-copy", "exhaustive, renamed",
-                          [](const SearchOptions& o) -> std::unique_ptr<CandidateSearch> {
-                            return std::make_unique<CopyOfExhaustive>(o);
-                          }});
-    register_search_mode({"test-blocks", "groups of 4 frames",
-                          [](const SearchOptions& o) -> std::unique_ptr<CandidateSearch> {
-                            return std::make_unique<Blocks>(o);
-                          },
-                          // Its memory model: a group id per frame, and 2 bytes a cell.
-                          [](const DetectorOptions&, int cells) -> std::int64_t {
-                            return 8 + 2 * std::int64_t{cells};
-                          }});
-    return true;
-  }();
-  (void)once;
-}
-
-TEST(SearchModes, ARegisteredModeRunsInTheDetectorThroughTheInterfaceAlone) {
-  register_test_modes();
-  EXPECT_NE(search_mode_names().find("test-copy"), std::string::npos);
-  const auto make = [](const SearchOptions& o) -> std::unique_ptr<CandidateSearch> {
-    return std::make_unique<CopyOfExhaustive>(o);
-  };
-  EXPECT_THROW(register_search_mode({"test-copy", "again", make}), InvalidArgument);
-  EXPECT_THROW(register_search_mode({"", "no name", make}), InvalidArgument);
-  EXPECT_THROW(register_search_mode({"test-none", "no make", nullptr}), InvalidArgument);
-
-  DetectorOptions copy = small_options(kExhaustiveSearch, 2, 4);
-  copy.verification.stages = {kTemporalStage};  // sequence evidence over the search's row
-  DetectorOptions original = copy;
-  copy.search.mode = "test-copy";
-  Detector a(copy), b(original);
-  for (int i = 0; i < 60; ++i) {
-    const cv::Mat f = random_frame(700 + i % 23);  // revisits
-    const Result ra = a.process(f);
-    const Result rb = b.process(f);
-    expect_same_result(ra, rb);
-  }
-
-  DetectorOptions blocks = small_options("test-blocks", 2, 4);
-  blocks.verification.stages = {kTemporalStage};  // realigned candidates, sampled statistics
-  Detector c(blocks);
-  for (int i = 0; i < 60; ++i) {
-    const Result r = c.process(random_frame(700 + i % 23));
-    EXPECT_EQ(r.node, i / 4);
-    EXPECT_EQ(r.node_created, i % 4 == 0);
-    for (const Candidate& k : r.candidates) EXPECT_LT(k.frame, i - 2);
-  }
-  EXPECT_EQ(c.nodes(), 15);
-  EXPECT_EQ(c.search().members(3), (std::vector<std::int64_t>{12, 13, 14, 15}));
-}
-
-// The memory a map takes: each frame's descriptor and its mode's own model,
-// a registered mode's included.
-TEST(SearchModes, EstimatedMapBytesAddTheModesOwnMemoryModel) {
-  register_test_modes();
-  DetectorOptions o;
-  const std::int64_t exact = static_cast<std::int64_t>(Descriptor::bytes_per_frame(HistogramStorage::kExact, 80));
-  o.search.mode = kExhaustiveSearch;
-  EXPECT_EQ(estimated_map_bytes(o, 1000, 80), 1000 * (exact + 8 * 48));
-  o.search.mode = kNodesSearch;
-  EXPECT_EQ(estimated_map_bytes(o, 1000, 80), 1000 * exact);
-  o.search.mode = kIndexSearch;
-  EXPECT_EQ(estimated_map_bytes(o, 1000, 80), 1000 * (exact + 16 * 80 + 8 * o.search.index.m + 64));
-  o.search.mode = "test-blocks";
-  EXPECT_EQ(estimated_map_bytes(o, 1000, 80), 1000 * (exact + 8 + 160));
-  o.search.mode = "test-copy";  // no model: the descriptors alone
-  EXPECT_EQ(estimated_map_bytes(o, 10, 80), 10 * exact);
-  o.search.mode = "no-such-mode";
-  EXPECT_THROW(estimated_map_bytes(o, 10, 80), InvalidArgument);
 }
 
 TEST(Detector, Deterministic) {
@@ -597,185 +421,6 @@ TEST(Detector, OptionsValidatedAtConstruction) {
   EXPECT_NO_THROW(d.options().check());
   EXPECT_EQ(d.size(), 0);
   EXPECT_EQ(d.nodes(), 0);
-}
-
-// One Detector shared by two threads (issue 15: SIGSEGV, heap-use-after-free
-// under ASan): an overlapping call throws InvalidArgument instead of
-// corrupting the detector; every call either completes or is refused, and the
-// detector holds exactly the frames that completed. (Run under ASan/UBSan by
-// scripts/ci-hardening.sh.)
-TEST(Detector, TwoThreadsOnOneDetectorAreRefusedNotCorrupted) {
-  DetectorOptions o = small_options(kNodesSearch, 2, 5);
-  Detector det(o);
-  std::vector<cv::Mat> frames;
-  for (int i = 0; i < 8; ++i) frames.push_back(random_frame(700 + i, CV_8UC3, 320, 240));
-  std::atomic<int> done{0}, refused{0};
-  std::atomic<bool> go{false};
-  const auto worker = [&](int offset) {
-    while (!go) std::this_thread::yield();
-    for (int i = 0; i < 40; ++i) {
-      try {
-        det.process(frames[static_cast<std::size_t>((i + offset) % 8)]);
-        ++done;
-      } catch (const InvalidArgument& e) {
-        EXPECT_NE(std::string(e.what()).find("one thread at a time"), std::string::npos)
-            << e.what();
-        ++refused;
-      }
-    }
-  };
-  std::thread a(worker, 0), b(worker, 3);
-  go = true;
-  a.join();
-  b.join();
-  EXPECT_EQ(done + refused, 80);
-  EXPECT_EQ(det.size(), done.load());
-  // Still a working detector.
-  const Result r = det.process(frames[0]);
-  EXPECT_EQ(r.frame, done.load());
-}
-
-// Result::status says why there is a loop or none, consistently with the
-// rest of the Result, and every status occurs on the street's revisits.
-TEST(Detector, StatusSaysWhyThereIsALoopOrNone) {
-  std::map<LoopStatus, int> seen;
-  for (const int agree : {0, 3}) {
-    DetectorOptions o;
-    o.search.min_gap = 20;
-    o.verification.temporal_options.agree = agree;  // 3: the temporal gate examines
-    Detector d(o);
-    for (std::int64_t i = 0; i < test::world().frames(); ++i) {
-      const Result r = d.process(test::frame(i));
-      ++seen[r.status];
-      SCOPED_TRACE("frame " + std::to_string(i) + " " + to_string(r.status));
-      EXPECT_EQ(r.loop, r.status == LoopStatus::kLoop);
-      EXPECT_EQ(i <= o.search.min_gap, r.status == LoopStatus::kTooFewFrames);
-      if (r.status == LoopStatus::kNoCandidate) {
-        EXPECT_TRUE(r.candidates.empty());
-      }
-      if (r.status == LoopStatus::kGated) {
-        EXPECT_EQ(r.best.frame, -1);
-        for (const StageVerdict& v : r.verification) EXPECT_FALSE(v.accepted);
-      }
-      if (r.status == LoopStatus::kNotConfirmed || r.status == LoopStatus::kBelowThreshold) {
-        EXPECT_GE(r.best.frame, 0);
-        EXPECT_LT(r.best.score, o.decision.threshold);
-      }
-      if (r.status == LoopStatus::kNotConfirmed) {
-        EXPECT_FALSE(r.evidence.confirmed);
-      }
-    }
-  }
-  for (const LoopStatus s : {LoopStatus::kLoop, LoopStatus::kTooFewFrames, LoopStatus::kNoCandidate,
-                             LoopStatus::kGated, LoopStatus::kYoung, LoopStatus::kNotConfirmed,
-                             LoopStatus::kBelowThreshold}) {
-    EXPECT_GT(seen[s], 0) << to_string(s);
-    EXPECT_EQ(parse_loop_status(to_string(s)), s);
-  }
-  EXPECT_NE(test::message_of<InvalidArgument>([] { parse_loop_status("looped"); })
-                .find("loop status 'looped' is not one of loop, too_few_frames"),
-            std::string::npos);
-}
-
-// Result::geometry: the reported candidate's matches and model whenever the
-// geometric stage fitted one, consistent with its inliers; none without it.
-TEST(Detector, ALoopCarriesItsGeometry) {
-  for (const char* stages : {"temporal,geometric", "temporal"}) {
-    DetectorOptions o;
-    o.search.min_gap = 20;
-    parse_verification_stages(stages, o.verification);
-    Detector d(o);
-    int loops = 0;
-    for (std::int64_t i = 0; i < test::world().frames(); ++i) {
-      const Result r = d.process(test::frame(i));
-      SCOPED_TRACE(std::string(stages) + ", frame " + std::to_string(i));
-      if (std::string(stages) == "temporal") {
-        EXPECT_EQ(r.geometry, nullptr);
-        continue;
-      }
-      loops += r.loop ? 1 : 0;
-      if (r.loop) {
-        ASSERT_NE(r.geometry, nullptr);
-      }
-      if (r.geometry == nullptr) continue;
-      EXPECT_GE(r.best.frame, 0);
-      EXPECT_EQ(std::count(r.geometry->inliers.begin(), r.geometry->inliers.end(), 1), r.evidence.inliers);
-      EXPECT_EQ(r.geometry->query_points.size(), 2 * r.geometry->matches());
-      EXPECT_TRUE(r.geometry->model == "fundamental" || r.geometry->model == "homography");
-    }
-    if (std::string(stages) != "temporal") {
-      EXPECT_GT(loops, 10);
-    }
-  }
-}
-
-// The caller's ids and stamps: carried into the Result, mapped both ways,
-// continued when not given, and refused (detector unchanged) when not
-// increasing or not finite.
-TEST(Detector, CallersIdsAndStamps) {
-  DetectorOptions o;
-  o.search.min_gap = 20;
-  Detector d(o);
-  std::int64_t loops = 0;
-  for (std::int64_t i = 0; i < test::world().frames(); ++i) {
-    const bool given = i < 150;
-    const Result r = given ? d.process(test::frame(i), 10 * i + 7, 0.1 * static_cast<double>(i))
-                           : d.process(test::frame(i));
-    const std::int64_t id = given ? 10 * i + 7 : 10 * 149 + 7 + (i - 149);
-    EXPECT_EQ(r.frame, i);
-    EXPECT_EQ(r.id, id);
-    EXPECT_EQ(d.id_of(i), id);
-    EXPECT_EQ(d.frame_of(id), i);
-    if (given) {
-      EXPECT_EQ(r.stamp, 0.1 * static_cast<double>(i));
-    } else {
-      EXPECT_TRUE(std::isnan(r.stamp));
-    }
-    EXPECT_EQ(r.loop_id, r.best.frame >= 0 ? d.id_of(r.best.frame) : -1);
-    loops += r.loop ? 1 : 0;
-  }
-  EXPECT_GT(loops, 0);
-  const std::int64_t n = d.size(), last = d.id_of(n - 1);
-  for (const auto& [id, stamp] : {std::pair<std::int64_t, double>{last, 0.0}, {last - 5, 0.0}, {-2, 0.0},
-                                  {last + 1, std::numeric_limits<double>::infinity()}}) {
-    EXPECT_THROW(d.process(test::frame(0), id, stamp), InvalidArgument) << id;
-    EXPECT_EQ(d.size(), n);
-  }
-  EXPECT_NE(test::message_of<InvalidArgument>([&] { d.process(test::frame(0), last); })
-                .find("frame id " + std::to_string(last) + " must be above the last frame's id"),
-            std::string::npos);
-  EXPECT_EQ(d.frame_of(-1), -1);
-  EXPECT_THROW(d.id_of(n), InvalidArgument);
-  // A query carries the id it was given, and changes nothing.
-  const Result q = d.query(test::frame(5), last + 100, 9.5);
-  EXPECT_EQ(q.id, last + 100);
-  EXPECT_EQ(q.stamp, 9.5);
-  EXPECT_EQ(d.process(test::frame(5)).id, last + 1);
-}
-
-// describe(): the descriptor process() stores, with nothing stored, in both storages.
-TEST(Detector, DescribeGivesTheStoredDescriptorAndStoresNothing) {
-  for (const HistogramStorage storage : {HistogramStorage::kExact, HistogramStorage::kCompact}) {
-    DetectorOptions o = small_options();
-    o.descriptor.storage = storage;
-    Detector d(o);
-    for (int i = 0; i < 5; ++i) {
-      const cv::Mat f = random_frame(900 + i);
-      const Descriptor x = d.describe(f);
-      EXPECT_EQ(d.size(), i);
-      d.process(f);
-      const DescriptorView stored = d.store().view(i), own = x.view();
-      ASSERT_EQ(own.cells, stored.cells);
-      if (storage == HistogramStorage::kCompact) {
-        EXPECT_TRUE(std::equal(own.compact, own.compact + own.cells * kCompactBins, stored.compact));
-      } else {
-        EXPECT_TRUE(std::equal(own.hist, own.hist + own.cells * kBins, stored.hist));
-        EXPECT_TRUE(std::equal(own.pixels, own.pixels + own.cells, stored.pixels));
-      }
-      EXPECT_EQ(similarity(own, stored, o.similarity.metric), similarity(stored, stored, o.similarity.metric));
-    }
-    EXPECT_THROW(d.describe(random_frame(1, CV_8UC3, kW * 2, kH)), InvalidArgument);
-  }
 }
 
 }  // namespace

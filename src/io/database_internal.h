@@ -368,6 +368,13 @@ struct Database::Impl {
   void checkpoint(const char* state);
   std::int64_t read_index(const std::string& mode, std::int64_t stored,
                           std::vector<std::uint8_t>& out) const;
+  // The steps of Database::restore() (database_restore.cc), inside its read
+  // transaction. Every frame row into `detector`, each checked; returns the
+  // rows read and the caller's id of the last (-1: none).
+  std::pair<std::int64_t, std::int64_t> restore_frames(Detector& detector) const;
+  // The saved index of the detector's search mode, covering `stored` frames,
+  // into `detector`; none saved: nothing (the detector builds its own).
+  void restore_index(Detector& detector, std::int64_t stored) const;
 
   void check_writable() const {
     if (!writable) internal::throw_invalid("database ", path, " was opened read-only");

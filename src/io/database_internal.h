@@ -1,7 +1,8 @@
 // Internals of the place database shared by its source files (database.cc:
-// opening, creating and reading the header; database_restore.cc: restoring a
-// detector; database_write.cc: appending, forgetting, saving an index): the
-// file format's blobs and checksums, SQLite helpers and Database::Impl.
+// opening and creating; database_header.cc: reading the header;
+// database_restore.cc: restoring a detector; database_write.cc: appending,
+// forgetting, saving an index): the file format's blobs and checksums, SQLite
+// helpers and Database::Impl.
 // Not installed; included by src/io/database*.cc only.
 #pragma once
 
@@ -421,7 +422,21 @@ struct Database::Impl {
     log_named = true;
   }
 
+  // Reads and checks the header when the file is opened (database_header.cc),
+  // in these steps.
   void load_header();
+  void check_integrity() const;  // SQLite's quick_check
+  void check_file_size() const;  // the pages the header counts are all there
+  void check_tables() const;     // meta and frames
+  // Every meta row into `meta`; returns each value's SQLite type.
+  std::map<std::string, int> read_meta();
+  void read_format(std::map<std::string, int>& types);  // format_version, into `format`
+  void check_meta(std::map<std::string, int>& types);
+  void read_options();     // meta options, into `options`
+  void read_frame_size();  // width, height, grid
+  void count_frames();     // the frames' columns, and their ids 0 .. frames - 1
+  void read_session_first_ids();
+  void read_last_frame();  // last_session, last_frame, sessions
   // `frame`: the detector's id of the frame; `caller_id`: the caller's.
   void insert_frame(const Detector& detector, std::int64_t frame, std::int64_t session,
                     const std::string& name, std::int64_t caller_id);

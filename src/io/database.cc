@@ -39,14 +39,18 @@ Database::Database(Database&& other) noexcept = default;
 Database& Database::operator=(Database&& other) noexcept = default;
 
 
-Database Database::open(const std::string& path, Mode mode) {
+namespace {
+
+// The file at `path` before anything opens it: it exists, is a regular file
+// with regular companions, has one name when written, and this user may
+// read (and write) it.
+void check_file(const std::string& path, bool writable) {
   struct stat st;
   if (::stat(path.c_str(), &st) != 0) {
     io_error(path, errno == ENOENT ? "does not exist" : "cannot be opened",
              errno == ENOENT ? "" : concat(" (", std::strerror(errno), ")"));
   }
   if (!S_ISREG(st.st_mode)) io_error(path, "is not a regular file");
-  const bool writable = mode == Mode::kReadWrite;
   check_companions(path);
   // Each name of a file has a log of its own: a writer through one name
   // would leave a log that a later open through the other replays over newer
@@ -60,6 +64,13 @@ Database Database::open(const std::string& path, Mode mode) {
     io_error(path, "cannot be ", writable ? "read and written" : "read", " (",
              std::strerror(errno), ")");
   }
+}
+
+}  // namespace
+
+Database Database::open(const std::string& path, Mode mode) {
+  const bool writable = mode == Mode::kReadWrite;
+  check_file(path, writable);
   auto impl = std::make_unique<Impl>();
   impl->path = path;
   impl->writable = writable;
@@ -69,42 +80,60 @@ Database Database::open(const std::string& path, Mode mode) {
   // after SQLite's, which closing it would otherwise release).
   impl->lock_fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
   if (impl->lock_fd < 0) io_error(path, "cannot be opened (", std::strerror(errno), ")");
-  bool writer_active = false;
-  if (writable) {
-    // A writer in this very process holds the lock already: say so, rather
-    // than the "another process" of the flock below.
-    struct stat id {};
-    if (::fstat(impl->lock_fd, &id) == 0) {
-      const std::lock_guard<std::mutex> lock(writers_mutex());
-      const std::pair<dev_t, ino_t> key{id.st_dev, id.st_ino};
-      const auto open = writers().find(key);
-      if (open != writers().end() && open->second == ::getpid()) {
-        io_error(path, "is already open for writing in this process (close that Database first: "
-                       "C++ destroys it, Python's db.close() or a `with` block closes it)");
-      }
-      writers()[key] = ::getpid();
-      impl->writer_key = key;
-      impl->registered = true;
-    }
-    // A reader holds a shared lock for a moment (below): wait up to 2 s.
-    int tries = 0;
-    while (::flock(impl->lock_fd, LOCK_EX | LOCK_NB) != 0) {
-      const int error = errno;
-      if (error != EWOULDBLOCK) {
-        io_error(path, "cannot be locked for writing (", std::strerror(error), ")");
-      }
-      if (++tries == 200) {
-        io_error(path, "another process is writing to it (one writer at a time: wait for it to "
-                       "finish, or give this run another database)");
-      }
-      ::usleep(10'000);
-    }
-  } else if (::flock(impl->lock_fd, LOCK_SH | LOCK_NB) != 0) {
-    writer_active = true;  // its log is in flux: SQLite reads it consistently, we cannot
+  const bool writer_active = impl->lock();
+  const wal::WalCheck log = impl->check_log(writer_active);
+  impl->open_sqlite(writer_active);
+  impl->load_header();
+  impl->note_last_writer(writer_active, log);
+  if (writable && impl->format < kDatabaseFormatVersion) impl->upgrade();
+  if (writable) impl->start_writing();
+  return Database(std::move(impl));
+}
+
+bool Database::Impl::lock() {
+  if (!writable) {
+    // Refused: a writer is active; its log is in flux: SQLite reads it
+    // consistently, we cannot.
+    return ::flock(lock_fd, LOCK_SH | LOCK_NB) != 0;
   }
-  // Before SQLite replays the log, which it would do silently up to any damage.
+  register_writer();
+  // A reader holds a shared lock for a moment (lock() to check_log()): wait up to 2 s.
+  int tries = 0;
+  while (::flock(lock_fd, LOCK_EX | LOCK_NB) != 0) {
+    const int error = errno;
+    if (error != EWOULDBLOCK) {
+      io_error(path, "cannot be locked for writing (", std::strerror(error), ")");
+    }
+    if (++tries == 200) {
+      io_error(path, "another process is writing to it (one writer at a time: wait for it to "
+                     "finish, or give this run another database)");
+    }
+    ::usleep(10'000);
+  }
+  return false;
+}
+
+// A writer in this very process holds the lock already: say so, rather
+// than the "another process" of the flock in lock().
+void Database::Impl::register_writer() {
+  struct stat id {};
+  if (::fstat(lock_fd, &id) != 0) return;
+  const std::lock_guard<std::mutex> lock(writers_mutex());
+  const std::pair<dev_t, ino_t> key{id.st_dev, id.st_ino};
+  const auto open = writers().find(key);
+  if (open != writers().end() && open->second == ::getpid()) {
+    io_error(path, "is already open for writing in this process (close that Database first: "
+                   "C++ destroys it, Python's db.close() or a `with` block closes it)");
+  }
+  writers()[key] = ::getpid();
+  writer_key = key;
+  registered = true;
+}
+
+// Before SQLite replays the log, which it would do silently up to any damage.
+wal::WalCheck Database::Impl::check_log(bool writer_active) const {
   const wal::WalCheck log = writer_active ? wal::WalCheck{} : wal::check_wal(path + "-wal");
-  if (!writable && !writer_active) ::flock(impl->lock_fd, LOCK_UN);
+  if (!writable && !writer_active) ::flock(lock_fd, LOCK_UN);
   if (!log.damage.empty()) {
     format_error(path, log.damage,
                  ". Nothing was changed; to open the database as of its last checkpoint, losing "
@@ -112,6 +141,10 @@ Database Database::open(const std::string& path, Mode mode) {
                  path, "-wal' away");
   }
   if (!writer_active && log.committed_frames > 0) check_log_belongs(path);
+  return log;
+}
+
+void Database::Impl::open_sqlite(bool writer_active) {
   // A reader where FILE-shm cannot be created (database_companions.cc): the
   // file as immutable when its log holds nothing; else say what to do.
   bool immutable = false;
@@ -127,67 +160,67 @@ Database Database::open(const std::string& path, Mode mode) {
   const int flags = writable ? SQLITE_OPEN_READWRITE
                              : SQLITE_OPEN_READONLY | (immutable ? SQLITE_OPEN_URI : 0);
   const std::string name = immutable ? immutable_uri(path) : path;
-  if (sqlite3_open_v2(name.c_str(), &impl->db, flags, nullptr) != SQLITE_OK) {
-    io_error(path, "cannot open (", impl->db ? sqlite3_errmsg(impl->db) : "out of memory", ")");
+  if (sqlite3_open_v2(name.c_str(), &db, flags, nullptr) != SQLITE_OK) {
+    io_error(path, "cannot open (", db ? sqlite3_errmsg(db) : "out of memory", ")");
   }
-  sqlite3_extended_result_codes(impl->db, 1);
-  sqlite3_busy_timeout(impl->db, 5000);
-  impl->load_header();
-  Impl& m = *impl;
-  const auto writer = m.meta.find("writer");
-  if (writer != m.meta.end() && writer->second == "open") {
-    const auto at = m.meta.find("checkpoint_frames");
-    const std::string checkpointed = at == m.meta.end() ? "?" : at->second;
-    if (!writable) {
-      m.note = writer_active
-                   ? concat("a writer has it open (", m.frames, " frames readable)")
-                   : concat("its last writer was stopped before closing it (", m.frames,
-                            " frames readable, ", checkpointed,
-                            " of them checkpointed into the file)");
-    } else if (log.committed_frames > 0) {
-      m.note = concat("the last writer was stopped before closing it; its write-ahead log held ",
-                      log.committed_frames, " pages of committed transactions, replayed: ",
-                      m.frames, " frames");
-    } else {
-      m.note = concat("the last writer was stopped before closing it and left no write-ahead "
-                      "log: the ",
-                      m.frames, " frames of its last checkpoint are here; frames it committed "
-                      "after that checkpoint, if any, are lost");
-    }
+  sqlite3_extended_result_codes(db, 1);
+  sqlite3_busy_timeout(db, 5000);
+}
+
+void Database::Impl::note_last_writer(bool writer_active, const wal::WalCheck& log) {
+  const auto writer = meta.find("writer");
+  if (writer == meta.end() || writer->second != "open") return;
+  const auto at = meta.find("checkpoint_frames");
+  const std::string checkpointed = at == meta.end() ? "?" : at->second;
+  if (!writable) {
+    note = writer_active
+               ? concat("a writer has it open (", frames, " frames readable)")
+               : concat("its last writer was stopped before closing it (", frames,
+                        " frames readable, ", checkpointed,
+                        " of them checkpointed into the file)");
+  } else if (log.committed_frames > 0) {
+    note = concat("the last writer was stopped before closing it; its write-ahead log held ",
+                  log.committed_frames, " pages of committed transactions, replayed: ",
+                  frames, " frames");
+  } else {
+    note = concat("the last writer was stopped before closing it and left no write-ahead "
+                  "log: the ",
+                  frames, " frames of its last checkpoint are here; frames it committed "
+                  "after that checkpoint, if any, are lost");
   }
-  if (writable && m.format < kDatabaseFormatVersion) {
-    // Upgrade in place, atomically: the columns and the new meta or nothing.
-    exec_write(m.db, path, "BEGIN IMMEDIATE");
-    try {
-      if (m.format < 2) exec_write(m.db, path, kUpgradeV1);
-      if (m.format < 3) exec_write(m.db, path, kUpgradeV2);
-      if (m.format < 4) exec_write(m.db, path, kUpgradeV3);
-      exec_write(m.db, path, kIndexesTable);
-      m.meta["format_version"] = std::to_string(kDatabaseFormatVersion);
-      m.meta["options"] = to_yaml(m.options);
-      m.write_meta();
-      exec_write(m.db, path, "COMMIT");
-    } catch (...) {
-      sqlite3_exec(m.db, "ROLLBACK", nullptr, nullptr, nullptr);
-      m.meta["format_version"] = std::to_string(m.format);
-      throw;
-    }
-    m.format = kDatabaseFormatVersion;
+}
+
+// Upgrade in place, atomically: the columns and the new meta or nothing.
+void Database::Impl::upgrade() {
+  exec_write(db, path, "BEGIN IMMEDIATE");
+  try {
+    if (format < 2) exec_write(db, path, kUpgradeV1);
+    if (format < 3) exec_write(db, path, kUpgradeV2);
+    if (format < 4) exec_write(db, path, kUpgradeV3);
+    exec_write(db, path, kIndexesTable);
+    meta["format_version"] = std::to_string(kDatabaseFormatVersion);
+    meta["options"] = to_yaml(options);
+    write_meta();
+    exec_write(db, path, "COMMIT");
+  } catch (...) {
+    sqlite3_exec(db, "ROLLBACK", nullptr, nullptr, nullptr);
+    meta["format_version"] = std::to_string(format);
+    throw;
   }
-  if (writable) {
-    // WAL: an append writes its pages once, sequentially, to the log; FULL:
-    // the log is synced at every commit, so a committed frame survives a
-    // power loss too. SQLite's own checkpoints are replaced by ours, which
-    // empty the log (docs/reliability.md, "Persistence").
-    exec_write(m.db, path,
-               "PRAGMA journal_mode=WAL; PRAGMA synchronous=FULL; PRAGMA wal_autocheckpoint=0;");
-    Statement insert(m.db, path, kInsertFrame);
-    m.insert = std::move(insert);
-    if (m.meta.find("database_id") == m.meta.end()) m.meta["database_id"] = new_database_id();
-    m.checkpoint("open");
-    m.opened = true;
-  }
-  return Database(std::move(impl));
+  format = kDatabaseFormatVersion;
+}
+
+void Database::Impl::start_writing() {
+  // WAL: an append writes its pages once, sequentially, to the log; FULL:
+  // the log is synced at every commit, so a committed frame survives a
+  // power loss too. SQLite's own checkpoints are replaced by ours, which
+  // empty the log (docs/reliability.md, "Persistence").
+  exec_write(db, path,
+             "PRAGMA journal_mode=WAL; PRAGMA synchronous=FULL; PRAGMA wal_autocheckpoint=0;");
+  insert = Statement(db, path, kInsertFrame);
+  if (meta.find("database_id") == meta.end()) meta["database_id"] = new_database_id();
+  checkpoint("open");
+  opened = true;
 }
 
 Database Database::create(const std::string& path, const DetectorOptions& options) {

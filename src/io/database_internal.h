@@ -422,6 +422,20 @@ struct Database::Impl {
     log_named = true;
   }
 
+  // The steps of Database::open() after its checks of the file (database.cc).
+  // Takes the lock: a writer's exclusive one (waiting for readers), a
+  // reader's shared one; returns true when a writer holds it (a reader's only).
+  bool lock();
+  void register_writer();  // in writers(): one writer per file in this process
+  // Checks the write-ahead log (wal_check.h) and that it belongs to the file;
+  // returns what it holds.
+  wal::WalCheck check_log(bool writer_active) const;
+  void open_sqlite(bool writer_active);  // into `db`
+  // `note`, when the last writer did not close the file.
+  void note_last_writer(bool writer_active, const wal::WalCheck& log);
+  void upgrade();        // an older format to this one (a writer only)
+  void start_writing();  // journal mode, the insert statement, the first checkpoint
+
   // Reads and checks the header when the file is opened (database_header.cc),
   // in these steps.
   void load_header();

@@ -310,6 +310,13 @@ inline std::map<std::pair<dev_t, ino_t>, pid_t>& writers() {
   return open;
 }
 
+// A stored frame's keys, as forget() keeps them (database_write.cc).
+struct FrameKeys {
+  std::int64_t session;
+  std::string name;
+  std::int64_t id;  // the caller's
+};
+
 }  // namespace db
 
 using namespace db;  // the database files' own helpers
@@ -456,6 +463,14 @@ struct Database::Impl {
                     const std::string& name, std::int64_t caller_id);
   // InvalidArgument unless frames may be appended to `session`.
   void check_session(std::int64_t session) const;
+  // The steps of Database::forget() (database_write.cc). Every row's keys,
+  // in order.
+  std::vector<FrameKeys> read_keys() const;
+  // In one transaction: the rows from `dense` on replaced by the kept `rows`
+  // from there, with their state in `detector`; the saved indexes dropped;
+  // meta session_first_ids set to `first_ids` (empty: removed).
+  void rewrite_from(std::int64_t dense, const Detector& detector,
+                    const std::vector<FrameKeys>& rows, const std::string& first_ids);
 };
 
 // Refuses a companion of `path` (FILE-wal, FILE-shm) that is not a regular

@@ -206,6 +206,33 @@ void Database::append_all(const Detector& detector, std::int64_t session) {
   m.checkpoint("open");
 }
 
+namespace {
+
+// The meta session_first_ids that forget() keeps, as a map and as its text.
+struct FirstIds {
+  std::map<std::int64_t, std::int64_t> ids;
+  std::string text;  // "session=first_id" pairs separated by spaces
+};
+
+// Of the first ids lsgd run gave the sessions (`first_ids`), those of the
+// kept `sessions` that the frames before them no longer give.
+FirstIds kept_first_ids(const std::map<std::int64_t, std::int64_t>& first_ids,
+                        const std::vector<FrameKeys>& rows, const std::set<std::int64_t>& sessions) {
+  FirstIds kept;
+  for (const auto& [session, id] : first_ids) {
+    if (sessions.count(session) == 0) continue;
+    const std::int64_t s = session;  // (C++17 lambdas cannot capture a structured binding)
+    const auto at = std::find_if(rows.begin(), rows.end(), [s](const FrameKeys& r) { return r.session == s; });
+    const std::int64_t before = at == rows.begin() ? 0 : std::prev(at)->id + 1;
+    if (before == id) continue;
+    kept.ids[session] = id;
+    kept.text += concat(kept.text.empty() ? "" : " ", session, "=", id);
+  }
+  return kept;
+}
+
+}  // namespace
+
 std::int64_t Database::forget(std::int64_t first_id, std::int64_t last_id) {
   Impl& m = *impl_;
   m.check_writable();
@@ -213,23 +240,9 @@ std::int64_t Database::forget(std::int64_t first_id, std::int64_t last_id) {
     internal::throw_invalid("database ", m.path, ": forget: the first id ", first_id,
                             " is above the last ", last_id);
   }
-  struct Row {
-    std::int64_t session;
-    std::string name;
-    std::int64_t id;
-  };
-  std::vector<Row> rows;
-  {
-    Statement stmt(m.db, m.path,
-                   concat("SELECT session, name, ", frame_column(m.format), " FROM frames ORDER BY id")
-                       .c_str());
-    while (step_read(m.db, stmt.get(), m.path)) {
-      rows.push_back({sqlite3_column_int64(stmt.get(), 0), column_text(stmt.get(), 1),
-                      sqlite3_column_int64(stmt.get(), 2)});
-    }
-  }
-  const auto from = std::find_if(rows.begin(), rows.end(), [&](const Row& r) { return r.id >= first_id; });
-  const auto to = std::find_if(from, rows.end(), [&](const Row& r) { return r.id > last_id; });
+  std::vector<FrameKeys> rows = m.read_keys();
+  const auto from = std::find_if(rows.begin(), rows.end(), [&](const FrameKeys& r) { return r.id >= first_id; });
+  const auto to = std::find_if(from, rows.end(), [&](const FrameKeys& r) { return r.id > last_id; });
   const std::int64_t forgotten = to - from;
   if (forgotten == 0) return 0;
   const auto dense = static_cast<std::int64_t>(from - rows.begin());  // the first forgotten frame
@@ -245,57 +258,63 @@ std::int64_t Database::forget(std::int64_t first_id, std::int64_t last_id) {
   }
   rows.erase(from, to);
   std::set<std::int64_t> sessions;
-  for (const Row& r : rows) sessions.insert(r.session);
-  // Those the frames before them no longer give.
-  std::map<std::int64_t, std::int64_t> session_first;
-  std::string kept_first;
-  for (const auto& [session, id] : first_ids) {
-    if (sessions.count(session) == 0) continue;
-    const std::int64_t s = session;  // (C++17 lambdas cannot capture a structured binding)
-    const auto at = std::find_if(rows.begin(), rows.end(), [s](const Row& r) { return r.session == s; });
-    const std::int64_t before = at == rows.begin() ? 0 : std::prev(at)->id + 1;
-    if (before == id) continue;
-    session_first[session] = id;
-    kept_first += concat(kept_first.empty() ? "" : " ", session, "=", id);
-  }
-  m.transaction([&] {
-    const std::map<std::string, std::string> saved = m.meta;
-    try {
-      Statement drop(m.db, m.path, "DELETE FROM frames WHERE id >= ?1");
-      sqlite3_bind_int64(drop.get(), 1, dense);
-      if (sqlite3_step(drop.get()) != SQLITE_DONE) io_error(m.path, "cannot write (", sqlite3_errmsg(m.db), ")");
-      // The saved graph numbers the forgotten frames: the next resume builds it again.
-      exec_write(m.db, m.path, "DELETE FROM indexes");
-      for (std::int64_t f = dense; f < detector.size(); ++f) {
-        const Row& r = rows[static_cast<std::size_t>(f)];
-        m.insert_frame(detector, f, r.session, r.name, r.id);
-      }
-      if (kept_first.empty()) {
-        m.meta.erase("session_first_ids");
-        exec_write(m.db, m.path, "DELETE FROM meta WHERE key = 'session_first_ids'");
-      } else {
-        m.meta["session_first_ids"] = kept_first;
-      }
-      if (rows.empty()) {  // the next frame sets the size again
-        for (const char* key : {"width", "height", "grid_rows", "grid_cols"}) m.meta[key] = "0";
-      }
-      m.write_meta();
-    } catch (...) {
-      m.meta = saved;
-      throw;
-    }
-  });
+  for (const FrameKeys& r : rows) sessions.insert(r.session);
+  FirstIds kept = kept_first_ids(first_ids, rows, sessions);
+  m.rewrite_from(dense, detector, rows, kept.text);
   m.frames = detector.size();
   m.sessions = sessions;
   m.last_session = rows.empty() ? -1 : rows.back().session;
   m.last_frame = rows.empty() ? -1 : rows.back().id;
-  m.session_first = std::move(session_first);
+  m.session_first = std::move(kept.ids);
   if (rows.empty()) m.width = m.height = 0, m.grid = GridSize{0, 0};
   m.checkpoint("open");
   // The freed pages go back to the file system.
   exec_write(m.db, m.path, "VACUUM");
   m.checkpoint("open");
   return forgotten;
+}
+
+std::vector<FrameKeys> Database::Impl::read_keys() const {
+  std::vector<FrameKeys> rows;
+  Statement stmt(db, path,
+                 concat("SELECT session, name, ", frame_column(format), " FROM frames ORDER BY id")
+                     .c_str());
+  while (step_read(db, stmt.get(), path)) {
+    rows.push_back({sqlite3_column_int64(stmt.get(), 0), column_text(stmt.get(), 1),
+                    sqlite3_column_int64(stmt.get(), 2)});
+  }
+  return rows;
+}
+
+void Database::Impl::rewrite_from(std::int64_t dense, const Detector& detector,
+                                  const std::vector<FrameKeys>& rows, const std::string& first_ids) {
+  transaction([&] {
+    const std::map<std::string, std::string> saved = meta;
+    try {
+      Statement drop(db, path, "DELETE FROM frames WHERE id >= ?1");
+      sqlite3_bind_int64(drop.get(), 1, dense);
+      if (sqlite3_step(drop.get()) != SQLITE_DONE) io_error(path, "cannot write (", sqlite3_errmsg(db), ")");
+      // The saved graph numbers the forgotten frames: the next resume builds it again.
+      exec_write(db, path, "DELETE FROM indexes");
+      for (std::int64_t f = dense; f < detector.size(); ++f) {
+        const FrameKeys& r = rows[static_cast<std::size_t>(f)];
+        insert_frame(detector, f, r.session, r.name, r.id);
+      }
+      if (first_ids.empty()) {
+        meta.erase("session_first_ids");
+        exec_write(db, path, "DELETE FROM meta WHERE key = 'session_first_ids'");
+      } else {
+        meta["session_first_ids"] = first_ids;
+      }
+      if (rows.empty()) {  // the next frame sets the size again
+        for (const char* key : {"width", "height", "grid_rows", "grid_cols"}) meta[key] = "0";
+      }
+      write_meta();
+    } catch (...) {
+      meta = saved;
+      throw;
+    }
+  });
 }
 
 std::int64_t Database::forget_session(std::int64_t session) {

@@ -23,6 +23,7 @@
 #include "lsgd/error.h"
 #include "lsgd/io/database.h"
 #include "detector_util.h"
+#include "test_util.h"
 
 namespace lsgd::io::database_test_support {
 
@@ -32,7 +33,7 @@ using test::frame;
 
 inline std::string temp_path(const std::string& name) {
   fs::create_directories(LSGD_TEST_TMP);
-  const std::string path = std::string(LSGD_TEST_TMP) + "/database_" + name;
+  const std::string path = std::string(LSGD_TEST_TMP) + "/database_" + test::test_file_tag() + "_" + name;
   fs::remove_all(path);
   for (const char* suffix : {"-wal", "-shm", "-journal"}) fs::remove(path + suffix);
   return path;

@@ -37,7 +37,7 @@ using test::options;
 
 std::string temp_path(const std::string& name) {
   std::filesystem::create_directories(LSGD_TEST_TMP);
-  const std::string path = std::string(LSGD_TEST_TMP) + "/forget_" + name;
+  const std::string path = std::string(LSGD_TEST_TMP) + "/forget_" + test::test_file_tag() + "_" + name;
   std::filesystem::remove_all(path);
   for (const char* suffix : {"-wal", "-shm", "-journal"}) std::filesystem::remove(path + suffix);
   return path;

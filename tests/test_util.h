@@ -19,6 +19,19 @@
 namespace lsgd::test {
 
 // SplitMix64: advances `state` and returns the next 64-bit pseudo-random value.
+// The running test's full name as part of a file name ("Suite.Name", or
+// "Prefix_Suite.Name_3" for a parameter): a file named with it is the test's
+// own when ctest runs tests in parallel, each in its own process.
+inline std::string test_file_tag() {
+  const ::testing::TestInfo* info = ::testing::UnitTest::GetInstance()->current_test_info();
+  if (info == nullptr) return "no_test";
+  std::string tag = std::string(info->test_suite_name()) + "." + info->name();
+  for (char& c : tag) {
+    if (c == '/') c = '_';
+  }
+  return tag;
+}
+
 inline std::uint64_t splitmix64(std::uint64_t& state) {
   std::uint64_t z = (state += 0x9E3779B97F4A7C15ull);
   z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;

@@ -292,7 +292,7 @@ class Detector {
   std::vector<Candidate> places_;  // the ranked places, top_n and those the search follows
   std::vector<double> row_;     // exhaustive: the query's similarity to every candidate
   // Set while process() or restore_frame() runs: a second, overlapping
-  // call throws (class Exclusive in detector.cc).
+  // call throws (class Exclusive in src/detector_internal.h).
   std::atomic<bool> busy_{false};
   class Exclusive;
 };

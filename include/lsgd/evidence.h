@@ -263,6 +263,23 @@ class AppearanceEvidence {
   // Drops the records that hold no query of the ring any more (add_query).
   void prune_terms();
   const Row* ring_row(std::int64_t query) const;
+  // realign()'s steps (evidence_places.cc).
+  struct Reach {
+    std::int64_t limit;   // candidates j < limit
+    std::int64_t span;    // tolerance + reach: a candidate's window
+    std::int64_t radius;  // 2 * tolerance + 1: one place
+  };
+  void realign_each(const FrameStore& store, const DescriptorView& descriptor,
+                    const std::vector<Candidate>& raw, SimilarityMetric metric, int top_n,
+                    std::vector<Candidate>& out);
+  void score_windows(const FrameStore& store, const DescriptorView& descriptor, SimilarityMetric metric,
+                     const Reach& r);
+  void window_places(const Reach& r, std::vector<Candidate>& out) const;
+  bool promote_followed(const FrameStore& store, const DescriptorView& descriptor,
+                        const std::vector<std::int64_t>& followed, SimilarityMetric metric,
+                        const Reach& r, int top_n, const std::vector<Candidate>& out);
+  void keep_beyond(std::size_t top_n, std::size_t keep, std::int64_t radius,
+                   std::vector<Candidate>& out) const;
   Row* ring_row(std::int64_t query);
 
   SequenceOptions options_;

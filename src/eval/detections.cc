@@ -267,15 +267,9 @@ Row parse_row(const std::vector<std::string>& f, const Columns& c, const std::st
   return row;
 }
 
-}  // namespace
-
-std::vector<FrameRecord> read_detections(const std::string& path, std::int64_t frames) {
-  if (frames < -1 || frames > kMaxFrames) {
-    internal::throw_invalid("read_detections: frames = ", frames, " must be in [-1, ", kMaxFrames,
-                            "]");
-  }
+// Reads the file's rows; a header, when there is one, sets `columns`.
+std::vector<Row> read_rows(const std::string& path, Columns& columns) {
   RecordReader reader(path);
-  Columns columns;
   std::vector<Row> rows;
   std::string record;
   for (bool first = true; reader.next(record); first = false) {
@@ -293,57 +287,70 @@ std::vector<FrameRecord> read_detections(const std::string& path, std::int64_t f
     rows.push_back(row);
   }
   if (rows.empty()) throw FormatError(concat("detections file '", path, "' has no row"));
-  if (frames < 0) {
-    frames = 0;
-    for (const Row& r : rows) frames = std::max(frames, r.query + 1);
+  return rows;
+}
+
+// The sequence length: `frames` when given (>= 0), else one past the last query.
+std::int64_t frame_count(const std::vector<Row>& rows, std::int64_t frames) {
+  if (frames >= 0) return frames;
+  frames = 0;
+  for (const Row& r : rows) frames = std::max(frames, r.query + 1);
+  return frames;
+}
+
+// One query's rows of a top-k file: (rank, (candidate, line)).
+using Ranks = std::vector<std::pair<std::int64_t, std::pair<Candidate, std::int64_t>>>;
+
+// Throws unless the row's frame ids lie in [0, frames).
+void check_row_frames(const Row& r, std::int64_t frames, const std::string& where) {
+  if (r.query >= frames) {
+    throw FormatError(concat(where, ": query ", r.query, " is outside the ", frames,
+                             " frames (does the file belong to this sequence and subsampling?)"));
   }
-  std::vector<FrameRecord> records(static_cast<std::size_t>(frames));
-  std::vector<std::int64_t> line_of(static_cast<std::size_t>(frames), 0);
-  // Top-k files: each query's (rank, (candidate, line)).
-  std::vector<std::vector<std::pair<std::int64_t, std::pair<Candidate, std::int64_t>>>> ranks_of(
-      columns.rank >= 0 ? static_cast<std::size_t>(frames) : 0);
-  for (std::int64_t i = 0; i < frames; ++i) records[static_cast<std::size_t>(i)].frame = i;
-  for (const Row& r : rows) {
-    const std::string where = concat(path, ":", r.line);
-    if (r.query >= frames) {
-      throw FormatError(concat(where, ": query ", r.query, " is outside the ", frames,
-                               " frames (does the file belong to this sequence and subsampling?)"));
-    }
-    if (r.match >= frames) {
-      throw FormatError(concat(where, ": match ", r.match, " is outside the ", frames, " frames"));
-    }
-    if (r.ranking && r.ranking->best.frame >= frames) {
-      throw FormatError(concat(where, ": ranked_frame ", r.ranking->best.frame, " is outside the ",
-                               frames, " frames"));
-    }
-    FrameRecord& out = records[static_cast<std::size_t>(r.query)];
-    if (columns.rank >= 0) {
-      // A top-k file: the query's candidates by rank, rank 1 reported.
-      auto& ranks = ranks_of[static_cast<std::size_t>(r.query)];
-      const auto twice = std::find_if(ranks.begin(), ranks.end(),
-                                      [&](const auto& k) { return k.first == r.rank; });
-      if (twice != ranks.end()) {
-        throw FormatError(concat(where, ": query ", r.query, " already has rank ", r.rank, " on line ",
-                                 twice->second.second));
-      }
-      ranks.push_back({r.rank, {Candidate{r.match, r.score}, r.line}});
-      if (r.rank != 1) continue;
-    } else {
-      std::int64_t& seen = line_of[static_cast<std::size_t>(r.query)];
-      if (seen != 0) {
-        throw FormatError(concat(where, ": query ", r.query, " already has a row on line ", seen,
-                                 " (one reported loop per query; top-k files have a rank column)"));
-      }
-      seen = r.line;
-    }
-    out.timings.total_ms = r.ms;
-    out.ranking = r.ranking;
-    if (r.match >= 0) {
-      out.reported = Candidate{r.match, r.score};
-      out.candidates = {out.reported};
-      out.loop = r.declared;
-    }
+  if (r.match >= frames) {
+    throw FormatError(concat(where, ": match ", r.match, " is outside the ", frames, " frames"));
   }
+  if (r.ranking && r.ranking->best.frame >= frames) {
+    throw FormatError(concat(where, ": ranked_frame ", r.ranking->best.frame, " is outside the ",
+                             frames, " frames"));
+  }
+}
+
+// Notes a top-k row under its query; true for rank 1 (the reported match).
+bool note_rank(const Row& r, Ranks& ranks, const std::string& where) {
+  const auto twice = std::find_if(ranks.begin(), ranks.end(),
+                                  [&](const auto& k) { return k.first == r.rank; });
+  if (twice != ranks.end()) {
+    throw FormatError(concat(where, ": query ", r.query, " already has rank ", r.rank, " on line ",
+                             twice->second.second));
+  }
+  ranks.push_back({r.rank, {Candidate{r.match, r.score}, r.line}});
+  return r.rank == 1;
+}
+
+// Notes a row of a one-row-per-query file; throws on a second row for its query.
+void note_single(const Row& r, std::int64_t& seen, const std::string& where) {
+  if (seen != 0) {
+    throw FormatError(concat(where, ": query ", r.query, " already has a row on line ", seen,
+                             " (one reported loop per query; top-k files have a rank column)"));
+  }
+  seen = r.line;
+}
+
+// Sets a query's record from its reported row.
+void set_reported(const Row& r, FrameRecord& out) {
+  out.timings.total_ms = r.ms;
+  out.ranking = r.ranking;
+  if (r.match >= 0) {
+    out.reported = Candidate{r.match, r.score};
+    out.candidates = {out.reported};
+    out.loop = r.declared;
+  }
+}
+
+// Top-k files: each query's candidates in rank order; throws when rank 1 is missing.
+void set_ranked_candidates(const std::string& path, std::vector<Ranks>& ranks_of,
+                           std::vector<FrameRecord>& records) {
   for (std::size_t q = 0; q < ranks_of.size(); ++q) {
     auto& ranks = ranks_of[q];
     if (ranks.empty()) continue;
@@ -358,6 +365,35 @@ std::vector<FrameRecord> read_detections(const std::string& path, std::int64_t f
       if (k.second.first.frame >= 0) out.candidates.push_back(k.second.first);
     }
   }
+}
+
+}  // namespace
+
+std::vector<FrameRecord> read_detections(const std::string& path, std::int64_t frames) {
+  if (frames < -1 || frames > kMaxFrames) {
+    internal::throw_invalid("read_detections: frames = ", frames, " must be in [-1, ", kMaxFrames,
+                            "]");
+  }
+  Columns columns;
+  const std::vector<Row> rows = read_rows(path, columns);
+  frames = frame_count(rows, frames);
+  std::vector<FrameRecord> records(static_cast<std::size_t>(frames));
+  std::vector<std::int64_t> line_of(static_cast<std::size_t>(frames), 0);
+  std::vector<Ranks> ranks_of(columns.rank >= 0 ? static_cast<std::size_t>(frames) : 0);
+  for (std::int64_t i = 0; i < frames; ++i) records[static_cast<std::size_t>(i)].frame = i;
+  for (const Row& r : rows) {
+    const std::string where = concat(path, ":", r.line);
+    check_row_frames(r, frames, where);
+    const auto q = static_cast<std::size_t>(r.query);
+    if (columns.rank >= 0) {
+      // A top-k file: the query's candidates by rank, rank 1 reported.
+      if (!note_rank(r, ranks_of[q], where)) continue;
+    } else {
+      note_single(r, line_of[q], where);
+    }
+    set_reported(r, records[q]);
+  }
+  set_ranked_candidates(path, ranks_of, records);
   return records;
 }
 

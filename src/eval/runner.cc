@@ -31,6 +31,95 @@ double thread_cpu_ms() {
   return static_cast<double>(t.tv_sec) * 1e3 + static_cast<double>(t.tv_nsec) * 1e-6;
 }
 
+// Throws unless the source has frames, `options.first` lies in it, the stored ids
+// are the detector's and increase below the first new id, and the new ids fit.
+void check_run(const Detector& detector, const FrameSource& source, const RunOptions& options) {
+  if (source.frames <= 0 || !source.load) {
+    internal::throw_invalid("run_detector: the frame source is empty (", source.frames,
+                            " frames)");
+  }
+  if (options.first < 0 || options.first > source.frames) {
+    internal::throw_invalid("run_detector: first frame ", options.first, " is outside the ",
+                            source.frames, " frames of the source");
+  }
+  const std::vector<std::int64_t>& ids = options.stored_ids;
+  if (static_cast<std::int64_t>(ids.size()) != detector.size()) {
+    internal::throw_invalid("run_detector: ", ids.size(), " stored ids for a detector holding ",
+                            detector.size(), " frames");
+  }
+  for (std::size_t k = 0; k < ids.size(); ++k) {
+    const std::int64_t bound = k + 1 < ids.size() ? ids[k + 1] : options.first_id + options.first;
+    if (ids[k] < 0 || ids[k] >= bound) {
+      internal::throw_invalid("run_detector: stored id ", ids[k], " is negative or not below ",
+                              "the next id ", bound);
+    }
+    // The detector keeps the ids it was given (Detector::id_of): the same.
+    if (ids[k] != detector.id_of(static_cast<std::int64_t>(k))) {
+      internal::throw_invalid("run_detector: stored id ", ids[k], " of frame ", k, " is not the detector's ",
+                              detector.id_of(static_cast<std::int64_t>(k)));
+    }
+  }
+  if (options.first_id < 0 || options.first_id > kMaxFrameId - source.frames) {
+    internal::throw_invalid("run_detector: first id ", options.first_id, " is outside [0, ",
+                            kMaxFrameId - source.frames, "]");
+  }
+}
+
+// Loads source frame `i` and gives it to the detector as `id`; sets the load and CPU times.
+Result load_and_process(Detector& detector, const FrameSource& source, std::int64_t i,
+                        std::int64_t id, FrameTimes& times) {
+  const auto start = std::chrono::steady_clock::now();
+  const cv::Mat image = source.load(i);
+  times.load_ms =
+      std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+  const double cpu_start = thread_cpu_ms();
+  Result result = detector.process(image, id, source.stamp ? source.stamp(i) : kNoStamp);
+  times.process_cpu_ms = thread_cpu_ms() - cpu_start;
+  return result;
+}
+
+// A frame the detector refused: re-thrown, or reported and (kept records) marked skipped.
+void skip_frame(const Error& e, const FrameSource& source, std::int64_t i, std::int64_t id,
+                const FrameTimes& times, const RunOptions& options, const SkipCallback& on_skip,
+                std::vector<FrameRecord>& records) {
+  const std::string name = source.name ? source.name(i) : std::to_string(i);
+  if (!options.skip_bad_frames) rethrow_for_frame(e, id, name);
+  if (on_skip) on_skip(id, name, e.what());
+  if (options.keep_records) {
+    FrameRecord skipped;
+    skipped.frame = id;
+    skipped.load_ms = times.load_ms;
+    skipped.skipped = true;
+    records.push_back(skipped);
+  }
+}
+
+// Renames the detector's dense frame numbers in `result` to the run's ids.
+void to_run_ids(Result& result, const std::vector<std::int64_t>& ids) {
+  const auto to_id = [&](std::int64_t dense) {
+    return dense >= 0 && dense < static_cast<std::int64_t>(ids.size())
+               ? ids[static_cast<std::size_t>(dense)]
+               : dense;
+  };
+  result.best.frame = to_id(result.best.frame);
+  result.ranking.best.frame = to_id(result.ranking.best.frame);
+  for (Candidate& c : result.candidates) c.frame = to_id(c.frame);
+  for (StageVerdict& v : result.verification) v.candidate = to_id(v.candidate);
+}
+
+// The record kept of a processed frame (takes its candidates).
+FrameRecord record_of(Result& result, const FrameTimes& times) {
+  FrameRecord record;
+  record.frame = result.frame;
+  record.reported = result.best;
+  record.loop = result.loop;
+  record.ranking = result.ranking;
+  record.candidates = std::move(result.candidates);
+  record.timings = result.timings;
+  record.load_ms = times.load_ms;
+  return record;
+}
+
 }  // namespace
 
 FrameSource sequence_source(const io::Sequence& sequence) {
@@ -93,89 +182,28 @@ std::vector<std::string> setup_warnings(const Detector& detector, const GroundTr
 std::vector<FrameRecord> run_detector(Detector& detector, const FrameSource& source,
                                       const FrameCallback& on_frame, const RunOptions& options,
                                       const SkipCallback& on_skip) {
-  if (source.frames <= 0 || !source.load) {
-    internal::throw_invalid("run_detector: the frame source is empty (", source.frames,
-                            " frames)");
-  }
-  if (options.first < 0 || options.first > source.frames) {
-    internal::throw_invalid("run_detector: first frame ", options.first, " is outside the ",
-                            source.frames, " frames of the source");
-  }
+  check_run(detector, source, options);
   // The run's id of every frame the detector holds (the detector's frame
   // numbers are dense; its ids, Detector::id_of, are these).
   std::vector<std::int64_t> ids = options.stored_ids;
-  if (static_cast<std::int64_t>(ids.size()) != detector.size()) {
-    internal::throw_invalid("run_detector: ", ids.size(), " stored ids for a detector holding ",
-                            detector.size(), " frames");
-  }
-  for (std::size_t k = 0; k < ids.size(); ++k) {
-    const std::int64_t bound = k + 1 < ids.size() ? ids[k + 1] : options.first_id + options.first;
-    if (ids[k] < 0 || ids[k] >= bound) {
-      internal::throw_invalid("run_detector: stored id ", ids[k], " is negative or not below ",
-                              "the next id ", bound);
-    }
-    // The detector keeps the ids it was given (Detector::id_of): the same.
-    if (ids[k] != detector.id_of(static_cast<std::int64_t>(k))) {
-      internal::throw_invalid("run_detector: stored id ", ids[k], " of frame ", k, " is not the detector's ",
-                              detector.id_of(static_cast<std::int64_t>(k)));
-    }
-  }
-  if (options.first_id < 0 || options.first_id > kMaxFrameId - source.frames) {
-    internal::throw_invalid("run_detector: first id ", options.first_id, " is outside [0, ",
-                            kMaxFrameId - source.frames, "]");
-  }
-  const auto to_id = [&](std::int64_t dense) {
-    return dense >= 0 && dense < static_cast<std::int64_t>(ids.size())
-               ? ids[static_cast<std::size_t>(dense)]
-               : dense;
-  };
   std::vector<FrameRecord> records;
   if (options.keep_records) records.reserve(static_cast<std::size_t>(source.frames - options.first));
   ids.reserve(ids.size() + static_cast<std::size_t>(source.frames - options.first));
   for (std::int64_t i = options.first; i < source.frames; ++i) {
     const std::int64_t id = options.first_id + i;
-    const auto start = std::chrono::steady_clock::now();
     Result result;
     FrameTimes times;
     try {
-      const cv::Mat image = source.load(i);
-      times.load_ms =
-          std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start)
-              .count();
-      const double cpu_start = thread_cpu_ms();
-      result = detector.process(image, id, source.stamp ? source.stamp(i) : kNoStamp);
-      times.process_cpu_ms = thread_cpu_ms() - cpu_start;
+      result = load_and_process(detector, source, i, id, times);
     } catch (const Error& e) {
-      const std::string name = source.name ? source.name(i) : std::to_string(i);
-      if (!options.skip_bad_frames) rethrow_for_frame(e, id, name);
-      if (on_skip) on_skip(id, name, e.what());
-      if (options.keep_records) {
-        FrameRecord skipped;
-        skipped.frame = id;
-        skipped.load_ms = times.load_ms;
-        skipped.skipped = true;
-        records.push_back(skipped);
-      }
+      skip_frame(e, source, i, id, times, options, on_skip, records);
       continue;
     }
     ids.push_back(id);
     result.frame = id;
-    result.best.frame = to_id(result.best.frame);
-    result.ranking.best.frame = to_id(result.ranking.best.frame);
-    for (Candidate& c : result.candidates) c.frame = to_id(c.frame);
-    for (StageVerdict& v : result.verification) v.candidate = to_id(v.candidate);
+    to_run_ids(result, ids);
     if (on_frame) on_frame(result, times);
-    if (options.keep_records) {
-      FrameRecord record;
-      record.frame = result.frame;
-      record.reported = result.best;
-      record.loop = result.loop;
-      record.ranking = result.ranking;
-      record.candidates = std::move(result.candidates);
-      record.timings = result.timings;
-      record.load_ms = times.load_ms;
-      records.push_back(std::move(record));
-    }
+    if (options.keep_records) records.push_back(record_of(result, times));
   }
   return records;
 }

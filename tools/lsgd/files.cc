@@ -72,6 +72,101 @@ void check_folder(const std::string& flag, const std::string& path, const std::s
   }
 }
 
+// An output folder: missing (created below a writable folder) or holding only
+// what the command writes there itself (the names `own`, `marker` among them).
+void check_output_folder(const std::string& flag, const std::string& path,
+                         const std::vector<std::string>& own, const std::string& marker) {
+  struct stat st {};
+  if (::stat(path.c_str(), &st) != 0) {
+    check_folder(flag, path, folder_of(fs::path(path).lexically_normal().string()));
+    return;
+  }
+  if (!S_ISDIR(st.st_mode)) unwritable(flag, path, "it exists and is not a folder");
+  std::error_code ec;
+  bool empty = true, marked = false;
+  for (const auto& entry : fs::directory_iterator(path, ec)) {
+    const std::string name = entry.path().filename().string();
+    empty = false;
+    marked = marked || name == marker;
+    if (std::find(own.begin(), own.end(), name) == own.end()) {
+      throw InvalidArgument(concat("refusing to write into ", flag, " '", path,
+                                   "': it holds '", name, "', which this command did not "
+                                   "write; give a new or empty folder (nothing was run)"));
+    }
+  }
+  if (!empty && !marked) {
+    throw InvalidArgument(concat("refusing to write into ", flag, " '", path, "': it is not "
+                                 "empty and has no ", marker, ", so this command "
+                                 "did not write it; give a new or empty folder (nothing was "
+                                 "run)"));
+  }
+  if (::access(path.c_str(), W_OK | X_OK) != 0) {
+    unwritable(flag, path, concat("the folder is not writable (", std::strerror(errno), ")"));
+  }
+}
+
+// An output already checked: the flag that names it and its path.
+struct Written {
+  std::string flag;
+  std::string path;
+};
+
+// The outputs checked so far, by inode (those that exist) and by spelling (all).
+struct Outputs {
+  std::map<FileId, Written> existing;
+  std::map<std::string, Written> spelled;
+};
+
+[[noreturn]] void same_file(const std::string& flag, const std::string& path, const Written& other) {
+  throw InvalidArgument(concat("refusing to write ", flag, " '", path, "' and ", other.flag, " '",
+                               other.path, "': they are the same file (nothing was run)"));
+}
+
+// An output: writable where it goes, a regular file when it exists, and not
+// the file of another flag; notes it in `outputs`.
+void check_output(const std::string& flag, const std::string& path, Outputs& outputs) {
+  FileId id{};
+  struct stat st {};
+  if (identify(path, id, st)) {
+    if (S_ISDIR(st.st_mode)) unwritable(flag, path, "it is a folder");
+    // A character device (/dev/null, a terminal) or a pipe is a stream the
+    // user chose; a disk or a socket is not a place for a result.
+    if (!S_ISREG(st.st_mode) && !S_ISCHR(st.st_mode) && !S_ISFIFO(st.st_mode)) {
+      unwritable(flag, path, "it is not a regular file (a block device or a socket)");
+    }
+    if (!S_ISREG(st.st_mode)) return;  // a stream: writing it destroys nothing
+    if (::access(path.c_str(), W_OK) != 0) {
+      unwritable(flag, path, concat("it is read-only (", std::strerror(errno), ")"));
+    }
+    const auto [it, fresh] = outputs.existing.emplace(id, Written{flag, path});
+    if (!fresh && it->second.flag != flag) same_file(flag, path, it->second);
+  } else {
+    check_folder(flag, path, folder_of(target_of(path)));
+  }
+  const auto [it, new_spelling] = outputs.spelled.emplace(spelling(path), Written{flag, path});
+  if (!new_spelling && it->second.flag != flag) same_file(flag, path, it->second);
+}
+
+// An input is no output of another flag: by inode when the input exists, by
+// spelling when it does not (a database's -wal file comes and goes).
+void check_not_output(const std::string& flag, const std::string& path, const std::string& what,
+                      const Outputs& outputs) {
+  FileId id{};
+  struct stat st {};
+  const Written* out = nullptr;
+  if (identify(path, id, st)) {
+    const auto it = outputs.existing.find(id);
+    if (it != outputs.existing.end()) out = &it->second;
+  } else {
+    const auto it = outputs.spelled.find(spelling(path));
+    if (it != outputs.spelled.end()) out = &it->second;
+  }
+  if (out == nullptr || out->flag == flag) return;  // a database is its own output
+  throw InvalidArgument(concat("refusing to write ", out->flag, " '", out->path, "': it is ",
+                               what, " ('", path, "'); choose another file (nothing "
+                               "was run)"));
+}
+
 }  // namespace
 
 void CommandFiles::input(const std::string& path, const std::string& flag) {
@@ -114,92 +209,13 @@ void CommandFiles::output_folder(const std::string& path, const std::string& fla
 }
 
 void CommandFiles::check() const {
-  // Output folders: missing (created below a writable folder) or holding only
-  // what the command writes there itself.
+  // Output folders first, then every output, then that no output is an input.
   for (std::size_t f = 0; f < folders_.size(); ++f) {
-    const File& d = folders_[f];
-    struct stat st {};
-    if (::stat(d.path.c_str(), &st) != 0) {
-      check_folder(d.flag, d.path, folder_of(fs::path(d.path).lexically_normal().string()));
-      continue;
-    }
-    if (!S_ISDIR(st.st_mode)) unwritable(d.flag, d.path, "it exists and is not a folder");
-    std::error_code ec;
-    bool empty = true, marked = false;
-    for (const auto& entry : fs::directory_iterator(d.path, ec)) {
-      const std::string name = entry.path().filename().string();
-      const auto& own = folder_names_[f];
-      empty = false;
-      marked = marked || name == folder_markers_[f];
-      if (std::find(own.begin(), own.end(), name) == own.end()) {
-        throw InvalidArgument(concat("refusing to write into ", d.flag, " '", d.path,
-                                     "': it holds '", name, "', which this command did not "
-                                     "write; give a new or empty folder (nothing was run)"));
-      }
-    }
-    if (!empty && !marked) {
-      throw InvalidArgument(concat("refusing to write into ", d.flag, " '", d.path, "': it is not "
-                                   "empty and has no ", folder_markers_[f], ", so this command "
-                                   "did not write it; give a new or empty folder (nothing was "
-                                   "run)"));
-    }
-    if (::access(d.path.c_str(), W_OK | X_OK) != 0) {
-      unwritable(d.flag, d.path, concat("the folder is not writable (", std::strerror(errno), ")"));
-    }
+    check_output_folder(folders_[f].flag, folders_[f].path, folder_names_[f], folder_markers_[f]);
   }
-
-  // Every output: writable where it goes, a regular file when it exists.
-  std::map<FileId, const File*> existing;
-  std::map<std::string, const File*> spelled;
-  for (const File& out : outputs_) {
-    FileId id{};
-    struct stat st {};
-    if (identify(out.path, id, st)) {
-      if (S_ISDIR(st.st_mode)) unwritable(out.flag, out.path, "it is a folder");
-      // A character device (/dev/null, a terminal) or a pipe is a stream the
-      // user chose; a disk or a socket is not a place for a result.
-      if (!S_ISREG(st.st_mode) && !S_ISCHR(st.st_mode) && !S_ISFIFO(st.st_mode)) {
-        unwritable(out.flag, out.path, "it is not a regular file (a block device or a socket)");
-      }
-      if (!S_ISREG(st.st_mode)) continue;  // a stream: writing it destroys nothing
-      if (::access(out.path.c_str(), W_OK) != 0) {
-        unwritable(out.flag, out.path, concat("it is read-only (", std::strerror(errno), ")"));
-      }
-      const auto [it, fresh] = existing.emplace(id, &out);
-      if (!fresh && it->second->flag != out.flag) {
-        throw InvalidArgument(concat("refusing to write ", out.flag, " '", out.path, "' and ",
-                                     it->second->flag, " '", it->second->path,
-                                     "': they are the same file (nothing was run)"));
-      }
-    } else {
-      check_folder(out.flag, out.path, folder_of(target_of(out.path)));
-    }
-    const auto [spelled_it, new_spelling] = spelled.emplace(spelling(out.path), &out);
-    if (!new_spelling && spelled_it->second->flag != out.flag) {
-      throw InvalidArgument(concat("refusing to write ", out.flag, " '", out.path, "' and ",
-                                   spelled_it->second->flag, " '", spelled_it->second->path,
-                                   "': they are the same file (nothing was run)"));
-    }
-  }
-
-  // No output is an input: by inode when the input exists, by spelling when
-  // it does not (a database's -wal file comes and goes).
-  for (const File& in : inputs_) {
-    FileId id{};
-    struct stat st {};
-    const File* out = nullptr;
-    if (identify(in.path, id, st)) {
-      const auto it = existing.find(id);
-      if (it != existing.end()) out = it->second;
-    } else {
-      const auto it = spelled.find(spelling(in.path));
-      if (it != spelled.end()) out = it->second;
-    }
-    if (out == nullptr || out->flag == in.flag) continue;  // a database is its own output
-    throw InvalidArgument(concat("refusing to write ", out->flag, " '", out->path, "': it is ",
-                                 in.what, " ('", in.path, "'); choose another file (nothing "
-                                 "was run)"));
-  }
+  Outputs outputs;
+  for (const File& out : outputs_) check_output(out.flag, out.path, outputs);
+  for (const File& in : inputs_) check_not_output(in.flag, in.path, in.what, outputs);
 }
 
 }  // namespace lsgd::cli

@@ -107,102 +107,129 @@ void check_frame_size(const std::string& database, const Detector& detector,
   }
 }
 
+// Opens --database when it exists (the options: --config's, else the stored
+// ones, with the flags applied) or creates it with the options the flags give.
+io::Database open_or_create(const RunArgs& args, bool exists, DetectorOptions& options) {
+  const DetectorFlags& flags = args.detector;
+  if (!exists) {
+    options = flags.resolve();
+    return io::Database::create(args.database, options);
+  }
+  io::Database db = io::Database::open(args.database);
+  if (!db.note().empty()) std::cerr << "lsgd: note: " << args.database << ": " << db.note() << "\n";
+  options = flags.config.empty() ? db.options() : io::load_config(flags.config);
+  flags.apply(options);
+  return db;
+}
+
+// Saves the search index of the stored frames (not when the detector holds a
+// frame the database lacks).
+void save_index(io::Database& db, const Detector& detector) {
+  if (detector.size() != db.frames()) return;
+  const auto start = std::chrono::steady_clock::now();
+  const std::int64_t covered = db.save_index(detector);
+  if (covered > 0) {
+    std::cerr << "saved the search index of " << covered << " frames in "
+              << std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count()
+              << " s\n";
+  }
+}
+
+void print_session_start(const std::string& database, bool exists, const Detector& detector,
+                         const io::SessionPlan& plan, std::int64_t images) {
+  std::cerr << (exists ? "resumed " : "created ") << database << ": " << detector.size()
+            << " frames stored; "
+            << (plan.resume ? "continuing session " : "appending session ") << plan.session
+            << (plan.resume ? " at image " + std::to_string(plan.first) : std::string())
+            << ", frame ids " << plan.first_id + plan.first << " .. "
+            << plan.first_id + images - 1 << "\n";
+}
+
+// Processes the session's images, writing each frame's row and storing the
+// frame. The search index is saved when the run ends, also when an error ends
+// it (what the frames stored so far built is kept).
+FrameRun store_frames(const RunArgs& args, const io::Sequence& sequence,
+                      const eval::FrameSource& source, const io::SessionPlan& plan,
+                      Detector& detector, io::Database& db, CsvWriter& csv) {
+  eval::RunOptions run_options;
+  run_options.skip_bad_frames = !args.layout.strict;
+  run_options.first = plan.first;
+  run_options.first_id = plan.first_id;
+  run_options.stored_ids = db.frame_ids();
+  run_options.keep_records = false;
+  // The row is written (and flushed) before the frame is committed: after a
+  // crash the CSV holds at most one row the database lacks, which the
+  // re-run cuts (continue_csv).
+  FrameRun run;
+  try {
+    run = run_frames(
+        detector, source, "run", run_options, [&](const Result& r, const eval::FrameTimes&) {
+          const std::string& image = sequence.images[static_cast<std::size_t>(r.frame - plan.first_id)];
+          csv.write(r, image);
+          db.append(detector, r, plan.session, io::stored_image_name(image), r.frame);
+        });
+  } catch (...) {
+    try {
+      save_index(db, detector);
+    } catch (const std::exception& e) {
+      std::cerr << "lsgd: note: the search index was not saved (" << e.what() << ")\n";
+    }
+    throw;
+  }
+  save_index(db, detector);
+  return run;
+}
+
+// Runs the sequence as a session of `db` (opened or, when not `exists`,
+// created with `options`).
+void run_session(const RunArgs& args, const io::Sequence& sequence, bool exists,
+                 const DetectorOptions& options, io::Database& db) {
+  Detector detector(options);
+  // Checks the options against the stored ones; the saved search index
+  // (index mode's graph) comes back with the frames.
+  db.restore(detector, args.rebuild_index ? io::IndexUse::kRebuild : io::IndexUse::kSaved);
+  const eval::FrameSource source = eval::sequence_source(sequence);
+  const io::SessionPlan plan = io::plan_session(db, detector, sequence.images, args.session);
+  const auto images = static_cast<std::int64_t>(sequence.images.size());
+  if (plan.resume && plan.first >= images) {
+    std::cerr << args.database << ": session " << plan.session << " already holds every image "
+              << "of --sequence (frames " << plan.first_id << " .. " << plan.last_stored
+              << "): nothing to do" << kNewSessionHint << "\n";
+    return;
+  }
+  check_frame_size(args.database, detector, source, plan.first);
+  print_session_start(args.database, exists, detector, plan, images);
+  // A new session is another sequence: nothing continues across it.
+  if (!plan.resume && detector.size() > 0) detector.cut();
+  const std::unique_ptr<CsvWriter> csv =
+      plan.resume ? continue_csv(args, plan) : std::make_unique<CsvWriter>(args.output);
+  const FrameRun run = store_frames(args, sequence, source, plan, detector, db, *csv);
+  // A new session that stored nothing is an error as a new database is
+  // (frames of another size than the stored ones, a list of garbage).
+  if (run.processed == 0 && !plan.resume) throw_no_frame(run.skipped, run.first_error);
+  std::cerr << "processed " << run.processed << " frames"
+            << (run.skipped > 0 ? " (" + std::to_string(run.skipped) + " skipped)"
+                                : std::string())
+            << ", " << csv->loops() << " loops, " << run.mean_ms() << " ms/frame mean; "
+            << args.database << " holds " << db.frames() << " frames"
+            << (args.output.empty() ? "" : ", rows in " + args.output) << "\n";
+}
+
 void run_database(const RunArgs& args, const io::Sequence& sequence) {
   check_files(args, sequence);
-  const DetectorFlags& flags = args.detector;
   struct stat st {};
   const bool exists = ::stat(args.database.c_str(), &st) == 0;  // also when unreadable
   std::optional<io::Database> db;
   DetectorOptions options;
-  if (exists) {
-    db.emplace(io::Database::open(args.database));
-    if (!db->note().empty()) std::cerr << "lsgd: note: " << args.database << ": " << db->note() << "\n";
-    options = flags.config.empty() ? db->options() : io::load_config(flags.config);
-    flags.apply(options);
-  } else {
-    options = flags.resolve();
-    db.emplace(io::Database::create(args.database, options));
-  }
-  // A database this run created and could not store a frame in is not left behind.
-  const auto discard_if_empty = [&] {
-    if (exists || !db || db->frames() != 0) return;
-    db.reset();
-    for (const char* suffix : {"", "-wal", "-shm"}) std::remove((args.database + suffix).c_str());
-  };
+  db.emplace(open_or_create(args, exists, options));
   try {
-    Detector detector(options);
-    // Checks the options against the stored ones; the saved search index
-    // (index mode's graph) comes back with the frames.
-    db->restore(detector, args.rebuild_index ? io::IndexUse::kRebuild : io::IndexUse::kSaved);
-    // The search index is saved when the run ends, also when an error ends it
-    // (what the frames stored so far built is kept).
-    const auto save_index = [&] {
-      if (detector.size() != db->frames()) return;
-      const auto start = std::chrono::steady_clock::now();
-      const std::int64_t covered = db->save_index(detector);
-      if (covered > 0) {
-        std::cerr << "saved the search index of " << covered << " frames in "
-                  << std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count()
-                  << " s\n";
-      }
-    };
-    const eval::FrameSource source = eval::sequence_source(sequence);
-    const io::SessionPlan plan = io::plan_session(*db, detector, sequence.images, args.session);
-    const auto images = static_cast<std::int64_t>(sequence.images.size());
-    if (plan.resume && plan.first >= images) {
-      std::cerr << args.database << ": session " << plan.session << " already holds every image "
-                << "of --sequence (frames " << plan.first_id << " .. " << plan.last_stored
-                << "): nothing to do" << kNewSessionHint << "\n";
-      return;
-    }
-    check_frame_size(args.database, detector, source, plan.first);
-    std::cerr << (exists ? "resumed " : "created ") << args.database << ": " << detector.size()
-              << " frames stored; "
-              << (plan.resume ? "continuing session " : "appending session ") << plan.session
-              << (plan.resume ? " at image " + std::to_string(plan.first) : std::string())
-              << ", frame ids " << plan.first_id + plan.first << " .. "
-              << plan.first_id + images - 1 << "\n";
-    // A new session is another sequence: nothing continues across it.
-    if (!plan.resume && detector.size() > 0) detector.cut();
-    const std::unique_ptr<CsvWriter> csv =
-        plan.resume ? continue_csv(args, plan) : std::make_unique<CsvWriter>(args.output);
-    eval::RunOptions run_options;
-    run_options.skip_bad_frames = !args.layout.strict;
-    run_options.first = plan.first;
-    run_options.first_id = plan.first_id;
-    run_options.stored_ids = db->frame_ids();
-    run_options.keep_records = false;
-    // The row is written (and flushed) before the frame is committed: after a
-    // crash the CSV holds at most one row the database lacks, which the
-    // re-run cuts (continue_csv).
-    FrameRun run;
-    try {
-      run = run_frames(
-          detector, source, "run", run_options, [&](const Result& r, const eval::FrameTimes&) {
-            const std::string& image = sequence.images[static_cast<std::size_t>(r.frame - plan.first_id)];
-            csv->write(r, image);
-            db->append(detector, r, plan.session, io::stored_image_name(image), r.frame);
-          });
-    } catch (...) {
-      try {
-        save_index();
-      } catch (const std::exception& e) {
-        std::cerr << "lsgd: note: the search index was not saved (" << e.what() << ")\n";
-      }
-      throw;
-    }
-    save_index();
-    // A new session that stored nothing is an error as a new database is
-    // (frames of another size than the stored ones, a list of garbage).
-    if (run.processed == 0 && !plan.resume) throw_no_frame(run.skipped, run.first_error);
-    std::cerr << "processed " << run.processed << " frames"
-              << (run.skipped > 0 ? " (" + std::to_string(run.skipped) + " skipped)"
-                                  : std::string())
-              << ", " << csv->loops() << " loops, " << run.mean_ms() << " ms/frame mean; "
-              << args.database << " holds " << db->frames() << " frames"
-              << (args.output.empty() ? "" : ", rows in " + args.output) << "\n";
+    run_session(args, sequence, exists, options, *db);
   } catch (...) {
-    discard_if_empty();
+    // A database this run created and could not store a frame in is not left behind.
+    if (!exists && db && db->frames() == 0) {
+      db.reset();
+      for (const char* suffix : {"", "-wal", "-shm"}) std::remove((args.database + suffix).c_str());
+    }
     throw;
   }
 }

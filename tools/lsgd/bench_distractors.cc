@@ -279,9 +279,9 @@ void check_memory(const DistractorSetup& a, const DetectorOptions& options, cons
                  available_memory_bytes(), "fewer distractors");
 }
 
-}  // namespace
-
-void run_distractors(const DistractorSetup& a, const DetectorOptions& options) {
+// The modes asked for (all but nodes when none), exhaustive search first: the
+// reference the others are compared with.
+std::vector<std::string> modes_to_run(const DistractorSetup& a) {
   std::vector<std::string> modes = a.modes;
   if (modes.empty()) {
     for (const SearchMode& m : search_modes()) {
@@ -297,23 +297,18 @@ void run_distractors(const DistractorSetup& a, const DetectorOptions& options) {
   }
   modes.erase(std::remove(modes.begin(), modes.end(), std::string(kExhaustiveSearch)), modes.end());
   modes.insert(modes.begin(), kExhaustiveSearch);  // the reference, first
-  const Frames f = load_frames(a, options);
-  check_memory(a, options, f, modes);
-  std::cout << "bench --distractors " << a.distractors << ": " << f.source << " (" << f.width << "x"
-            << f.height << "), " << to_string(options.descriptor.storage) << " storage, verification "
-            << verification_stages(options.verification) << "\n";
-  std::vector<ModeRun> runs;
-  for (const std::string& m : modes) {
-    std::cout << "  " << m << " ..." << std::flush;
-    runs.push_back(run_mode(m, a, options, f));
-    std::cout << " done\n";
-  }
+  return modes;
+}
+
+// Sets each run's agreement with the first (exhaustive search): its best
+// candidates, split by where exhaustive search's lies, and its declared loops.
+void compare_to_exhaustive(std::vector<ModeRun>& runs, std::int64_t distractors) {
   const std::vector<std::int64_t>& reference = runs.front().best;
   for (ModeRun& r : runs) {
     std::int64_t compared[2] = {}, same[2] = {};  // [0]: into the sequence, [1]: a distractor
     for (std::size_t i = 1; i < reference.size(); ++i) {
       if (reference[i] < 0) continue;
-      const int k = reference[i] < a.distractors ? 1 : 0;
+      const int k = reference[i] < distractors ? 1 : 0;
       ++compared[k];
       same[k] += r.best[i] == reference[i] ? 1 : 0;
     }
@@ -334,6 +329,10 @@ void run_distractors(const DistractorSetup& a, const DetectorOptions& options) {
     }
     r.declared_vs_exhaustive = declared > 0 ? static_cast<double>(kept) / declared : 1;
   }
+}
+
+// The table of the runs on standard output.
+void print_runs(const std::vector<ModeRun>& runs) {
   std::cout << std::fixed << std::setprecision(3)
             << "mode        frames   query ms (median, p95)   insert ms (median, p95)   build s   "
                "recall_vs_exhaustive   declared (same as exhaustive)   false   bytes/frame (descriptor)\n";
@@ -360,28 +359,50 @@ void run_distractors(const DistractorSetup& a, const DetectorOptions& options) {
     std::cout << std::setprecision(3) << "\n";
   }
   std::cout.unsetf(std::ios::floatfield);
-  if (!a.json.empty()) {
-    // The top level is the mode asked for (the first that is not exhaustive);
-    // every mode is under "modes".
-    const ModeRun& main = runs.size() > 1 ? runs[1] : runs[0];
-    nlohmann::json j = row_json(main);
-    j["distractors"] = a.distractors;
-    j["sequence"] = f.source;
-    j["width"] = f.width;
-    j["height"] = f.height;
-    j["storage"] = to_string(options.descriptor.storage);
-    j["verification"] = verification_stages(options.verification);
-    j["distractor_run"] = a.run;
-    j["distractor_recipe"] =
-        "descriptor of sequence frame k % M, cells shuffled, each cell's histogram moved by a "
-        "random -24..+24 levels (seed k / distractor_run: one layout and lighting per run)";
-    j["machine"] = to_json(describe_machine());
-    nlohmann::json rows = nlohmann::json::array();
-    for (const ModeRun& r : runs) rows.push_back(row_json(r));
-    j["modes"] = rows;
-    write_json(j, a.json);
-    std::cout << "wrote " << a.json << "\n";
+}
+
+// The runs as JSON in --json: the top level is the mode asked for (the first
+// that is not exhaustive); every mode is under "modes".
+void write_runs_json(const DistractorSetup& a, const DetectorOptions& options, const Frames& f,
+                     const std::vector<ModeRun>& runs) {
+  const ModeRun& main = runs.size() > 1 ? runs[1] : runs[0];
+  nlohmann::json j = row_json(main);
+  j["distractors"] = a.distractors;
+  j["sequence"] = f.source;
+  j["width"] = f.width;
+  j["height"] = f.height;
+  j["storage"] = to_string(options.descriptor.storage);
+  j["verification"] = verification_stages(options.verification);
+  j["distractor_run"] = a.run;
+  j["distractor_recipe"] =
+      "descriptor of sequence frame k % M, cells shuffled, each cell's histogram moved by a "
+      "random -24..+24 levels (seed k / distractor_run: one layout and lighting per run)";
+  j["machine"] = to_json(describe_machine());
+  nlohmann::json rows = nlohmann::json::array();
+  for (const ModeRun& r : runs) rows.push_back(row_json(r));
+  j["modes"] = rows;
+  write_json(j, a.json);
+  std::cout << "wrote " << a.json << "\n";
+}
+
+}  // namespace
+
+void run_distractors(const DistractorSetup& a, const DetectorOptions& options) {
+  const std::vector<std::string> modes = modes_to_run(a);
+  const Frames f = load_frames(a, options);
+  check_memory(a, options, f, modes);
+  std::cout << "bench --distractors " << a.distractors << ": " << f.source << " (" << f.width << "x"
+            << f.height << "), " << to_string(options.descriptor.storage) << " storage, verification "
+            << verification_stages(options.verification) << "\n";
+  std::vector<ModeRun> runs;
+  for (const std::string& m : modes) {
+    std::cout << "  " << m << " ..." << std::flush;
+    runs.push_back(run_mode(m, a, options, f));
+    std::cout << " done\n";
   }
+  compare_to_exhaustive(runs, a.distractors);
+  print_runs(runs);
+  if (!a.json.empty()) write_runs_json(a, options, f, runs);
 }
 
 }  // namespace lsgd::cli::bench

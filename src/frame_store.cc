@@ -71,7 +71,7 @@ FrameStore& FrameStore::operator=(const FrameStore& other) {
   return *this;
 }
 
-std::int64_t FrameStore::add(const Descriptor& descriptor, std::int64_t group) {
+void FrameStore::check_joins(const Descriptor& descriptor, std::int64_t group) const {
   descriptor.check_consistent("FrameStore::add");
   const bool first = slots_.empty();
   if (!first && descriptor.grid != grid_) {
@@ -94,6 +94,11 @@ std::int64_t FrameStore::add(const Descriptor& descriptor, std::int64_t group) {
     internal::throw_invalid("FrameStore::add: group ", group, " is neither one of the ", groups(),
                             " groups nor the next new one");
   }
+}
+
+std::int64_t FrameStore::add(const Descriptor& descriptor, std::int64_t group) {
+  check_joins(descriptor, group);
+  const bool first = slots_.empty();
   const bool compact = descriptor.storage == HistogramStorage::kCompact;
   const std::size_t bytes = compact ? descriptor.compact.size() * sizeof(CompactBin)
                                     : descriptor.hist.size() * sizeof(Bin);

@@ -62,6 +62,9 @@ class FrameStore {
   std::int64_t max_chunk_frames() const { return max_chunk_frames_; }
 
  private:
+  // Throws unless `descriptor` may join the stored frames in `group` (add()).
+  void check_joins(const Descriptor& descriptor, std::int64_t group) const;
+
   static constexpr std::size_t kChunkBytes = std::size_t{4} << 20;
   static constexpr std::size_t kArenaBytes = std::size_t{16} << 20;
 

@@ -15,6 +15,7 @@
 #include <exception>
 #include <limits>
 #include <sstream>
+#include <string>
 
 #include "internal/check.h"
 #include "internal/clock.h"
@@ -96,13 +97,7 @@ class IndexSearch final : public CandidateSearch {
     const std::int64_t limit = std::max<std::int64_t>(0, std::min(q.store.size(), q.id - options_.min_gap));
     Outcome outcome;
     try {
-      if (inserted_ < limit) {
-        const std::int64_t start = internal::now_ns();
-        outcome.inserted = limit - inserted_;
-        // Counted only once in the graph: a failed insertion is retried.
-        for (; inserted_ < limit; ++inserted_) insert(q.store, q.metric, inserted_);
-        outcome.insert_ms = internal::ms_since(start);
-      }
+      if (inserted_ < limit) insert_up_to(q, limit, outcome);
       if (scores_every_frame_for(limit)) {
         search_exhaustive(q.store, q.descriptor, q.id, options_, q.metric, scratch_, out, &row);
         return outcome;
@@ -113,59 +108,16 @@ class IndexSearch final : public CandidateSearch {
       // rank by key and by similarity differ).
       const auto k = static_cast<std::size_t>(std::min<std::int64_t>(
           inserted_, std::max<std::int64_t>(options_.index.shortlist, options_.top_n)));
-      const auto fetch = std::max(k, static_cast<std::size_t>(std::min<std::int64_t>(
-                                         inserted_, options_.index.rescore)));
-      graph_->setEf(std::max<std::size_t>(fetch, static_cast<std::size_t>(options_.index.ef_search)));
-      key_.resize(space_->get_data_size());
-      make_key(q.descriptor, key_.data());
-      auto found = graph_->searchKnn(key_.data(), fetch);
-      ids_.clear();
-      while (!found.empty()) {
-        ids_.push_back(static_cast<std::int64_t>(found.top().second));
-        found.pop();
-      }
+      nearest_keys(q, k);
       const std::size_t from_graph = ids_.size();
-      // The previous frame's places, one frame on along their diagonals: a
-      // revisit whose sequence stands out stays in the shortlist even where
-      // single frames look alike elsewhere. Its top_n are realigned as
-      // candidates; the places and frames it followed beyond them are
-      // followed again, their sequence only (a query that revisits nothing:
-      // its best place is the highest of the map's sequences of noise, which
-      // builds up over many queries and no single frame of which stands out).
-      if (previous_frame_ == q.id - 1) {
-        for (std::size_t rank = 0; rank < previous_.size(); ++rank) {
-          const std::int64_t j = previous_[rank] + 1;
-          if (j < 1 || j >= limit) continue;
-          if (rank < static_cast<std::size_t>(options_.top_n)) {
-            ids_.push_back(j);
-          } else if (followed_.size() < static_cast<std::size_t>(options_.index.follow)) {
-            followed_.push_back(j);
-          }
-        }
-      }
+      follow_previous(q, limit);
       // The newest frame in the graph, just past the temporal window: a query
       // that revisits nothing is often most like its own recent past, a
       // sequence no single frame of which stands out (street + 10^4
       // distractors: 10 of the 13 queries whose place differed from
       // exhaustive search's; docs/performance.md).
       ids_.push_back(limit - 1);
-      // Re-scored exactly, in one batch: the candidates' scores are the metric's own.
-      views_.clear();
-      for (const std::int64_t j : ids_) views_.push_back(q.store.view(j));
-      scores_.resize(views_.size());
-      similarities(q.descriptor, views_.data(), views_.size(), q.metric, scores_.data());
-      scratch_.clear();
-      for (std::size_t i = 0; i < from_graph; ++i) scratch_.push_back({ids_[i], scores_[i]});
-      if (scratch_.size() > k) {
-        std::partial_sort(scratch_.begin(), scratch_.begin() + static_cast<std::ptrdiff_t>(k),
-                          scratch_.end(), better);
-        scratch_.resize(k);
-      }
-      for (std::size_t i = from_graph; i < ids_.size(); ++i) {
-        const bool seen = std::any_of(scratch_.begin(), scratch_.end(),
-                                      [&](const Candidate& c) { return c.frame == ids_[i]; });
-        if (!seen) scratch_.push_back({ids_[i], scores_[i]});
-      }
+      rescore(q, from_graph, k);
     } catch (const InvalidArgument&) {
       throw;
     } catch (const std::exception& e) {  // hnswlib reports allocation failures as runtime_error
@@ -176,6 +128,72 @@ class IndexSearch final : public CandidateSearch {
     // top_n (Detector::score_candidates).
     internal::keep_best(scratch_, static_cast<int>(scratch_.size()), out);
     return outcome;
+  }
+
+  // search()'s steps.
+  void insert_up_to(const Query& q, std::int64_t limit, Outcome& outcome) {
+    const std::int64_t start = internal::now_ns();
+    outcome.inserted = limit - inserted_;
+    // Counted only once in the graph: a failed insertion is retried.
+    for (; inserted_ < limit; ++inserted_) insert(q.store, q.metric, inserted_);
+    outcome.insert_ms = internal::ms_since(start);
+  }
+
+  // The graph's nearest keys to the query's (at least k of them) into ids_.
+  void nearest_keys(const Query& q, std::size_t k) {
+    const auto fetch = std::max(k, static_cast<std::size_t>(std::min<std::int64_t>(
+                                       inserted_, options_.index.rescore)));
+    graph_->setEf(std::max<std::size_t>(fetch, static_cast<std::size_t>(options_.index.ef_search)));
+    key_.resize(space_->get_data_size());
+    make_key(q.descriptor, key_.data());
+    auto found = graph_->searchKnn(key_.data(), fetch);
+    ids_.clear();
+    while (!found.empty()) {
+      ids_.push_back(static_cast<std::int64_t>(found.top().second));
+      found.pop();
+    }
+  }
+
+  // The previous frame's places, one frame on along their diagonals: a
+  // revisit whose sequence stands out stays in the shortlist even where
+  // single frames look alike elsewhere. Its top_n are realigned as
+  // candidates (into ids_); the places and frames it followed beyond them are
+  // followed again, their sequence only (followed_; a query that revisits
+  // nothing: its best place is the highest of the map's sequences of noise,
+  // which builds up over many queries and no single frame of which stands out).
+  void follow_previous(const Query& q, std::int64_t limit) {
+    if (previous_frame_ != q.id - 1) return;
+    for (std::size_t rank = 0; rank < previous_.size(); ++rank) {
+      const std::int64_t j = previous_[rank] + 1;
+      if (j < 1 || j >= limit) continue;
+      if (rank < static_cast<std::size_t>(options_.top_n)) {
+        ids_.push_back(j);
+      } else if (followed_.size() < static_cast<std::size_t>(options_.index.follow)) {
+        followed_.push_back(j);
+      }
+    }
+  }
+
+  // ids_ re-scored exactly, in one batch (the candidates' scores are the
+  // metric's own), into scratch_: the best k of the graph's, then the others
+  // not among them.
+  void rescore(const Query& q, std::size_t from_graph, std::size_t k) {
+    views_.clear();
+    for (const std::int64_t j : ids_) views_.push_back(q.store.view(j));
+    scores_.resize(views_.size());
+    similarities(q.descriptor, views_.data(), views_.size(), q.metric, scores_.data());
+    scratch_.clear();
+    for (std::size_t i = 0; i < from_graph; ++i) scratch_.push_back({ids_[i], scores_[i]});
+    if (scratch_.size() > k) {
+      std::partial_sort(scratch_.begin(), scratch_.begin() + static_cast<std::ptrdiff_t>(k),
+                        scratch_.end(), better);
+      scratch_.resize(k);
+    }
+    for (std::size_t i = from_graph; i < ids_.size(); ++i) {
+      const bool seen = std::any_of(scratch_.begin(), scratch_.end(),
+                                    [&](const Candidate& c) { return c.frame == ids_[i]; });
+      if (!seen) scratch_.push_back({ids_[i], scores_[i]});
+    }
   }
 
   // search() keeps nothing of the query: the frames it inserts are stored
@@ -307,67 +325,101 @@ class IndexSearch final : public CandidateSearch {
   static constexpr char kMagic[9] = "lsgdhnsw";
   static constexpr std::int64_t kSnapshotVersion = 1;
 
+  // A snapshot's header (load()).
+  struct SnapshotHeader {
+    std::int64_t cells = 0, metric = 0, m = 0, ef = 0, count = 0, top = 0, entry = 0;
+    std::string generator;  // the level generator's state
+  };
+
+  template <typename... Parts>
+  [[noreturn]] static void bad(const Parts&... parts) {
+    internal::throw_invalid("index snapshot: ", parts...);
+  }
+
+  // A list of links: at most max_links, each to another frame of the n.
+  static bool links_ok(const hnswlib::linklistsizeint* list, std::size_t max_links, std::size_t self,
+                       std::size_t n) {
+    const std::size_t k = *list;
+    if (k > max_links) return false;
+    const auto* ids = reinterpret_cast<const hnswlib::tableint*>(list + 1);
+    for (std::size_t e = 0; e < k; ++e) {
+      if (ids[e] >= n || ids[e] == self) return false;
+    }
+    return true;
+  }
+
   void load(const FrameStore& store, SimilarityMetric expected_metric, const std::uint8_t* data,
             std::size_t size) {
     StateReader in(data, size, "index snapshot");
-    const auto bad = [](const auto&... parts) { internal::throw_invalid("index snapshot: ", parts...); };
+    const SnapshotHeader h = read_header(in, store, expected_metric);
+    space_ = std::make_unique<KeySpace>(static_cast<int>(h.cells), static_cast<SimilarityMetric>(h.metric));
+    const auto n = static_cast<std::size_t>(h.count);
+    std::size_t capacity = 1024;
+    while (capacity < n) capacity *= 2;
+    graph_ = std::make_unique<hnswlib::HierarchicalNSW<float>>(
+        space_.get(), capacity, static_cast<std::size_t>(h.m), static_cast<std::size_t>(h.ef), 100);
+    advise_huge_pages(*graph_);
+    auto& g = *graph_;
+    std::istringstream generator(h.generator);
+    generator >> g.level_generator_;
+    if (!generator) bad("level generator state unreadable");
+    const std::size_t block = g.size_data_per_element_;
+    std::memcpy(g.data_level0_memory_, in.get_bytes(n * block), n * block);
+    check_bottom_layer(store, n);
+    g.cur_element_count = n;  // from here the destructor frees the upper layers made below
+    for (std::size_t i = 0; i < n; ++i) g.element_levels_[i] = 0;
+    read_upper_layers(in, n, h.top, h.entry);
+    in.finish();
+    check_upper_links(n);
+    g.maxlevel_ = static_cast<int>(h.top);
+    g.enterpoint_node_ = static_cast<hnswlib::tableint>(h.entry);
+    inserted_ = h.count;
+  }
+
+  SnapshotHeader read_header(StateReader& in, const FrameStore& store, SimilarityMetric expected_metric) const {
     if (std::memcmp(in.get_bytes(8), kMagic, 8) != 0) bad("not an index snapshot (no lsgdhnsw mark)");
     const std::int64_t version = in.get_i64();
     if (version != kSnapshotVersion) bad("version ", version, " is not ", kSnapshotVersion);
     std::uint32_t marker = 0;
     std::memcpy(&marker, in.get_bytes(sizeof marker), sizeof marker);
     if (marker != 1) bad("written on a machine of the other byte order");
-    const std::int64_t cells = in.get_i64(), metric = in.get_i64(), m = in.get_i64(),
-                       ef = in.get_i64(), count = in.get_i64(), top = in.get_i64(),
-                       entry = in.get_i64();
-    if (store.empty() || cells != store.view(0).cells) {
-      bad(cells, " cells per frame, the stored frames have ", store.empty() ? 0 : store.view(0).cells);
+    SnapshotHeader h;
+    h.cells = in.get_i64(), h.metric = in.get_i64(), h.m = in.get_i64(), h.ef = in.get_i64(),
+    h.count = in.get_i64(), h.top = in.get_i64(), h.entry = in.get_i64();
+    if (store.empty() || h.cells != store.view(0).cells) {
+      bad(h.cells, " cells per frame, the stored frames have ", store.empty() ? 0 : store.view(0).cells);
     }
-    if (metric != static_cast<std::int64_t>(expected_metric)) {
-      bad("made for similarity metric ", metric, ", the detector's is ", to_string(expected_metric));
+    if (h.metric != static_cast<std::int64_t>(expected_metric)) {
+      bad("made for similarity metric ", h.metric, ", the detector's is ", to_string(expected_metric));
     }
-    if (m != options_.index.m || ef != options_.index.ef_construction) {
-      bad("made with m ", m, ", ef_construction ", ef, "; the options say ", options_.index.m, ", ",
+    if (h.m != options_.index.m || h.ef != options_.index.ef_construction) {
+      bad("made with m ", h.m, ", ef_construction ", h.ef, "; the options say ", options_.index.m, ", ",
           options_.index.ef_construction);
     }
-    if (count < 1 || count > store.size()) bad(count, " frames, the store holds ", store.size());
-    if (top < 0 || top > 64 || entry < 0 || entry >= count) bad("top level ", top, ", entry point ", entry);
+    if (h.count < 1 || h.count > store.size()) bad(h.count, " frames, the store holds ", store.size());
+    if (h.top < 0 || h.top > 64 || h.entry < 0 || h.entry >= h.count) {
+      bad("top level ", h.top, ", entry point ", h.entry);
+    }
     const std::int64_t text_size = in.get_i64();
     if (text_size < 0 || text_size > 4096) bad("level generator state of ", text_size, " bytes");
     const auto* text = reinterpret_cast<const char*>(in.get_bytes(static_cast<std::size_t>(text_size)));
+    h.generator.assign(text, static_cast<std::size_t>(text_size));
+    return h;
+  }
 
-    space_ = std::make_unique<KeySpace>(static_cast<int>(cells), static_cast<SimilarityMetric>(metric));
-    const auto n = static_cast<std::size_t>(count);
-    std::size_t capacity = 1024;
-    while (capacity < n) capacity *= 2;
-    graph_ = std::make_unique<hnswlib::HierarchicalNSW<float>>(
-        space_.get(), capacity, static_cast<std::size_t>(m), static_cast<std::size_t>(ef), 100);
-    advise_huge_pages(*graph_);
+  // Every link points to another frame of the graph, no list is longer than
+  // the layer allows, labels are the frames in order, keys are the stored
+  // frames' keys.
+  void check_bottom_layer(const FrameStore& store, std::size_t n) {
     auto& g = *graph_;
-    std::istringstream generator(std::string(text, static_cast<std::size_t>(text_size)));
-    generator >> g.level_generator_;
-    if (!generator) bad("level generator state unreadable");
     const std::size_t block = g.size_data_per_element_;
-    std::memcpy(g.data_level0_memory_, in.get_bytes(n * block), n * block);
-    // Every link points to another frame of the graph, no list is longer
-    // than the layer allows, labels are the frames in order, keys are the
-    // stored frames' keys.
     key_.resize(space_->get_data_size());
-    const auto links_ok = [&](const hnswlib::linklistsizeint* list, std::size_t max_links, std::size_t self) {
-      const std::size_t k = *list;
-      if (k > max_links) return false;
-      const auto* ids = reinterpret_cast<const hnswlib::tableint*>(list + 1);
-      for (std::size_t e = 0; e < k; ++e) {
-        if (ids[e] >= n || ids[e] == self) return false;
-      }
-      return true;
-    };
     for (std::size_t i = 0; i < n; ++i) {
       char* element = g.data_level0_memory_ + i * block;
       hnswlib::labeltype label = 0;
       std::memcpy(&label, element + g.label_offset_, sizeof label);
       if (label != i) bad("frame ", i, " is labelled ", label);
-      if (!links_ok(reinterpret_cast<const hnswlib::linklistsizeint*>(element), g.maxM0_, i)) {
+      if (!links_ok(reinterpret_cast<const hnswlib::linklistsizeint*>(element), g.maxM0_, i, n)) {
         bad("frame ", i, ": bottom-layer links out of range");
       }
       make_key(store.view(static_cast<std::int64_t>(i)), key_.data());
@@ -375,8 +427,10 @@ class IndexSearch final : public CandidateSearch {
         bad("frame ", i, ": its key is not the stored frame's (a snapshot of other frames)");
       }
     }
-    g.cur_element_count = n;  // from here the destructor frees the upper layers made below
-    for (std::size_t i = 0; i < n; ++i) g.element_levels_[i] = 0;
+  }
+
+  void read_upper_layers(StateReader& in, std::size_t n, std::int64_t top, std::int64_t entry) {
+    auto& g = *graph_;
     for (std::size_t i = 0; i < n; ++i) {
       const std::int64_t level = in.get_i64();
       if (level < 0 || level > top) bad("frame ", i, ": level ", level, " above the top level ", top);
@@ -389,13 +443,16 @@ class IndexSearch final : public CandidateSearch {
       std::memcpy(g.linkLists_[i], in.get_bytes(bytes), bytes);
       for (std::int64_t l = 0; l < level; ++l) {
         const char* list = g.linkLists_[i] + static_cast<std::size_t>(l) * g.size_links_per_element_;
-        if (!links_ok(reinterpret_cast<const hnswlib::linklistsizeint*>(list), g.maxM_, i)) {
+        if (!links_ok(reinterpret_cast<const hnswlib::linklistsizeint*>(list), g.maxM_, i, n)) {
           bad("frame ", i, ": links on level ", l + 1, " out of range");
         }
       }
     }
-    in.finish();
-    // Upper-layer links only to frames on that layer.
+  }
+
+  // Upper-layer links only to frames on that layer.
+  void check_upper_links(std::size_t n) {
+    auto& g = *graph_;
     for (std::size_t i = 0; i < n; ++i) {
       for (int l = 1; l <= g.element_levels_[i]; ++l) {
         const auto* list = reinterpret_cast<const hnswlib::linklistsizeint*>(
@@ -407,9 +464,6 @@ class IndexSearch final : public CandidateSearch {
       }
       g.label_lookup_[i] = static_cast<hnswlib::tableint>(i);
     }
-    g.maxlevel_ = static_cast<int>(top);
-    g.enterpoint_node_ = static_cast<hnswlib::tableint>(entry);
-    inserted_ = count;
   }
 
   void insert(const FrameStore& store, SimilarityMetric metric, std::int64_t frame) {

@@ -137,118 +137,126 @@ bool parse_storage(const std::string& s, lsgd::HistogramStorage& storage) {
   return true;
 }
 
-}  // namespace
-
-int main(int argc, char** argv) {
-  cv::setNumThreads(0);  // as lsgd bench: OpenCV sequential
+// The study's settings, from the command line.
+struct Settings {
   std::int64_t frames = 4541;
   bool timing_only = false;
   std::vector<Between> between = {Between::kNone, Between::kFlush};
   std::vector<lsgd::HistogramStorage> storages = {lsgd::HistogramStorage::kExact,
                                                   lsgd::HistogramStorage::kCompact};
+};
+
+bool parse_settings(int argc, char** argv, Settings& s) {
   bool ok = true;
   for (int i = 1; i < argc && ok; ++i) {
     const std::string arg = argv[i];
     if (arg == "--timing-only") {
-      timing_only = true;
+      s.timing_only = true;
     } else if (arg == "--between" && i + 1 < argc) {
-      ok = parse_list<Between>(argv[++i], parse_between, between);
+      ok = parse_list<Between>(argv[++i], parse_between, s.between);
     } else if (arg == "--storage" && i + 1 < argc) {
-      ok = parse_list<lsgd::HistogramStorage>(argv[++i], parse_storage, storages);
+      ok = parse_list<lsgd::HistogramStorage>(argv[++i], parse_storage, s.storages);
     } else if (i == 1 && std::atoll(argv[1]) >= 1) {
-      frames = std::atoll(argv[1]);
+      s.frames = std::atoll(argv[1]);
     } else {
       ok = false;
     }
   }
-  if (!ok) {
-    std::fprintf(stderr,
-                 "usage: %s [frames >= 1] [--timing-only] [--between "
-                 "none,flush,render,busy,sleep] [--storage exact,compact]\n",
-                 argv[0]);
-    return 2;
+  return ok;
+}
+
+// The route's distinct frames described once (frame i repeats route frame
+// i % 1090), with their coarse histograms unless only timing.
+struct Route {
+  std::vector<lsgd::Descriptor> frames;
+  std::vector<std::vector<std::uint32_t>> coarse[3];
+  std::int64_t distinct = 0;
+  std::size_t at(std::int64_t i) const { return static_cast<std::size_t>(i % distinct); }
+  double sim(std::int64_t a, std::int64_t b) const {
+    return lsgd::similarity(frames[at(a)].view(), frames[at(b)].view(),
+                            lsgd::SimilarityMetric::kReference);
   }
-  lsgd::eval::SyntheticOptions world_options;
-  world_options.width = 1241;
-  world_options.height = 376;
-  const lsgd::eval::SyntheticWorld world(world_options);
-  const lsgd::SearchOptions search;  // defaults: reference thresholds, min_gap 50
-  lsgd::Segmenter segmenter{lsgd::SegmentationOptions{}};
-  // Frame i repeats route frame i % 1090: describe each route frame once.
-  const std::int64_t distinct = std::min<std::int64_t>(frames, world.frames());
-  std::vector<lsgd::Descriptor> route(static_cast<std::size_t>(distinct));
-  std::vector<std::vector<std::uint32_t>> coarse_route[3];
-  for (std::int64_t i = 0; i < distinct; ++i) {
+};
+
+Route describe_route(const lsgd::eval::SyntheticWorld& world, lsgd::Segmenter& segmenter,
+                     const Settings& s) {
+  Route r;
+  r.distinct = std::min<std::int64_t>(s.frames, world.frames());
+  r.frames.resize(static_cast<std::size_t>(r.distinct));
+  for (std::int64_t i = 0; i < r.distinct; ++i) {
     cv::Mat gray;
     cv::cvtColor(world.render(i), gray, cv::COLOR_BGR2GRAY);
     const lsgd::GrayImage image = lsgd::to_gray(gray);
-    route[static_cast<std::size_t>(i)] = lsgd::describe(image, segmenter.segment(image));
-    for (int g = 0; g < 3 && !timing_only; ++g) {
-      coarse_route[g].push_back(coarse(route[static_cast<std::size_t>(i)], kGroups[g]));
+    r.frames[static_cast<std::size_t>(i)] = lsgd::describe(image, segmenter.segment(image));
+    for (int g = 0; g < 3 && !s.timing_only; ++g) {
+      r.coarse[g].push_back(coarse(r.frames[static_cast<std::size_t>(i)], kGroups[g]));
     }
   }
-  const int cells = route[0].grid.cells();
-  const auto at = [&](std::int64_t i) { return static_cast<std::size_t>(i % distinct); };
-  const auto sim = [&](std::int64_t a, std::int64_t b) {
-    return lsgd::similarity(route[at(a)].view(), route[at(b)].view(),
-                            lsgd::SimilarityMetric::kReference);
-  };
+  return r;
+}
 
+// The study's Algorithm 1 over the route, counting the similarities it spends
+// and those a bound from coarse bins would skip; returns its nodes.
+std::vector<std::vector<std::int64_t>> study_algorithm1(const Route& route, const lsgd::SearchOptions& search,
+                                                        std::int64_t frames) {
+  const int cells = route.frames[0].grid.cells();
   const double n = static_cast<double>(frames);
-  std::vector<std::vector<std::int64_t>> nodes;  // the study's Algorithm 1
-  if (!timing_only) {
-    std::int64_t first_sims = 0, member_sims = 0, scanned_nodes = 0, accepting_members = 0;
-    std::int64_t saved[3] = {0, 0, 0};
-    for (std::int64_t q = 0; q < frames; ++q) {
-      const double base = search.nodes.threshold_0 * (q > 0 ? sim(q, q - 1) : 1.0);
-      bool joined = false;
-      for (auto& node : nodes) {
-        if (q - node.front() <= search.min_gap) continue;
-        const double first = sim(q, node.front());
-        ++first_sims;
-        if (!(first > search.nodes.alpha * base)) continue;
-        ++scanned_nodes;
-        double sum = first, bound[3] = {first, first, first};
-        for (std::size_t m = 1; m < node.size(); ++m) {
-          sum += sim(q, node[m]);
-          for (int g = 0; g < 3; ++g) {
-            bound[g] += upper_bound(coarse_route[g][at(q)], coarse_route[g][at(node[m])], cells);
-          }
-        }
-        const auto members = static_cast<std::int64_t>(node.size()) - 1;
-        member_sims += members;
-        const double size = static_cast<double>(node.size());
+  std::vector<std::vector<std::int64_t>> nodes;
+  std::int64_t first_sims = 0, member_sims = 0, scanned_nodes = 0, accepting_members = 0;
+  std::int64_t saved[3] = {0, 0, 0};
+  for (std::int64_t q = 0; q < frames; ++q) {
+    const double base = search.nodes.threshold_0 * (q > 0 ? route.sim(q, q - 1) : 1.0);
+    bool joined = false;
+    for (auto& node : nodes) {
+      if (q - node.front() <= search.min_gap) continue;
+      const double first = route.sim(q, node.front());
+      ++first_sims;
+      if (!(first > search.nodes.alpha * base)) continue;
+      ++scanned_nodes;
+      double sum = first, bound[3] = {first, first, first};
+      for (std::size_t m = 1; m < node.size(); ++m) {
+        sum += route.sim(q, node[m]);
         for (int g = 0; g < 3; ++g) {
-          if (!(bound[g] / size > search.nodes.beta * base)) saved[g] += members;
-        }
-        if (sum / size > search.nodes.beta * base) {
-          accepting_members += members;
-          node.push_back(q);
-          joined = true;
-          break;
+          bound[g] += upper_bound(route.coarse[g][route.at(q)], route.coarse[g][route.at(node[m])], cells);
         }
       }
-      if (!joined) nodes.push_back({q});
+      const auto members = static_cast<std::int64_t>(node.size()) - 1;
+      member_sims += members;
+      const double size = static_cast<double>(node.size());
+      for (int g = 0; g < 3; ++g) {
+        if (!(bound[g] / size > search.nodes.beta * base)) saved[g] += members;
+      }
+      if (sum / size > search.nodes.beta * base) {
+        accepting_members += members;
+        node.push_back(q);
+        joined = true;
+        break;
+      }
     }
-    std::printf("frames %lld, nodes %zu\n", static_cast<long long>(frames), nodes.size());
-    std::printf(
-        "per query: %.1f first-frame similarities, %.1f nodes scanned, %.1f member "
-        "similarities (%.1f of them in the node the query joins)\n",
-        static_cast<double>(first_sims) / n, static_cast<double>(scanned_nodes) / n,
-        static_cast<double>(member_sims) / n, static_cast<double>(accepting_members) / n);
-    for (int g = 0; g < 3; ++g) {
-      std::printf("bound from %d coarse bins: %.1f %% of member similarities skippable\n",
-                  lsgd::kBins / kGroups[g],
-                  member_sims ? 100.0 * static_cast<double>(saved[g]) / member_sims : 0.0);
-    }
+    if (!joined) nodes.push_back({q});
   }
+  std::printf("frames %lld, nodes %zu\n", static_cast<long long>(frames), nodes.size());
+  std::printf(
+      "per query: %.1f first-frame similarities, %.1f nodes scanned, %.1f member "
+      "similarities (%.1f of them in the node the query joins)\n",
+      static_cast<double>(first_sims) / n, static_cast<double>(scanned_nodes) / n,
+      static_cast<double>(member_sims) / n, static_cast<double>(accepting_members) / n);
+  for (int g = 0; g < 3; ++g) {
+    std::printf("bound from %d coarse bins: %.1f %% of member similarities skippable\n",
+                lsgd::kBins / kGroups[g],
+                member_sims ? 100.0 * static_cast<double>(saved[g]) / member_sims : 0.0);
+  }
+  return nodes;
+}
 
-  // DynamicNodes itself: similarities spent per query and wall time of
-  // assign() alone (no segmentation, no verification), with `between` done
-  // before every query outside the timed part.
-  std::vector<char> flush(std::size_t{64} << 20);
+// What runs before every query outside the timed part.
+struct BeforeQuery {
+  const lsgd::eval::SyntheticWorld& world;
+  lsgd::Segmenter& segmenter;
+  std::vector<char> flush = std::vector<char>(std::size_t{64} << 20);
   std::size_t sink = 0;  // keeps the untimed work from being optimised away
-  const auto before_query = [&](Between b, std::int64_t q) {
+
+  void operator()(Between b, std::int64_t q) {
     if (b == Between::kNone) return;
     if (b == Between::kRender) {
       cv::Mat gray;
@@ -267,55 +275,91 @@ int main(int argc, char** argv) {
     } else if (b == Between::kSleep) {
       std::this_thread::sleep_for(std::chrono::milliseconds(20));
     }
-  };
-  for (const Between b : between)
-    for (const lsgd::HistogramStorage storage : storages) {
-      std::vector<lsgd::Descriptor> stored(route.size());
-      for (std::size_t i = 0; i < route.size(); ++i) {
-        if (storage == lsgd::HistogramStorage::kCompact) {
-          lsgd::compact(route[i], stored[i]);
-        } else {
-          stored[i] = route[i];
-        }
-      }
-      lsgd::SearchOptions o = search;
-      o.mode = lsgd::kNodesSearch;
-      lsgd::FrameStore store;
-      lsgd::DynamicNodes dn;
-      std::vector<lsgd::Candidate> scratch, out;
-      std::int64_t spent = 0;
-      std::vector<double> ms;
-      for (std::int64_t q = 0; q < frames; ++q) {
-        const lsgd::DescriptorView query = stored[at(q)].view();
-        before_query(b, q);
-        const auto t0 = std::chrono::steady_clock::now();
-        const auto outcome =
-            dn.assign(store, query, q, o, lsgd::SimilarityMetric::kReference, scratch, out);
-        ms.push_back(
-            std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0)
-                .count());
-        spent += outcome.similarities;
-        store.add(stored[at(q)], outcome.node);  // as the detector does
-      }
-      if (!timing_only && storage == lsgd::HistogramStorage::kExact) {
-        bool same = dn.size() == static_cast<std::int64_t>(nodes.size());
-        for (std::int64_t k = 0; same && k < dn.size(); ++k) {
-          same = dn.members(k) == nodes[static_cast<std::size_t>(k)];
-        }
-        if (!same) {
-          std::fprintf(stderr, "the study's Algorithm 1 (%zu nodes) is not DynamicNodes::assign's "
-                       "(%lld nodes): its counts above are wrong\n", nodes.size(),
-                       static_cast<long long>(dn.size()));
-          return 1;
-        }
-      }
-      std::sort(ms.begin(), ms.end());
-      std::printf(
-          "DynamicNodes, %s storage, between queries %s: %lld nodes, %.1f similarities per "
-          "query, assign() median %.3f ms\n",
-          lsgd::to_string(storage), name(b), static_cast<long long>(dn.size()),
-          static_cast<double>(spent) / n, ms[ms.size() / 2]);
+  }
+};
+
+// DynamicNodes itself: similarities spent per query and wall time of
+// assign() alone (no segmentation, no verification), with `between` done
+// before every query outside the timed part. Returns false when its nodes
+// are not the study's (`nodes`, when given).
+bool time_dynamic_nodes(const Route& route, const lsgd::SearchOptions& search, std::int64_t frames,
+                        Between b, lsgd::HistogramStorage storage, BeforeQuery& before_query,
+                        const std::vector<std::vector<std::int64_t>>* nodes) {
+  std::vector<lsgd::Descriptor> stored(route.frames.size());
+  for (std::size_t i = 0; i < route.frames.size(); ++i) {
+    if (storage == lsgd::HistogramStorage::kCompact) {
+      lsgd::compact(route.frames[i], stored[i]);
+    } else {
+      stored[i] = route.frames[i];
     }
-  std::fprintf(stderr, "%s", sink == 1 ? " " : "");
+  }
+  lsgd::SearchOptions o = search;
+  o.mode = lsgd::kNodesSearch;
+  lsgd::FrameStore store;
+  lsgd::DynamicNodes dn;
+  std::vector<lsgd::Candidate> scratch, out;
+  std::int64_t spent = 0;
+  std::vector<double> ms;
+  for (std::int64_t q = 0; q < frames; ++q) {
+    const lsgd::DescriptorView query = stored[route.at(q)].view();
+    before_query(b, q);
+    const auto t0 = std::chrono::steady_clock::now();
+    const auto outcome = dn.assign(store, query, q, o, lsgd::SimilarityMetric::kReference, scratch, out);
+    ms.push_back(std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count());
+    spent += outcome.similarities;
+    store.add(stored[route.at(q)], outcome.node);  // as the detector does
+  }
+  if (nodes != nullptr) {
+    bool same = dn.size() == static_cast<std::int64_t>(nodes->size());
+    for (std::int64_t k = 0; same && k < dn.size(); ++k) {
+      same = dn.members(k) == (*nodes)[static_cast<std::size_t>(k)];
+    }
+    if (!same) {
+      std::fprintf(stderr, "the study's Algorithm 1 (%zu nodes) is not DynamicNodes::assign's "
+                   "(%lld nodes): its counts above are wrong\n", nodes->size(),
+                   static_cast<long long>(dn.size()));
+      return false;
+    }
+  }
+  std::sort(ms.begin(), ms.end());
+  std::printf(
+      "DynamicNodes, %s storage, between queries %s: %lld nodes, %.1f similarities per "
+      "query, assign() median %.3f ms\n",
+      lsgd::to_string(storage), name(b), static_cast<long long>(dn.size()),
+      static_cast<double>(spent) / static_cast<double>(frames), ms[ms.size() / 2]);
+  return true;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  cv::setNumThreads(0);  // as lsgd bench: OpenCV sequential
+  Settings s;
+  if (!parse_settings(argc, argv, s)) {
+    std::fprintf(stderr,
+                 "usage: %s [frames >= 1] [--timing-only] [--between "
+                 "none,flush,render,busy,sleep] [--storage exact,compact]\n",
+                 argv[0]);
+    return 2;
+  }
+  lsgd::eval::SyntheticOptions world_options;
+  world_options.width = 1241;
+  world_options.height = 376;
+  const lsgd::eval::SyntheticWorld world(world_options);
+  const lsgd::SearchOptions search;  // defaults: reference thresholds, min_gap 50
+  lsgd::Segmenter segmenter{lsgd::SegmentationOptions{}};
+  const Route route = describe_route(world, segmenter, s);
+  std::vector<std::vector<std::int64_t>> nodes;  // the study's Algorithm 1
+  if (!s.timing_only) nodes = study_algorithm1(route, search, s.frames);
+  BeforeQuery before_query{world, segmenter};
+  for (const Between b : s.between) {
+    for (const lsgd::HistogramStorage storage : s.storages) {
+      const bool compare = !s.timing_only && storage == lsgd::HistogramStorage::kExact;
+      if (!time_dynamic_nodes(route, search, s.frames, b, storage, before_query, compare ? &nodes : nullptr)) {
+        return 1;
+      }
+    }
+  }
+  std::fprintf(stderr, "%s", before_query.sink == 1 ? " " : "");
   return 0;
 }

@@ -406,6 +406,8 @@ void BM_GeometricVerify(benchmark::State& state) {
   state.counters["accepted"] = check.accepted ? 1 : 0;
 }
 
+// Every benchmark and its arguments, one registration after another (95 lines:
+// a table, read as the list of what is measured; nothing to split out).
 void register_all(bool large) {
   for (Size s : {kKitti, kSmall}) {
     const std::string label = std::to_string(s.width) + "x" + std::to_string(s.height);

@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 
 #include "cli_util.h"
+#include "test_util.h"
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -30,7 +31,8 @@ namespace fs = std::filesystem;
 
 namespace {
 
-const fs::path kTmp = fs::path(LSGD_TEST_TMP) / ("bench-cli-" + std::to_string(getpid()));
+const fs::path kTmp =
+    lsgd::test::removed_at_exit(fs::path(LSGD_TEST_TMP) / ("bench-cli-" + std::to_string(getpid())));
 
 using lsgd::test::CmdResult;
 using lsgd::test::slurp;

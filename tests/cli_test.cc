@@ -13,6 +13,7 @@
 #include <gtest/gtest.h>
 
 #include "cli_util.h"
+#include "test_util.h"
 #include <nlohmann/json.hpp>
 #include <opencv2/core.hpp>
 #include <opencv2/imgcodecs.hpp>
@@ -26,7 +27,8 @@ namespace fs = std::filesystem;
 namespace {
 
 // Unique per process: CTest may run these tests in parallel processes.
-const fs::path kTmp = fs::path(LSGD_TEST_TMP) / ("cli-" + std::to_string(getpid()));
+const fs::path kTmp =
+    lsgd::test::removed_at_exit(fs::path(LSGD_TEST_TMP) / ("cli-" + std::to_string(getpid())));
 const fs::path kShared = LSGD_SHARED_DIR;
 
 using lsgd::test::CmdResult;

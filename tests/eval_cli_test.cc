@@ -17,6 +17,7 @@
 #include <string>
 
 #include "cli_util.h"
+#include "test_util.h"
 #include "lsgd/eval/groundtruth.h"
 #include "lsgd/eval/gt_formats.h"
 #include "lsgd/eval/gt_remap.h"
@@ -27,7 +28,8 @@ namespace fs = std::filesystem;
 
 namespace {
 
-const fs::path kTmp = fs::path(LSGD_TEST_TMP) / ("eval-cli-" + std::to_string(getpid()));
+const fs::path kTmp =
+    lsgd::test::removed_at_exit(fs::path(LSGD_TEST_TMP) / ("eval-cli-" + std::to_string(getpid())));
 
 using lsgd::test::CmdResult;
 using lsgd::test::slurp;

@@ -9,14 +9,18 @@
 #include <unistd.h>
 
 #include "lsgd/error.h"
+#include "test_util.h"
 
 namespace fs = std::filesystem;
 using lsgd::eval::GroundTruth;
 
 namespace {
 
+const fs::path kTmp =
+    lsgd::test::removed_at_exit(fs::path(LSGD_TEST_TMP) / ("gt-" + std::to_string(getpid())));
+
 fs::path write_file(const std::string& name, const std::string& text) {
-  const fs::path dir = fs::path(LSGD_TEST_TMP) / ("gt-" + std::to_string(getpid()));
+  const fs::path dir = kTmp;
   fs::create_directories(dir);
   const fs::path path = dir / name;
   std::ofstream(path) << text;
@@ -98,7 +102,7 @@ TEST(WritePairs, RoundTrips) {
   gt.add(10, 2);
   gt.add(19, 0);
   gt.add(12, 11);
-  const fs::path p = fs::path(LSGD_TEST_TMP) / ("gt-" + std::to_string(getpid())) / "rt.txt";
+  const fs::path p = kTmp / "rt.txt";
   fs::create_directories(p.parent_path());
   lsgd::eval::write_pairs(gt, p.string());
   const GroundTruth back = lsgd::eval::read_pairs(p.string(), 20);

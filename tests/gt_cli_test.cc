@@ -2,6 +2,7 @@
 #include <gtest/gtest.h>
 
 #include "cli_util.h"
+#include "test_util.h"
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -19,7 +20,8 @@ namespace fs = std::filesystem;
 
 namespace {
 
-const fs::path kTmp = fs::path(LSGD_TEST_TMP) / ("gtcli-" + std::to_string(getpid()));
+const fs::path kTmp =
+    lsgd::test::removed_at_exit(fs::path(LSGD_TEST_TMP) / ("gtcli-" + std::to_string(getpid())));
 const fs::path kGt = fs::path(LSGD_SHARED_DIR) / "groundtruth";
 
 using lsgd::test::CmdResult;

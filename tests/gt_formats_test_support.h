@@ -20,6 +20,7 @@
 #include <vector>
 
 #include "lsgd/eval/gt_formats.h"
+#include "test_util.h"
 
 namespace gt_formats_test_support {
 
@@ -27,7 +28,8 @@ namespace fs = std::filesystem;
 using lsgd::eval::GroundTruth;
 using lsgd::eval::Pose;
 
-inline const fs::path kTmp = fs::path(LSGD_TEST_TMP) / ("gtf-" + std::to_string(getpid()));
+inline const fs::path kTmp =
+    lsgd::test::removed_at_exit(fs::path(LSGD_TEST_TMP) / ("gtf-" + std::to_string(getpid())));
 
 using Pairs = std::set<std::pair<std::int64_t, std::int64_t>>;  // (q, m), q > m
 

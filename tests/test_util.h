@@ -8,6 +8,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <exception>
+#include <filesystem>
 #include <string>
 #include <utility>
 #include <vector>
@@ -19,6 +20,27 @@
 namespace lsgd::test {
 
 // SplitMix64: advances `state` and returns the next 64-bit pseudo-random value.
+// A test program's scratch folder (or file), removed when the program ends
+// (a global environment's TearDown, after the last test, passed or failed):
+// one folder per process otherwise piles up in the build tree, a few hundred
+// MB over a day of ctest runs. Call it at namespace scope:
+//   const fs::path kTmp = test::removed_at_exit(fs::path(LSGD_TEST_TMP) / ...);
+inline std::filesystem::path removed_at_exit(std::filesystem::path path) {
+  class Remove final : public ::testing::Environment {
+   public:
+    explicit Remove(std::filesystem::path p) : path_(std::move(p)) {}
+    void TearDown() override {
+      std::error_code ignored;  // nothing to remove, or already removed: fine
+      std::filesystem::remove_all(path_, ignored);
+    }
+
+   private:
+    std::filesystem::path path_;
+  };
+  ::testing::AddGlobalTestEnvironment(new Remove(path));  // gtest owns it
+  return path;
+}
+
 // The running test's full name as part of a file name ("Suite.Name", or
 // "Prefix_Suite.Name_3" for a parameter): a file named with it is the test's
 // own when ctest runs tests in parallel, each in its own process.

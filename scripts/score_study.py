@@ -8,7 +8,11 @@
 # places at 3.5 and 2 sigma, the best score of queries with no revisit.
 # No geometry and no decision: a study of the ranking the decision starts from.
 #
-#   PYTHONPATH=build/python scripts/score_study.py SEQUENCE GROUNDTRUTH [--first Q] [--min-gap 50]
+#   PYTHONPATH=build/python scripts/score_study.py SEQUENCE GROUNDTRUTH [--first Q] [--min-gap 50] [--level2]
+#
+# --level2: the shipped level 1, and variants of the second standardisation
+# (R = (A - mean) / sd over the query's candidates) instead: robust or
+# truncated estimates of the null of A.
 #
 # SEQUENCE is anything `lsgd.open_sequence` reads; GROUNDTRUTH is pairs
 # "query match" (scripts/eval_suite.py writes them); --first: queries before
@@ -24,6 +28,7 @@ ap.add_argument('sequence')
 ap.add_argument('groundtruth')
 ap.add_argument('--first', type=int, default=0)
 ap.add_argument('--min-gap', type=int, default=50)
+ap.add_argument('--level2', action='store_true')
 args = ap.parse_args()
 w = args.min_gap
 
@@ -83,18 +88,80 @@ def combine_mean(a, b):
     return (a + b) / 2
 
 
+def l2_global(A):
+    return A.mean(), A.std()
+
+
+def l2_truncated(q):
+    """A normal fitted to the values above the q-quantile (the truncated normal's moments)."""
+    from statistics import NormalDist
+    a = NormalDist().inv_cdf(q)
+    lam = np.exp(-a * a / 2) / np.sqrt(2 * np.pi) / (1 - q)
+    sd_factor = np.sqrt(1 + a * lam - lam * lam)
+
+    def stats(A):
+        upper = np.sort(A)[int(q * len(A)):]
+        sd = upper.std() / sd_factor
+        return upper.mean() - lam * sd, sd
+    return stats
+
+
+def l2_otsu(eta0):
+    def stats(A):
+        v = np.sort(A)
+        cs = np.cumsum(v)
+        k = np.arange(1, len(v))
+        w0 = k / len(v)
+        between = w0 * (1 - w0) * ((cs[-1] - cs[k - 1]) / (len(v) - k) - cs[k - 1] / k) ** 2
+        b = int(np.argmax(between))
+        upper = v[k[b]:]
+        if between[b] / A.var() >= eta0 and len(upper) >= 32:
+            return upper.mean(), upper.std()
+        return l2_global(A)
+    return stats
+
+
+def l2_median_mad(A):
+    median = np.median(A)
+    return median, 1.4826 * np.median(np.abs(A - median))
+
+
+def l2_quantiles(lo, hi):
+    """A normal through the lo- and hi-quantiles of A."""
+    from statistics import NormalDist
+    zl, zh = NormalDist().inv_cdf(lo), NormalDist().inv_cdf(hi)
+
+    def stats(A):
+        a, b = np.percentile(A, [100 * lo, 100 * hi])
+        sd = (b - a) / (zh - zl)
+        return a - zl * sd, sd
+    return stats
+
+
+level2 = [('shipped', l2_global)]
+if args.level2:
+    level2 += [('truncated above the median', l2_truncated(0.5)),
+               ('truncated above the 75th percentile', l2_truncated(0.75)),
+               ('truncated above the 90th percentile', l2_truncated(0.9)),
+               ("Otsu's upper class, eta >= 0.7", l2_otsu(0.7)),
+               ("Otsu's upper class, eta >= 0.8", l2_otsu(0.8)),
+               ('median and MAD', l2_median_mad),
+               ('quantiles 50 and 75', l2_quantiles(0.5, 0.75)),
+               ('quantiles 75 and 95', l2_quantiles(0.75, 0.95))]
 variants = [('shipped: global z, mean of 16 and 48', z_global, combine_mean),
             ('local contrast +-10', z_local(10), combine_mean),
             ('local contrast +-20', z_local(20), combine_mean),
             ('Otsu upper class, eta >= 0.7', z_otsu(0.7), combine_mean),
             ('max(16, mean of 16 and 48)', z_global, lambda a, b: np.maximum(a, (a + b) / 2)),
             ('16 only', z_global, lambda a, b: a)]
+if args.level2:
+    variants = variants[:1]
 queries = [i for i in range(max(args.first, w + 32), n)]
 for name, standardise, combine in variants:
     Z = np.zeros((n, n))
     for i in range(w + 32, n):
         Z[i, :i - w] = standardise(S[i, :i - w])
-    rows = []  # (best R, correct, has a revisit)
+    scores = []  # A of every query
     for i in queries:
         m = i - w
         sums = []
@@ -104,16 +171,22 @@ for name, standardise, combine in variants:
                 j = np.arange(m) - t
                 s[j >= 0] += Z[i - t, j[j >= 0]]
             sums.append(s / L)
-        A = combine(*sums)
-        R = (A - A.mean()) / A.std()
-        best = int(np.argmax(R))
-        rows.append((R[best], best in gt.get(i, ()), i in gt))
-    rows.sort(key=lambda r: -r[0])
-    positives = sum(1 for r in rows if r[2])
-    before_first_false = next((k for k, r in enumerate(rows) if not r[1]), len(rows))
-    nulls = [r[0] for r in rows if not r[2]]
-    print(f'{name}: R@1 {sum(r[1] for r in rows)}/{positives}, '
-          f'R@100P {before_first_false / max(positives, 1):.3f}, '
-          f'true at 3.5 sigma {sum(1 for r in rows if r[1] and r[0] >= 3.5)}, '
-          f'at 2 {sum(1 for r in rows if r[1] and r[0] >= 2)}, '
-          f'best of a query with no revisit {max(nulls) if nulls else float("nan"):.2f}')
+        scores.append(combine(*sums))
+    for name2, second in level2:
+        rows = []  # (best R, correct, has a revisit)
+        for i, A in zip(queries, scores):
+            mean, sd = second(A)
+            R = (A - mean) / sd
+            best = int(np.argmax(R))
+            rows.append((R[best], best in gt.get(i, ()), i in gt))
+        rows.sort(key=lambda r: -r[0])
+        positives = sum(1 for r in rows if r[2])
+        before_first_false = next((k for k, r in enumerate(rows) if not r[1]), len(rows))
+        nulls = [r[0] for r in rows if not r[2]]
+        label = name if not args.level2 else f'level 2: {name2}'
+        print(f'{label}: R@1 {sum(r[1] for r in rows)}/{positives}, '
+              f'R@100P {before_first_false / max(positives, 1):.3f}, '
+              f'true at 3.5 sigma {sum(1 for r in rows if r[1] and r[0] >= 3.5)}, '
+              f'at 2 {sum(1 for r in rows if r[1] and r[0] >= 2)}, '
+              f'wrong at 3.5 {sum(1 for r in rows if not r[1] and r[0] >= 3.5)}, '
+              f'best of a query with no revisit {max(nulls) if nulls else float("nan"):.2f}')

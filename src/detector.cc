@@ -8,6 +8,7 @@
 #include "internal/check.h"
 #include "internal/clock.h"
 #include "internal/names.h"
+#include "internal/option_tables.h"
 #include "detector_internal.h"
 #include "lsgd/limits.h"
 
@@ -15,19 +16,25 @@ namespace lsgd {
 using internal::ms_since;
 using internal::now_ns;
 
-const OptionTable<DetectorOptions>& DetectorOptions::fields() {
+namespace {
+
+OptionTable<DetectorOptions> detector_table() {
   using S = DetectorOptions;
-  static const OptionTable<S> table = [] {
-    OptionTable<S> t;
-    nest<S, SegmentationOptions>(t, "segmentation", &S::segmentation, SegmentationOptions::fields());
-    nest<S, DescriptorOptions>(t, "descriptor", &S::descriptor, DescriptorOptions::fields());
-    nest<S, SimilarityOptions>(t, "similarity", &S::similarity, SimilarityOptions::fields());
-    nest<S, SearchOptions>(t, "search", &S::search, SearchOptions::fields());
-    nest<S, VerificationOptions>(t, "verification", &S::verification, VerificationOptions::fields());
-    nest<S, DecisionOptions>(t, "decision", &S::decision, DecisionOptions::fields());
-    return t;
-  }();
-  return table;
+  OptionTable<S> t;
+  nest<S, SegmentationOptions>(t, "segmentation", &S::segmentation, SegmentationOptions::fields());
+  nest<S, DescriptorOptions>(t, "descriptor", &S::descriptor, DescriptorOptions::fields());
+  nest<S, SimilarityOptions>(t, "similarity", &S::similarity, SimilarityOptions::fields());
+  nest<S, SearchOptions>(t, "search", &S::search, SearchOptions::fields());
+  nest<S, VerificationOptions>(t, "verification", &S::verification, VerificationOptions::fields());
+  nest<S, DecisionOptions>(t, "decision", &S::decision, DecisionOptions::fields());
+  return t;
+}
+
+}  // namespace
+
+// Built again after a registration: a registered mode's or stage's options.
+const OptionTable<DetectorOptions>& DetectorOptions::fields() {
+  return internal::current_table(detector_table);
 }
 
 namespace {

@@ -7,6 +7,7 @@
 
 #include "internal/check.h"
 #include "internal/numbers.h"
+#include "internal/option_tables.h"
 
 namespace lsgd {
 
@@ -25,6 +26,13 @@ std::string format_real(double value) {
 }
 
 namespace internal {
+
+namespace {
+std::atomic<std::uint64_t> registered{0};
+}  // namespace
+
+std::uint64_t registrations() { return registered.load(); }
+void count_registration() { registered.fetch_add(1); }
 
 std::string shown_value(const std::string& text) {
   constexpr std::size_t kShown = 64;
@@ -88,6 +96,123 @@ double parse_option_real(const std::string& key, const std::string& text) {
   double v = 0;
   if (!internal::parses_as(text, v)) internal::throw_bad_option_text(key, text, "a number");
   return v;
+}
+
+void check_option_choice(const std::string& key, const std::string& value,
+                         const std::vector<std::string>& choices) {
+  std::string all;
+  for (std::size_t k = 0; k < choices.size(); ++k) {
+    if (choices[k] == value) return;
+    all += (k == 0 ? "" : k + 1 == choices.size() ? " or " : ", ") + choices[k];
+  }
+  internal::throw_bad_option_text(key, value, "one of " + all);
+}
+
+const std::string* OwnOptionValues::find(const std::string& key) const {
+  const auto it = values_.find(key);
+  return it == values_.end() ? nullptr : &it->second;
+}
+
+namespace {
+
+bool is_option_name(const std::string& name) {
+  if (name.empty() || name.size() > 64) return false;
+  for (const char c : name) {
+    if (!((c >= 'a' && c <= 'z') || (c >= '0' && c <= '9') || c == '_')) return false;
+  }
+  return true;
+}
+
+// The default's text as the table writes it, checked like a value set.
+std::string canonical_default(const OwnOption& o, const std::string& key) {
+  switch (o.kind) {
+    case OptionKind::kInteger: {
+      const std::int64_t v = parse_option_integer(key, o.default_value,
+                                                  std::numeric_limits<std::int64_t>::min(),
+                                                  std::numeric_limits<std::int64_t>::max());
+      check_option_range(key, static_cast<double>(v), o.default_value, o.lo, o.hi, o.lo_open, true,
+                         o.unit);
+      return std::to_string(v);
+    }
+    case OptionKind::kReal: {
+      const double v = parse_option_real(key, o.default_value);
+      check_option_range(key, v, "", o.lo, o.hi, o.lo_open, false, o.unit);
+      return format_real(v);
+    }
+    case OptionKind::kChoice:
+      check_option_choice(key, o.default_value, o.choices);
+      return o.default_value;
+  }
+  return o.default_value;
+}
+
+const OwnOption& declared_option(const std::vector<OwnOption>& declared, const std::string& owner,
+                                 const std::string& name, OptionKind kind) {
+  for (const OwnOption& o : declared) {
+    if (o.name != name) continue;
+    if (o.kind != kind) {
+      internal::throw_invalid(owner, ".", name, " is not an option of the kind asked for");
+    }
+    return o;
+  }
+  internal::throw_invalid(owner, " declares no option '", name, "'");
+}
+
+const std::string& own_text(const OwnOptionValues& values, const OwnOption& o,
+                            const std::string& key) {
+  const std::string* v = values.find(key);
+  return v != nullptr ? *v : o.default_value;
+}
+
+}  // namespace
+
+std::vector<OwnOption> checked_own_options(const std::vector<OwnOption>& options,
+                                           const std::string& caller, const std::string& owner) {
+  std::vector<OwnOption> out = options;
+  for (std::size_t i = 0; i < out.size(); ++i) {
+    OwnOption& o = out[i];
+    const std::string key = owner + "." + o.name;
+    if (!is_option_name(o.name)) {
+      internal::throw_invalid(caller, ": ", owner, ": option name '", internal::shown_value(o.name),
+                              "' must be 1 to 64 lower-case letters, digits or '_'");
+    }
+    for (std::size_t k = 0; k < i; ++k) {
+      if (out[k].name == o.name) internal::throw_invalid(caller, ": ", owner, " declares '", o.name, "' twice");
+    }
+    if (o.doc.empty()) internal::throw_invalid(caller, ": ", key, " needs a line of documentation");
+    if (o.kind == OptionKind::kChoice) {
+      if (o.choices.empty()) internal::throw_invalid(caller, ": ", key, " needs its choices");
+    } else if (!(o.lo <= o.hi)) {
+      internal::throw_invalid(caller, ": ", key, " has an empty range [", o.lo, ", ", o.hi, "]");
+    }
+    try {
+      o.default_value = canonical_default(o, key);
+    } catch (const InvalidArgument& e) {
+      internal::throw_invalid(caller, ": the default of ", e.what());
+    }
+  }
+  return out;
+}
+
+std::int64_t own_integer(const OwnOptionValues& values, const std::vector<OwnOption>& declared,
+                         const std::string& owner, const std::string& name) {
+  const OwnOption& o = declared_option(declared, owner, name, OptionKind::kInteger);
+  const std::string key = owner + "." + name;
+  return parse_option_integer(key, own_text(values, o, key), std::numeric_limits<std::int64_t>::min(),
+                              std::numeric_limits<std::int64_t>::max());
+}
+
+double own_real(const OwnOptionValues& values, const std::vector<OwnOption>& declared,
+                const std::string& owner, const std::string& name) {
+  const OwnOption& o = declared_option(declared, owner, name, OptionKind::kReal);
+  const std::string key = owner + "." + name;
+  return parse_option_real(key, own_text(values, o, key));
+}
+
+std::string own_choice(const OwnOptionValues& values, const std::vector<OwnOption>& declared,
+                       const std::string& owner, const std::string& name) {
+  const OwnOption& o = declared_option(declared, owner, name, OptionKind::kChoice);
+  return own_text(values, o, owner + "." + name);
 }
 
 }  // namespace lsgd

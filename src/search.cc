@@ -1,6 +1,7 @@
 #include "lsgd/search.h"
 
 #include "internal/check.h"
+#include "internal/option_tables.h"
 #include "internal/registry.h"
 #include "lsgd/search/dynamic_nodes.h"
 #include "lsgd/search/exhaustive.h"
@@ -31,7 +32,21 @@ internal::Registry<SearchMode>& registry() {
 
 std::vector<SearchMode> search_modes() { return registry().entries(); }
 
-void register_search_mode(const SearchMode& mode) { registry().add(mode, "register_search_mode"); }
+void register_search_mode(const SearchMode& mode) {
+  SearchMode entry = mode;
+  if (mode.name != nullptr && !mode.options.empty()) {
+    for (const OptionField<SearchOptions>& f : SearchOptions::fields()) {
+      if (f.name == mode.name) {
+        internal::throw_invalid("register_search_mode: a mode with options cannot be named '",
+                                mode.name, "', an option of search");
+      }
+    }
+    entry.options = checked_own_options(mode.options, "register_search_mode",
+                                        std::string("search.") + mode.name);
+  }
+  registry().add(entry, "register_search_mode");
+  internal::count_registration();
+}
 
 std::string search_mode_names() { return registry().names(); }
 
@@ -89,38 +104,60 @@ const OptionTable<IndexOptions>& IndexOptions::fields() {
 
 void IndexOptions::check() const { check_options(fields(), *this, "search.index"); }
 
-const OptionTable<SearchOptions>& SearchOptions::fields() {
+namespace {
+
+OptionTable<SearchOptions> search_table() {
   using S = SearchOptions;
-  static const OptionTable<S> table = [] {
-    OptionField<S> mode_field;
-    mode_field.name = "mode";
-    mode_field.kind = OptionKind::kChoice;
-    mode_field.doc = "how earlier frames are searched: a registered search mode (search.h)";
-    mode_field.choices = [] {
-      std::vector<std::string> names;
-      for (const SearchMode& m : search_modes()) names.emplace_back(m.name);
-      return names;
-    };
-    mode_field.text = [](const S& s) { return s.mode; };
-    mode_field.set_choice = [](S& s, const std::string& name) {
-      check_search_mode(name);
-      s.mode = name;
-    };
-    OptionTable<S> t = {
-        mode_field,
-        integer_option<S, std::int64_t>("min_gap", &S::min_gap, 0, kMaxWindowFrames, "frames",
-                                        "temporal window w: frame j is a candidate for query i "
-                                        "only if j < i - w"),
-        integer_option("top_n", &S::top_n, 1, 1000, "", "best candidates returned"),
-    };
-    nest<S, DynamicNodeOptions>(t, "nodes", &S::nodes, DynamicNodeOptions::fields(),
-                                [](const S& s) { return s.mode == kNodesSearch; },
-                                "in nodes mode");
-    nest<S, IndexOptions>(t, "index", &S::index, IndexOptions::fields(),
-                          [](const S& s) { return s.mode == kIndexSearch; }, "in index mode");
-    return t;
-  }();
-  return table;
+  OptionField<S> mode_field;
+  mode_field.name = "mode";
+  mode_field.kind = OptionKind::kChoice;
+  mode_field.doc = "how earlier frames are searched: a registered search mode (search.h)";
+  mode_field.choices = [] {
+    std::vector<std::string> names;
+    for (const SearchMode& m : search_modes()) names.emplace_back(m.name);
+    return names;
+  };
+  mode_field.text = [](const S& s) { return s.mode; };
+  mode_field.set_choice = [](S& s, const std::string& name) {
+    check_search_mode(name);
+    s.mode = name;
+  };
+  OptionTable<S> t = {
+      mode_field,
+      integer_option<S, std::int64_t>("min_gap", &S::min_gap, 0, kMaxWindowFrames, "frames",
+                                      "temporal window w: frame j is a candidate for query i "
+                                      "only if j < i - w"),
+      integer_option("top_n", &S::top_n, 1, 1000, "", "best candidates returned"),
+  };
+  nest<S, DynamicNodeOptions>(t, "nodes", &S::nodes, DynamicNodeOptions::fields(),
+                              [](const S& s) { return s.mode == kNodesSearch; },
+                              "in nodes mode");
+  nest<S, IndexOptions>(t, "index", &S::index, IndexOptions::fields(),
+                        [](const S& s) { return s.mode == kIndexSearch; }, "in index mode");
+  for (const SearchMode& m : search_modes()) {
+    const std::string name = m.name;
+    add_own_options<S>(t, name, m.options, &S::own, [name](const S& s) { return s.mode == name; },
+                       "in " + name + " mode");
+  }
+  return t;
+}
+
+}  // namespace
+
+const OptionTable<SearchOptions>& SearchOptions::fields() {
+  return internal::current_table(search_table);
+}
+
+std::int64_t SearchOptions::own_integer(const std::string& name) const {
+  return lsgd::own_integer(own, find_search_mode(mode).options, mode, name);
+}
+
+double SearchOptions::own_real(const std::string& name) const {
+  return lsgd::own_real(own, find_search_mode(mode).options, mode, name);
+}
+
+std::string SearchOptions::own_choice(const std::string& name) const {
+  return lsgd::own_choice(own, find_search_mode(mode).options, mode, name);
 }
 
 void SearchOptions::check() const {

@@ -3,6 +3,7 @@
 #include <algorithm>
 
 #include "internal/check.h"
+#include "internal/option_tables.h"
 #include "internal/registry.h"
 #include "lsgd/stages/geometric.h"
 #include "lsgd/stages/temporal.h"
@@ -30,8 +31,22 @@ internal::Registry<StageType>& registry() {
 std::vector<StageType> verification_stage_types() { return registry().entries(); }
 
 void register_verification_stage(const StageType& type) {
-  registry().add(type, "register_verification_stage", "none");
+  StageType entry = type;
+  if (type.name != nullptr && !type.options.empty()) {
+    for (const OptionField<VerificationOptions>& f : VerificationOptions::fields()) {
+      if (f.name == type.name) {
+        internal::throw_invalid("register_verification_stage: a stage with options cannot be named '",
+                                type.name, "', an option of verification");
+      }
+    }
+    entry.options = checked_own_options(type.options, "register_verification_stage",
+                                        std::string("verification.") + type.name);
+  }
+  registry().add(entry, "register_verification_stage", "none");
+  internal::count_registration();
 }
+
+StageType find_verification_stage(const std::string& name) { return registry().find(name); }
 
 std::string verification_stage_names() { return registry().names(); }
 

@@ -5,6 +5,7 @@
 #include <sstream>
 
 #include "internal/check.h"
+#include "internal/option_tables.h"
 #include "lsgd/stage.h"
 
 namespace lsgd {
@@ -34,35 +35,57 @@ void TemporalOptions::check() const {
   }
 }
 
-const OptionTable<VerificationOptions>& VerificationOptions::fields() {
+namespace {
+
+OptionTable<VerificationOptions> verification_table() {
   using S = VerificationOptions;
-  static const OptionTable<S> table = [] {
-    OptionField<S> stages_field;
-    stages_field.name = "stages";
-    stages_field.kind = OptionKind::kChoice;
-    stages_field.list = true;
-    stages_field.doc = "verification stages after the search (any order; lsgd/stage.h)";
-    stages_field.choices = [] {
-      std::vector<std::string> names;
-      for (const StageType& t : verification_stage_types()) names.emplace_back(t.name);
-      return names;
-    };
-    stages_field.text = [](const S& s) { return verification_stages(s); };
-    stages_field.set_choice = [](S& s, const std::string& text) { parse_verification_stages(text, s); };
-    OptionTable<S> t = {
-        stages_field,
-        integer_option("max_candidates", &S::max_candidates, 1, 100, "",
-                       "candidates examined best first; the first no stage rejects is reported"),
-    };
-    t.back().applies = [](const S& s) { return !s.stages.empty(); };
-    t.back().when = "with a stage";
-    nest<S, TemporalOptions>(t, "temporal", &S::temporal_options, TemporalOptions::fields(),
-                             [](const S& s) { return s.has(kTemporalStage); }, "with the temporal stage");
-    nest<S, GeometricOptions>(t, "geometric", &S::geometric_options, GeometricOptions::fields(),
-                              [](const S& s) { return s.has(kGeometricStage); }, "with the geometric stage");
-    return t;
-  }();
-  return table;
+  OptionField<S> stages_field;
+  stages_field.name = "stages";
+  stages_field.kind = OptionKind::kChoice;
+  stages_field.list = true;
+  stages_field.doc = "verification stages after the search (any order; lsgd/stage.h)";
+  stages_field.choices = [] {
+    std::vector<std::string> names;
+    for (const StageType& t : verification_stage_types()) names.emplace_back(t.name);
+    return names;
+  };
+  stages_field.text = [](const S& s) { return verification_stages(s); };
+  stages_field.set_choice = [](S& s, const std::string& text) { parse_verification_stages(text, s); };
+  OptionTable<S> t = {
+      stages_field,
+      integer_option("max_candidates", &S::max_candidates, 1, 100, "",
+                     "candidates examined best first; the first no stage rejects is reported"),
+  };
+  t.back().applies = [](const S& s) { return !s.stages.empty(); };
+  t.back().when = "with a stage";
+  nest<S, TemporalOptions>(t, "temporal", &S::temporal_options, TemporalOptions::fields(),
+                           [](const S& s) { return s.has(kTemporalStage); }, "with the temporal stage");
+  nest<S, GeometricOptions>(t, "geometric", &S::geometric_options, GeometricOptions::fields(),
+                            [](const S& s) { return s.has(kGeometricStage); }, "with the geometric stage");
+  for (const StageType& type : verification_stage_types()) {
+    const std::string name = type.name;
+    add_own_options<S>(t, name, type.options, &S::own, [name](const S& s) { return s.has(name); },
+                       "with the " + name + " stage");
+  }
+  return t;
+}
+
+}  // namespace
+
+const OptionTable<VerificationOptions>& VerificationOptions::fields() {
+  return internal::current_table(verification_table);
+}
+
+std::int64_t VerificationOptions::own_integer(const std::string& stage, const std::string& name) const {
+  return lsgd::own_integer(own, find_verification_stage(stage).options, stage, name);
+}
+
+double VerificationOptions::own_real(const std::string& stage, const std::string& name) const {
+  return lsgd::own_real(own, find_verification_stage(stage).options, stage, name);
+}
+
+std::string VerificationOptions::own_choice(const std::string& stage, const std::string& name) const {
+  return lsgd::own_choice(own, find_verification_stage(stage).options, stage, name);
 }
 
 bool VerificationOptions::has(const std::string& stage) const {

@@ -14,6 +14,7 @@
 #include <cstdint>
 #include <functional>
 #include <limits>
+#include <map>
 #include <string>
 #include <utility>
 #include <vector>
@@ -75,6 +76,10 @@ std::int64_t parse_option_integer(const std::string& key, const std::string& tex
                                   std::int64_t hi);
 // A real option's text ("0.8", "1e-3", YAML's .inf and .nan).
 double parse_option_real(const std::string& key, const std::string& text);
+// InvalidArgument "key = 'value' is not one of a, b or c" unless `value` is
+// one of `choices`.
+void check_option_choice(const std::string& key, const std::string& value,
+                         const std::vector<std::string>& choices);
 
 // ---- builders for the tables
 
@@ -167,6 +172,95 @@ void nest(OptionTable<S>& out, const std::string& prefix, Inner S::*member,
       };
     }
     out.push_back(std::move(g));
+  }
+}
+
+// ---- options a registered search mode or verification stage brings
+
+// One option of a mode or stage registered from outside the library
+// (SearchMode::options, StageType::options). Its key is
+// search.<mode>.<name> or verification.<stage>.<name>; from then on it is
+// an option like the built-in ones: validated, read from YAML and
+// `--option`, listed by `lsgd options` in a program that registered it,
+// stored in a database and checked on resume, applying only with its mode
+// or stage. docs/design.md, "Add a search mode".
+struct OwnOption {
+  std::string name;  // lower case letters, digits and '_': "k", "max_depth"
+  OptionKind kind = OptionKind::kInteger;
+  std::string default_value;  // as text: "4", "0.5", one of `choices`
+  double lo = 0;              // numbers: the valid range, [lo, hi] ((lo, hi] when lo_open)
+  double hi = 0;
+  bool lo_open = false;
+  std::vector<std::string> choices;  // kChoice: the accepted names
+  std::string unit;                  // "frames", "pixels" or empty
+  std::string doc;                   // one line
+};
+
+// The values of registered modes' or stages' own options, by key
+// ("<mode>.<name>"), as the option table sets them (canonical text); a key
+// not set has its declared default.
+class OwnOptionValues {
+ public:
+  // The value set for `key`, or nullptr.
+  const std::string* find(const std::string& key) const;
+  void set(const std::string& key, std::string text) { values_[key] = std::move(text); }
+  bool operator==(const OwnOptionValues& o) const { return values_ == o.values_; }
+
+ private:
+  std::map<std::string, std::string> values_;
+};
+
+// Throws InvalidArgument ("<caller>: <owner>: ...") unless every declaration
+// is complete and its default valid, and returns them with their defaults as
+// the table writes them ("0.50" -> "0.5").
+std::vector<OwnOption> checked_own_options(const std::vector<OwnOption>& options,
+                                           const std::string& caller, const std::string& owner);
+// The value of option `name` of mode or stage `owner` in `values` (its
+// default when not set), `declared` its declarations; InvalidArgument when
+// `owner` declares no such option or it is of another kind.
+std::int64_t own_integer(const OwnOptionValues& values, const std::vector<OwnOption>& declared,
+                         const std::string& owner, const std::string& name);
+double own_real(const OwnOptionValues& values, const std::vector<OwnOption>& declared,
+                const std::string& owner, const std::string& name);
+std::string own_choice(const OwnOptionValues& values, const std::vector<OwnOption>& declared,
+                       const std::string& owner, const std::string& name);
+
+// The table fields of `owner`'s own options in S (whose member `values`
+// holds them), applying when `applies` says so (`when` in words).
+template <class S>
+void add_own_options(OptionTable<S>& out, const std::string& owner,
+                     const std::vector<OwnOption>& declared, OwnOptionValues S::*values,
+                     std::function<bool(const S&)> applies, const std::string& when) {
+  for (const OwnOption& o : declared) {
+    OptionField<S> f;
+    const std::string key = owner + "." + o.name;
+    f.name = key;
+    f.kind = o.kind;
+    f.unit = o.unit;
+    f.doc = o.doc;
+    f.lo = o.lo;
+    f.hi = o.hi;
+    f.lo_open = o.lo_open;
+    f.type_min = std::numeric_limits<std::int64_t>::min();
+    f.type_max = std::numeric_limits<std::int64_t>::max();
+    f.text = [values, key, def = o.default_value](const S& s) {
+      const std::string* v = (s.*values).find(key);
+      return v != nullptr ? *v : def;
+    };
+    if (o.kind == OptionKind::kChoice) {
+      f.choices = [choices = o.choices] { return choices; };
+      f.set_choice = [values, key, choices = o.choices](S& s, const std::string& v) {
+        check_option_choice(key, v, choices);
+        (s.*values).set(key, v);
+      };
+    } else {
+      f.number = [t = f.text, key](const S& s) { return parse_option_real(key, t(s)); };
+      f.set_integer = [values, key](S& s, std::int64_t v) { (s.*values).set(key, std::to_string(v)); };
+      f.set_real = [values, key](S& s, double v) { (s.*values).set(key, format_real(v)); };
+    }
+    f.applies = applies;
+    f.when = when;
+    out.push_back(std::move(f));
   }
 }
 

@@ -87,7 +87,18 @@ struct SearchOptions {
   int top_n = 10;
   DynamicNodeOptions nodes;  // used in nodes mode
   IndexOptions index;        // used in index mode
+  // The options registered modes declare (SearchMode::options), keys
+  // "<mode>.<name>" (search.<mode>.<name> in DetectorOptions), set through
+  // the option table like any other. A mode reads its own in its make
+  // function with own_integer("name") and the like: the value set, or the
+  // declared default (InvalidArgument for an option `mode` does not declare
+  // with that kind).
+  OwnOptionValues own;
+  std::int64_t own_integer(const std::string& name) const;
+  double own_real(const std::string& name) const;
+  std::string own_choice(const std::string& name) const;
   void check() const;
+  // Built again after register_search_mode() (a new mode's options).
   static const OptionTable<SearchOptions>& fields();  // lsgd/options.h
 };
 
@@ -216,6 +227,9 @@ struct SearchMode {
   // frame of `cells` cells beyond the frame's descriptor (estimated_map_bytes(),
   // docs/performance.md); nullptr: none.
   std::int64_t (*bytes_per_frame)(const DetectorOptions& options, int cells) = nullptr;
+  // Its own options (lsgd/options.h): search.<name>.<option>, in this mode
+  // only; make() reads them with SearchOptions::own_integer() and the like.
+  std::vector<OwnOption> options = {};
 };
 
 // Every registered mode, in registration order: the built-in ones first.
@@ -223,7 +237,9 @@ std::vector<SearchMode> search_modes();
 // Registers another mode (e.g. an application's own index), usable by name
 // in SearchOptions::mode from then on; call it before the detectors that use
 // it are made. InvalidArgument for a missing name, summary or make function,
-// or a name already registered. Thread-safe.
+// a name already registered, or an own option that is not complete (a name,
+// a line of documentation, a range or choices its default is in; a mode with
+// options may not be named as a search option: "top_n"). Thread-safe.
 void register_search_mode(const SearchMode& mode);
 // "exhaustive, nodes": the names, for messages and help texts.
 std::string search_mode_names();

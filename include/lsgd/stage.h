@@ -90,6 +90,10 @@ struct StageType {
   const char* name;
   const char* summary;  // one line, for help texts
   std::unique_ptr<VerificationStage> (*make)(const VerificationOptions& options);
+  // Its own options (lsgd/options.h): verification.<name>.<option>, when
+  // the stage runs; make() reads them with VerificationOptions::own_integer()
+  // and the like.
+  std::vector<OwnOption> options = {};
 };
 
 // Every registered stage, in registration order: the built-in ones first.
@@ -97,8 +101,13 @@ std::vector<StageType> verification_stage_types();
 // Registers another stage (an application's own check), usable by name in
 // VerificationOptions::stages from then on; call it before the detectors
 // that use it are made. InvalidArgument for a missing name, summary or make
-// function, a name already registered, or "none"; thread-safe.
+// function, a name already registered, "none", or an own option that is not
+// complete (as register_search_mode(); a stage with options may not be
+// named as a verification option: "stages"); thread-safe.
 void register_verification_stage(const StageType& type);
+// The registered stage named `name` (InvalidArgument naming it and the
+// registered ones when there is none).
+StageType find_verification_stage(const std::string& name);
 // "temporal, geometric": the names, for messages and help texts.
 std::string verification_stage_names();
 // Throws InvalidArgument naming `name` and the registered stages unless it is one.

@@ -67,9 +67,20 @@ struct VerificationOptions {
   int max_candidates = 3;
   TemporalOptions temporal_options;    // used with the temporal stage
   GeometricOptions geometric_options;  // used with the geometric stage
+  // The options registered stages declare (StageType::options), keys
+  // "<stage>.<name>" (verification.<stage>.<name> in DetectorOptions), set
+  // through the option table like any other. A stage reads its own in its
+  // make function with own_integer("<stage>", "name") and the like: the
+  // value set, or the declared default (InvalidArgument for an option the
+  // stage does not declare with that kind).
+  OwnOptionValues own;
+  std::int64_t own_integer(const std::string& stage, const std::string& name) const;
+  double own_real(const std::string& stage, const std::string& name) const;
+  std::string own_choice(const std::string& stage, const std::string& name) const;
   // True when `stage` is one of `stages`.
   bool has(const std::string& stage) const;
   void check() const;
+  // Built again after register_verification_stage() (a new stage's options).
   static const OptionTable<VerificationOptions>& fields();  // lsgd/options.h
 };
 

@@ -1,0 +1,38 @@
+// Option tables that hold what registered search modes and verification
+// stages declare (OwnOption, lsgd/options.h): SearchOptions::fields(),
+// VerificationOptions::fields() and DetectorOptions::fields() are built
+// again after a registration. A table once returned stays alive (a caller
+// may hold a reference to it), so each registration keeps one more copy:
+// a few kilobytes for each of a handful of registrations.
+#pragma once
+
+#include <atomic>
+#include <cstdint>
+#include <deque>
+#include <mutex>
+
+namespace lsgd::internal {
+
+// How many modes and stages have been registered so far (any thread).
+std::uint64_t registrations();
+// Called by register_search_mode() and register_verification_stage() once
+// the entry is in its registry.
+void count_registration();
+
+// The table `build` makes, built again when a registration came after the
+// last build.
+template <class Table>
+const Table& current_table(Table (*build)()) {
+  static std::mutex mutex;
+  static std::deque<Table> tables;
+  static std::uint64_t built_at = 0;
+  const std::lock_guard<std::mutex> lock(mutex);
+  const std::uint64_t now = registrations();
+  if (tables.empty() || built_at != now) {
+    tables.push_back(build());
+    built_at = now;
+  }
+  return tables.back();
+}
+
+}  // namespace lsgd::internal

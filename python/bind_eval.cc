@@ -12,6 +12,7 @@
 #include "lsgd/eval/groundtruth.h"
 #include "lsgd/eval/gt_formats.h"
 #include "lsgd/eval/metrics.h"
+#include "lsgd/eval/sweep.h"
 
 namespace lsgd::python {
 
@@ -110,6 +111,50 @@ void bind_metrics(py::module_& m) {
       .def_readonly("curve", &lsgd::eval::Metrics::curve);
 }
 
+// lsgd sweep's grid from Python: the same library calls (eval/sweep.h), a
+// row a cell, in grid order.
+py::list run_sweep(const std::vector<std::string>& datasets, const std::vector<std::string>& sets,
+                   const py::object& options, int jobs, bool strict) {
+  const lsgd::DetectorOptions base = make_options(options, py::kwargs());
+  std::vector<lsgd::eval::SweepAxis> axes;
+  std::vector<std::string> keys;
+  for (const std::string& spec : sets) {
+    axes.push_back(lsgd::eval::parse_sweep_axis(spec));
+    keys.push_back(axes.back().key);
+    if (keys.back() == "search.min_gap") {
+      throw lsgd::InvalidArgument("sweep: set " + spec +
+                                  ": the window is set per dataset: NAME=...,MIN_GAP");
+    }
+  }
+  const std::vector<lsgd::eval::SweepPoint> points = lsgd::eval::expand_sweep(axes, base);
+  std::vector<lsgd::eval::SweepData> data;
+  for (const std::string& spec : datasets) {
+    data.push_back(lsgd::eval::open_sweep_dataset(lsgd::eval::parse_dataset_spec(spec)));
+  }
+  const std::vector<lsgd::eval::SweepCell> cells = lsgd::eval::sweep_cells(data, points, keys);
+  std::vector<lsgd::eval::SweepRow> rows(cells.size());
+  {
+    py::gil_scoped_release release;
+    lsgd::eval::run_sweep(
+        cells, jobs, [&rows](std::size_t i, const lsgd::eval::SweepRow& row) { rows[i] = row; }, {},
+        strict);
+  }
+  py::list out;
+  for (std::size_t i = 0; i < cells.size(); ++i) {
+    py::dict values;
+    for (std::size_t k = 0; k < keys.size(); ++k) values[py::str(keys[k])] = cells[i].point->values[k];
+    py::dict row;
+    row["dataset"] = cells[i].dataset->spec.name;
+    row["values"] = values;
+    row["metrics"] = rows[i].metrics;
+    row["nodes"] = rows[i].nodes;
+    row["bytes_per_frame"] = rows[i].bytes_per_frame;
+    row["skipped_frames"] = rows[i].skipped;
+    out.append(row);
+  }
+  return out;
+}
+
 }  // namespace
 
 void bind_eval(py::module_& m) {
@@ -126,6 +171,13 @@ void bind_eval(py::module_& m) {
         }, py::arg("path"), py::arg("groundtruth"), py::arg("min_gap"),
         "Scores a detections CSV (query,match,score[,rank]: lsgd match, lsgd.match, another "
         "system's output) as lsgd eval --detections does.");
+  m.def("sweep", &run_sweep, py::arg("datasets"), py::arg("sets") = std::vector<std::string>(),
+        py::arg("options") = py::none(), py::arg("jobs") = 1, py::arg("strict") = false,
+        "Runs lsgd sweep's grid: every configuration of `sets` (\"KEY=VALUES\", as --set) on "
+        "every dataset (\"NAME=SEQUENCE,GT,MIN_GAP\" or \"NAME=DIR,MIN_GAP\", as --dataset), "
+        "on top of `options` (a dict or a YAML path), on `jobs` threads; bad frames are skipped "
+        "unless strict. A list of rows in grid order: dataset, values, metrics, nodes, "
+        "bytes_per_frame, skipped_frames. Everything is checked before the first run.");
 }
 
 }  // namespace lsgd::python

@@ -47,6 +47,7 @@ from ._lsgd import (  # noqa: F401
     read_image,
     similarity,
     stored_image_name,
+    sweep,
     write_csv,
 )
 

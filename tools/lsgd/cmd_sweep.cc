@@ -42,42 +42,9 @@ struct SweepArgs {
   DetectorFlags detector;
 };
 
-struct Dataset {
-  eval::SweepDataset spec;
-  eval::FrameSource source;
-  eval::GroundTruth gt;
-  std::int64_t positives = 0;
-  std::vector<std::string> images;
-};
-
-// Opens the sequence and reads the ground truth, so a wrong path fails before
-// any run (images are read by the runs, which skip bad ones as lsgd eval does).
-Dataset prepare(const eval::SweepDataset& spec) {
-  // Every layout and ground-truth format lsgd eval reads (eval/dataset.h).
-  eval::Dataset opened = eval::open_dataset(spec.sequence, spec.sequence_options, spec.ground_truth,
-                                            spec.gt_options);
-  Dataset d{spec, eval::sequence_source(opened.frames), std::move(opened.gt), 0,
-            std::move(opened.all.images)};
-  for (std::int64_t q = 0; q < d.gt.frames(); ++q) d.positives += d.gt.has_loop(q, spec.min_gap);
-  return d;
-}
-
-// One (dataset, configuration) run.
-struct Cell {
-  const Dataset* dataset = nullptr;
-  const eval::SweepPoint* point = nullptr;
-  DetectorOptions options;  // the point's options with the dataset's window
-  std::string label;        // for progress and error messages
-  bool first_of_dataset = false;  // reports the dataset's skipped frames
-};
-
-struct Row {
-  eval::Metrics metrics;
-  std::int64_t nodes = 0;
-  std::size_t bytes_per_frame = 0;
-  std::int64_t skipped = 0;  // frames skipped (unreadable or rejected images)
-  bool done = false;
-};
+using Dataset = eval::SweepData;
+using Cell = eval::SweepCell;
+using Row = eval::SweepRow;
 
 // Shortest text that reads back to exactly `value`.
 std::string exact(double value) { return shortest_text(value); }
@@ -276,8 +243,9 @@ class SweepOutput {
   std::unique_ptr<std::ofstream> markdown_;
 };
 
-// Runs one cell through the frame loop of every command; bad frames are
-// skipped as by lsgd eval (reported once per dataset) unless --strict.
+// One cell through the frame loop of every command (run_frames: its progress
+// bar when `progress`, skipped frames reported once per dataset); bad frames
+// are skipped as by lsgd eval unless --strict.
 Row run_cell(const Cell& cell, bool progress, bool strict) {
   Detector detector(cell.options);
   eval::RunOptions options;
@@ -288,36 +256,19 @@ Row run_cell(const Cell& cell, bool progress, bool strict) {
           detector.nodes(), detector.bytes_per_frame(), run.skipped, true};
 }
 
-// Runs the cells on `jobs` threads (1: this thread, with a progress bar).
-// After a failure no new cell starts; running ones finish and are kept. The
-// first failure is rethrown, naming its cell.
+// The cells on --jobs threads (eval::run_sweep); rows after a failure are
+// written too, then the failure is rethrown.
 void run_cells(const std::vector<Cell>& cells, int jobs, bool strict, SweepOutput& output) {
-  std::atomic<std::size_t> next{0};
-  std::atomic<bool> failed{false};
-  std::exception_ptr error;
-  std::mutex error_mutex;
-  auto worker = [&] {
-    for (std::size_t i; !failed && (i = next++) < cells.size();) {
-      try {
-        output.add(i, run_cell(cells[i], jobs == 1, strict));
-      } catch (const std::exception& e) {
-        std::lock_guard<std::mutex> lock(error_mutex);
-        if (!failed.exchange(true)) {
-          error = std::make_exception_ptr(Error(cells[i].label + ": " + e.what()));
-        }
-      }
-    }
-  };
-  if (jobs == 1) {
-    worker();
-  } else {
-    std::vector<std::thread> threads;
-    const auto n = std::min<std::size_t>(static_cast<std::size_t>(jobs), cells.size());
-    for (std::size_t t = 0; t < n; ++t) threads.emplace_back(worker);
-    for (auto& t : threads) t.join();
+  std::exception_ptr failure;
+  try {
+    eval::run_sweep(
+        cells, jobs, [&output](std::size_t i, const Row& row) { output.add(i, row); },
+        [jobs, strict](const Cell& cell) { return run_cell(cell, jobs == 1, strict); });
+  } catch (...) {
+    failure = std::current_exception();
   }
   output.finish();
-  if (error) std::rethrow_exception(error);
+  if (failure) std::rethrow_exception(failure);
 }
 
 void sweep(const SweepArgs& args) {
@@ -336,7 +287,7 @@ void sweep(const SweepArgs& args) {
   const std::vector<eval::SweepPoint> points = eval::expand_sweep(axes, base);
   std::vector<Dataset> datasets;
   for (const std::string& spec : args.datasets) {
-    datasets.push_back(prepare(eval::parse_dataset_spec(spec)));
+    datasets.push_back(eval::open_sweep_dataset(eval::parse_dataset_spec(spec)));
     for (std::size_t i = 0; i + 1 < datasets.size(); ++i) {
       if (datasets[i].spec.name == datasets.back().spec.name) {
         throw InvalidArgument("--dataset " + spec + ": the name '" + datasets[i].spec.name +
@@ -355,18 +306,7 @@ void sweep(const SweepArgs& args) {
   files.output(args.markdown, "--markdown");
   files.output(args.json, "--json");
   files.check();
-  std::vector<Cell> cells;
-  for (const Dataset& d : datasets) {
-    for (const eval::SweepPoint& p : points) {
-      Cell cell{&d, &p, p.options, d.spec.name, &p == &points.front()};
-      for (std::size_t k = 0; k < keys.size(); ++k) cell.label += " " + keys[k] + "=" + p.values[k];
-      cell.label = "[" + std::to_string(cells.size() + 1) + "/" +
-                   std::to_string(datasets.size() * points.size()) + "] " + cell.label;
-      cell.options.search.min_gap = d.spec.min_gap;
-      cell.options.check();
-      cells.push_back(std::move(cell));
-    }
-  }
+  const std::vector<Cell> cells = eval::sweep_cells(datasets, points, keys);
   SweepOutput output(args, keys, datasets, cells);
   output.write_headers(base);
   run_cells(cells, args.jobs, args.strict, output);

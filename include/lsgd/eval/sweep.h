@@ -12,12 +12,16 @@
 // error naming the spec before anything runs.
 #pragma once
 
+#include <cstddef>
 #include <cstdint>
+#include <functional>
 #include <string>
 #include <vector>
 
 #include "lsgd/detector.h"
 #include "lsgd/eval/dataset.h"
+#include "lsgd/eval/metrics.h"
+#include "lsgd/eval/runner.h"
 
 namespace lsgd::eval {
 
@@ -78,5 +82,62 @@ struct SweepDataset {
 // name, a window that is not an integer >= 0 or a bad option. Files are not
 // opened here.
 SweepDataset parse_dataset_spec(const std::string& spec);
+
+// ---- running a sweep (lsgd sweep, and any program that sweeps)
+
+// A dataset opened for a sweep: its frames and ground truth are read before
+// any run, so that a wrong path fails first (images are read by the runs,
+// which skip bad ones as lsgd eval does).
+struct SweepData {
+  SweepDataset spec;
+  FrameSource source;
+  GroundTruth gt;
+  std::int64_t positives = 0;       // queries with a loop outside the window
+  std::vector<std::string> images;  // every image of its layout (inputs no output may overwrite)
+};
+// Opens spec's sequence and ground truth (eval::open_dataset: every layout
+// and format lsgd eval reads); the errors name the file.
+SweepData open_sweep_dataset(const SweepDataset& spec);
+
+// One run of a sweep: a configuration of the grid on one dataset.
+struct SweepCell {
+  const SweepData* dataset = nullptr;
+  const SweepPoint* point = nullptr;
+  DetectorOptions options;        // the point's options with the dataset's window, checked
+  std::string label;              // "[k/n] NAME KEY=VALUE ...": for progress and messages
+  bool first_of_dataset = false;  // the first cell of its dataset (reports its skipped frames)
+};
+// Every point on every dataset, the datasets varying slowest; `keys` are the
+// swept keys, for the labels. InvalidArgument naming the cell when a point
+// is invalid with a dataset's window, or when two datasets share a name.
+std::vector<SweepCell> sweep_cells(const std::vector<SweepData>& datasets,
+                                   const std::vector<SweepPoint>& points,
+                                   const std::vector<std::string>& keys);
+
+// What one cell measured.
+struct SweepRow {
+  Metrics metrics;
+  std::int64_t nodes = 0;
+  std::size_t bytes_per_frame = 0;
+  std::int64_t skipped = 0;  // frames skipped (unreadable or rejected images)
+  bool done = false;         // false: the cell did not run (an earlier one failed)
+};
+
+// Runs one cell through the frame loop of every command (run_detector):
+// a bad frame is skipped (`on_skip` told) unless `strict`, where it stops the
+// run; `on_frame` is called for each processed frame. Throws lsgd::Error when
+// every image was skipped.
+SweepRow run_sweep_cell(const SweepCell& cell, bool strict, const FrameCallback& on_frame = {},
+                        const SkipCallback& on_skip = {});
+
+// Runs the cells on `jobs` threads (1: the calling thread), each with
+// `run_cell` (run_sweep_cell when empty); `on_row(i, row)` is called for cell
+// i as it finishes, one call at a time. After a failure no new cell starts;
+// running ones finish and are reported. The first failure is rethrown as an
+// lsgd::Error naming its cell. InvalidArgument for jobs < 1.
+using SweepCellRunner = std::function<SweepRow(const SweepCell& cell)>;
+void run_sweep(const std::vector<SweepCell>& cells, int jobs,
+               const std::function<void(std::size_t index, const SweepRow& row)>& on_row,
+               const SweepCellRunner& run_cell = {}, bool strict = false);
 
 }  // namespace lsgd::eval

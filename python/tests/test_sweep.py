@@ -1,0 +1,86 @@
+"""lsgd.sweep: lsgd sweep's grid from Python, through the same library calls
+(include/lsgd/eval/sweep.h): each row equals a run of its configuration
+scored with lsgd.evaluate, and the table `lsgd sweep --csv` writes."""
+import csv
+import os
+import subprocess
+
+import numpy as np
+import pytest
+
+import lsgd
+
+CLI = os.environ.get("LSGD_CLI", "")
+
+
+def place(p, shift=0, width=160, height=120):
+    rng = np.random.default_rng(1000 + p)
+    levels = np.random.default_rng(7000 + p).integers(0, 256, 8, dtype=np.uint8)
+    index = rng.integers(0, 8, (height, width + 8))
+    return levels[index[:, shift:shift + width]]
+
+
+@pytest.fixture
+def route(tmp_path):
+    """30 places visited 3 times, as PGM files, with its loop ground truth."""
+    folder = tmp_path / "route"
+    folder.mkdir()
+    names = []
+    for k in range(90):
+        path = folder / ("%03d.pgm" % k)
+        image = place(k % 30, k // 30)
+        with open(path, "wb") as f:
+            f.write(b"P5\n160 120\n255\n" + np.ascontiguousarray(image).tobytes())
+        names.append(str(path))
+    (folder / "sequence.txt").write_text("\n".join(names) + "\n")
+    (folder / "groundtruth.txt").write_text(
+        "".join("%d %d\n" % (q, m) for q in range(30, 90) for m in range(q % 30, q - 29, 30)))
+    return str(folder)
+
+
+def test_rows_equal_runs_scored_alone(route):
+    rows = lsgd.sweep(["route=%s,10" % route], ["segmentation.superpixel_size=30,40"],
+                      options={"verification.stages": "temporal"}, jobs=2)
+    assert [(r["dataset"], r["values"]) for r in rows] == [
+        ("route", {"segmentation.superpixel_size": "30"}), ("route", {"segmentation.superpixel_size": "40"})]
+    images = lsgd.open_sequence(os.path.join(route, "sequence.txt"))
+    gt = lsgd.load_groundtruth(os.path.join(route, "groundtruth.txt"), frames=len(images))
+    for row, size in zip(rows, [30, 40]):
+        detector = lsgd.Detector({"verification.stages": "temporal", "search.min_gap": 10,
+                                  "segmentation.superpixel_size": size})
+        m = lsgd.evaluate(lsgd.run(detector, images), gt, min_gap=10)
+        assert row["metrics"].declared_loops == m.declared_loops
+        assert row["metrics"].recall_at_1 == m.recall_at_1
+        assert row["metrics"].average_precision == m.average_precision
+        assert row["nodes"] == detector.nodes and row["skipped_frames"] == 0
+    assert rows[0]["metrics"].recall_at_1 > 0.5
+
+
+def test_rows_equal_lsgd_sweep(route, tmp_path):
+    if not CLI:
+        pytest.skip("the lsgd tool is absent")
+    out = tmp_path / "grid.csv"
+    subprocess.run([CLI, "sweep", "--dataset", "route=%s,10" % route, "--set", "search.mode=exhaustive,nodes",
+                    "--verify", "none", "--csv", str(out)], check=True, capture_output=True)
+    table = list(csv.DictReader(open(out)))
+    rows = lsgd.sweep(["route=%s,10" % route], ["search.mode=exhaustive,nodes"],
+                      options={"verification.stages": "none"})
+    assert len(rows) == len(table) == 2
+    for row, line in zip(rows, table):
+        assert row["values"]["search.mode"] == line["search.mode"]
+        assert row["metrics"].declared_loops == int(line["declared_loops"])
+        assert row["metrics"].recall_at_1 == pytest.approx(float(line["recall_at_1"]), abs=1e-12)
+        assert row["nodes"] == int(line["nodes"])
+
+
+def test_everything_is_checked_before_the_first_run(route):
+    with pytest.raises(lsgd.InvalidArgument, match="superpixel_size"):
+        lsgd.sweep(["route=%s,10" % route], ["segmentation.superpixel_size=0,30"])
+    with pytest.raises(lsgd.InvalidArgument, match="per dataset"):
+        lsgd.sweep(["route=%s,10" % route], ["search.min_gap=5,10"])
+    with pytest.raises(lsgd.Error):
+        lsgd.sweep(["route=/no/such/folder,10"])
+    with pytest.raises(lsgd.InvalidArgument, match="used twice"):
+        lsgd.sweep(["a=%s,10" % route, "a=%s,10" % route])
+    with pytest.raises(lsgd.InvalidArgument, match="jobs"):
+        lsgd.sweep(["route=%s,10" % route], jobs=0)

@@ -10,6 +10,7 @@
 #include "convert.h"
 #include "lsgd/descriptor.h"
 #include "lsgd/error.h"
+#include "lsgd/eval/distractors.h"
 #include "lsgd/eval/results_csv.h"
 #include "lsgd/io/files.h"
 #include "lsgd/options.h"
@@ -119,6 +120,16 @@ void bind_descriptor(py::module_& m) {
           return lsgd::similarity(a.view(), b.view(), lsgd::parse_similarity_metric(metric.c_str()));
         }, py::arg("a"), py::arg("b"), py::arg("metric") = std::string(lsgd::to_string(lsgd::SimilarityOptions{}.metric)),
         "Similarity of two descriptors (the detector's similarity.metric by default).");
+  m.def("make_distractor", [](const lsgd::Descriptor& base, std::int64_t k, std::int64_t run,
+                             const std::string& storage) {
+          lsgd::Descriptor exact, out;
+          lsgd::eval::make_distractor(base, k, run, lsgd::parse_histogram_storage(storage.c_str()), exact, out);
+          return out;
+        }, py::arg("base"), py::arg("k"), py::arg("run") = 1, py::arg("storage") = "exact",
+        "Distractor k made from `base` (an exact descriptor, Detector.describe()) as lsgd bench "
+        "--distractors makes it: cells shuffled and each histogram moved by a random lighting "
+        "offset, seeded by k // run (a run of `run` distractors is one stretch of another place); "
+        "in `storage` (exact or compact).");
   m.def("match", &match_descriptors,
         py::arg("reference"), py::arg("query"), py::arg("top_k") = 1,
         py::arg("metric") = std::string(lsgd::to_string(lsgd::SimilarityOptions{}.metric)),

@@ -41,6 +41,7 @@ from ._lsgd import (  # noqa: F401
     evaluate,
     evaluate_detections,
     load_groundtruth,
+    make_distractor,
     match,
     open_sequence,
     options,

@@ -84,3 +84,22 @@ def test_everything_is_checked_before_the_first_run(route):
         lsgd.sweep(["a=%s,10" % route, "a=%s,10" % route])
     with pytest.raises(lsgd.InvalidArgument, match="jobs"):
         lsgd.sweep(["route=%s,10" % route], jobs=0)
+
+
+def test_distractors_are_the_benchs(route):
+    """lsgd.make_distractor: what lsgd bench --distractors stores, from a real descriptor."""
+    detector = lsgd.Detector()
+    base = detector.describe(lsgd.read_image(os.path.join(route, "000.pgm")))
+    a, b = lsgd.make_distractor(base, 0), lsgd.make_distractor(base, 1)
+    assert lsgd.similarity(a, a) == pytest.approx(lsgd.similarity(base, base))
+    assert lsgd.similarity(a, b) < lsgd.similarity(a, a)
+    # A run of 5 distractors is one place: 10 .. 14 are equal, 15 another.
+    run = [lsgd.make_distractor(base, k, run=5) for k in range(10, 16)]
+    assert all(lsgd.similarity(run[0], d) == lsgd.similarity(run[0], run[0]) for d in run[1:5])
+    assert lsgd.similarity(run[0], run[5]) < lsgd.similarity(run[0], run[0])
+    compact = lsgd.make_distractor(base, 0, storage="compact")
+    assert compact.storage == "compact"
+    with pytest.raises(lsgd.InvalidArgument, match="at least 1"):
+        lsgd.make_distractor(base, 0, run=0)
+    with pytest.raises(lsgd.InvalidArgument, match="exact descriptor"):
+        lsgd.make_distractor(compact, 0)

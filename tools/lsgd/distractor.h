@@ -1,5 +1,5 @@
-// The distractor frames of lsgd bench --distractors (bench_distractors.cc
-// says how they are used).
+// The map planning of lsgd bench --distractors (bench_distractors.cc says
+// how the distractors are used; eval/distractors.h makes them).
 #pragma once
 
 #include <cstdint>
@@ -8,20 +8,12 @@
 
 #include "lsgd/descriptor.h"
 #include "lsgd/detector.h"
+#include "lsgd/eval/distractors.h"
 
 namespace lsgd::cli::bench {
 
-// Distractor k made from `base`, the exact descriptor of sequence frame k % M
-// (M frames): its cells are shuffled (a random permutation: another spatial
-// layout of the same kind of content) and each cell's histogram is moved by a
-// random offset of -24 to +24 intensity levels (a lighting change; mass
-// pushed past 0 or 255 stays at the end bin), with a generator seeded by
-// k / run. So the `run` consecutive distractors of one run share their layout
-// and lighting: a stretch of another place, as a camera would have stored it;
-// with run 1 each distractor is its own place. Writes `exact` and `out` (as
-// `storage` keeps it).
-void make_distractor(const Descriptor& base, std::int64_t k, std::int64_t run,
-                     HistogramStorage storage, Descriptor& exact, Descriptor& out);
+// Distractor frames: lsgd/eval/distractors.h.
+using eval::make_distractor;
 
 // Memory a detector with `options` in search mode `mode` takes for `frames`
 // stored frames of `cells` cells, bytes: lsgd::estimated_map_bytes() (each

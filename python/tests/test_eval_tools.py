@@ -1,6 +1,9 @@
-"""lsgd.sweep: lsgd sweep's grid from Python, through the same library calls
-(include/lsgd/eval/sweep.h): each row equals a run of its configuration
-scored with lsgd.evaluate, and the table `lsgd sweep --csv` writes."""
+"""The evaluation tools from Python, through the library calls the CLI makes.
+
+lsgd.sweep: lsgd sweep's grid (include/lsgd/eval/sweep.h): each row equals a
+run of its configuration scored with lsgd.evaluate, and the table `lsgd sweep
+--csv` writes. lsgd.make_distractor: lsgd bench --distractors' frames
+(include/lsgd/eval/distractors.h)."""
 import csv
 import os
 import subprocess

@@ -94,7 +94,12 @@ double parse_option_real(const std::string& key, const std::string& text) {
   if (kNegInf.count(text)) return -std::numeric_limits<double>::infinity();
   if (kNan.count(text)) return std::numeric_limits<double>::quiet_NaN();
   double v = 0;
-  if (!internal::parses_as(text, v)) internal::throw_bad_option_text(key, text, "a number");
+  const std::errc ec = internal::parse_number(text, v);
+  if (ec == std::errc::result_out_of_range) {  // 1e309, 1e-400: a number, but not a double
+    internal::throw_invalid(key, " = ", internal::shown_value(text),
+                            " is out of range: beyond what a double holds");
+  }
+  if (ec != std::errc()) internal::throw_bad_option_text(key, text, "a number");
   return v;
 }
 

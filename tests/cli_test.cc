@@ -9,6 +9,7 @@
 #include <iomanip>
 #include <sstream>
 #include <string>
+#include <utility>
 
 #include <gtest/gtest.h>
 
@@ -211,6 +212,32 @@ TEST(Cli, VersionSuggestionsExitCodesAndDefaults) {
                            "(default 7; overrides decision.threshold)"}) {
     EXPECT_NE(help.out.find(text), std::string::npos) << text << "\n" << help.out;
   }
+}
+
+// An integer flag given a number beyond 64 bits, or a negative one where only
+// 0 and up make sense, is refused naming it: CLI11 alone read
+// --seed 99999999999999999999999 as seed 18446744073709551615 and --seed -5
+// as 18446744073709551611.
+TEST(Cli, IntegerFlagsBeyond64BitsOrBelowZeroAreRefusedAsTyped) {
+  const std::pair<const char*, const char*> cases[] = {
+      {"demo --seed 99999999999999999999999",
+       "--seed: value 99999999999999999999999 is out of range: far beyond the values it takes"},
+      {"demo --seed -5", "--seed: value -5 is out of range: must be 0 or more"},
+      {"demo --min-gap 99999999999999999999999",
+       "--min-gap: value 99999999999999999999999 is out of range"},
+      {"demo --min-gap -99999999999999999999999",
+       "--min-gap: value -99999999999999999999999 is out of range"},
+  };
+  for (const auto& [args, expected] : cases) {
+    const CmdResult r = lsgd(args);
+    EXPECT_EQ(r.code, 1) << args;
+    EXPECT_NE(r.err.find(expected), std::string::npos) << args << ": " << r.err;
+    EXPECT_EQ(lines_of(r.err), 1) << r.err;
+  }
+  // Within 64 bits the flag's own checks still speak (the window's range).
+  const CmdResult within = lsgd("demo --min-gap 9223372036854775807");
+  EXPECT_EQ(within.code, 1);
+  EXPECT_EQ(within.err.find("far beyond"), std::string::npos) << within.err;
 }
 
 TEST(Cli, MissingSequenceFailsWithOneLineNamingIt) {

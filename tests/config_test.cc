@@ -427,6 +427,13 @@ TEST(OptionTables, SetOptionNamesUnknownKeysAndWrongValues) {
     m = test::message_of<InvalidArgument>([&] { set_option(o, "search.top_n", big); });
     EXPECT_NE(m.find(std::string("search.top_n = ") + big + " is out of range"), std::string::npos) << m;
   }
+  // A real beyond a double (either way) is a number out of range, not "not a number".
+  for (const char* big : {"1e309", "-1e400", "1e-400"}) {
+    m = test::message_of<InvalidArgument>([&] { set_option(o, "decision.threshold", big); });
+    EXPECT_NE(m.find(std::string("decision.threshold = ") + big + " is out of range: beyond what a double holds"),
+              std::string::npos)
+        << m;
+  }
   // A value is shown on one line: a NUL escaped, a long one cut with its length.
   m = test::message_of<InvalidArgument>([&] { set_option(o, "search.min_gap", std::string("1\0x", 3)); });
   EXPECT_NE(m.find("search.min_gap = '1\\0x' is not an integer"), std::string::npos) << m;

@@ -4,6 +4,8 @@
 
 #include <algorithm>
 #include <cerrno>
+#include <charconv>
+#include <cstdint>
 #include <cstdlib>
 #include <exception>
 #include <iostream>
@@ -46,6 +48,42 @@ void hide_sentinel_defaults(CLI::App& app) {
     if (o->get_default_str() == "-1" || o->get_default_str() == "[]") o->default_str("");
   }
   for (CLI::App* sub : app.get_subcommands({})) hide_sentinel_defaults(*sub);
+}
+
+// CLI11 reads an integer beyond 64 bits as the largest one (strtoll
+// saturates): --seed 99999999999999999999999 ran seed 18446744073709551615
+// and --min-gap's message named a value nobody typed. Every integer option
+// refuses such text, naming it, before it is converted.
+void refuse_integer_overflow(CLI::App& app) {
+  // `unsigned_type`: a negative value would wrap around (--seed -5 ran
+  // seed 18446744073709551611).
+  const auto fits = [](bool unsigned_type) {
+    return CLI::Validator(
+        [unsigned_type](std::string& text) -> std::string {
+          const std::size_t sign = !text.empty() && (text[0] == '-' || text[0] == '+') ? 1 : 0;
+          if (text.size() == sign || text.find_first_not_of("0123456789", sign) != std::string::npos) {
+            return {};  // not digits: CLI11's own conversion error
+          }
+          if (unsigned_type && text[0] == '-' && text.find_first_not_of('0', 1) != std::string::npos) {
+            return "value " + text + " is out of range: must be 0 or more";
+          }
+          const char* first = text.data() + (text[0] == '+' ? 1 : 0);
+          const char* last = text.data() + text.size();
+          std::int64_t i = 0;
+          std::uint64_t u = 0;
+          if (std::from_chars(first, last, i).ec == std::errc() ||
+              (text[0] != '-' && std::from_chars(first, last, u).ec == std::errc())) {
+            return {};
+          }
+          return "value " + text + " is out of range: far beyond the values it takes";
+        },
+        "", "fits in 64 bits");
+  };
+  for (CLI::Option* o : app.get_options()) {
+    const std::string type = o->get_type_name();
+    if (type == "INT" || type == "UINT") o->check(fits(type == "UINT"));
+  }
+  for (CLI::App* sub : app.get_subcommands({})) refuse_integer_overflow(*sub);
 }
 
 // A usage error as one message: unknown commands and misspelt options name
@@ -111,6 +149,7 @@ int main(int argc, char** argv) {
   lsgd::cli::register_db(app);
   lsgd::cli::register_options(app);
   hide_sentinel_defaults(app);
+  refuse_integer_overflow(app);
   // The detector runs on the calling thread; OpenCV's own thread pool (ORB,
   // RANSAC and resizing in the geometric stage) is off too, so that every
   // time the tool reports is single-thread and runs are repeatable. `lsgd

@@ -70,6 +70,8 @@ TEST(Distractor, ABaseThatIsNotAnExactDescriptorIsRefused) {
   lsgd::compact(base, compacted);
   EXPECT_THROW(lsgd::eval::make_distractor(compacted, 0, 1, lsgd::HistogramStorage::kExact, exact, out),
                lsgd::InvalidArgument);
+  EXPECT_THROW(lsgd::eval::make_distractor(base, -1, 1, lsgd::HistogramStorage::kExact, exact, out),
+               lsgd::InvalidArgument);
   base.pixels.pop_back();
   EXPECT_THROW(lsgd::eval::make_distractor(base, 0, 1, lsgd::HistogramStorage::kExact, exact, out),
                lsgd::InvalidArgument);

@@ -22,6 +22,7 @@ std::uint64_t next(std::uint64_t& s) {  // splitmix64
 void make_distractor(const Descriptor& base, std::int64_t k, std::int64_t run, HistogramStorage storage,
                      Descriptor& exact, Descriptor& out) {
   if (run < 1) internal::throw_invalid("distractor run ", run, ": must be at least 1 frame");
+  if (k < 0) internal::throw_invalid("distractor ", k, ": must be 0 or more");
   const auto cell_count = static_cast<std::size_t>(std::max(base.grid.cells(), 0));
   if (base.storage != HistogramStorage::kExact || cell_count == 0 ||
       base.hist.size() != cell_count * kBins || base.pixels.size() != cell_count) {

@@ -17,8 +17,8 @@ namespace lsgd::eval {
 // k / run. So the `run` consecutive distractors of one run share their layout
 // and lighting: a stretch of another place, as a camera would have stored it;
 // with run 1 each distractor is its own place. Writes `exact` and `out` (as
-// `storage` keeps it). InvalidArgument for run < 1 or a base that is not
-// exact storage.
+// `storage` keeps it). InvalidArgument for k < 0, run < 1 or a base that is
+// not exact storage.
 void make_distractor(const Descriptor& base, std::int64_t k, std::int64_t run,
                      HistogramStorage storage, Descriptor& exact, Descriptor& out);
 

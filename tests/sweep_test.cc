@@ -170,6 +170,23 @@ TEST(SweepGrid, KeySweptTwiceIsAnError) {
   EXPECT_NE(message.find("already swept"), std::string::npos) << message;
 }
 
+// A grid of more than 10,000 configurations is refused before any point is
+// parsed (a million took minutes and gigabytes before the first run); 10,000
+// are built.
+TEST(SweepGrid, MoreThanTenThousandPointsAreRefusedAtOnce) {
+  const std::string message = message_of<InvalidArgument>([] {
+    expand_sweep({parse_sweep_axis("segmentation.superpixel_size=10:109:1"),
+                  parse_sweep_axis("decision.threshold=1:100:1"), parse_sweep_axis("search.top_n=1:100:1")},
+                 {});
+  });
+  EXPECT_NE(message.find("sweep: 1000000 configurations, more than the 10000 a sweep runs"), std::string::npos)
+      << message;
+  EXPECT_EQ(expand_sweep({parse_sweep_axis("decision.threshold=1:100:1"), parse_sweep_axis("search.top_n=1:100:1")},
+                         {})
+                .size(),
+            10000u);
+}
+
 TEST(SweepGrid, YamlMergesSectionsSharingAPrefix) {
   EXPECT_EQ(lsgd::eval::sweep_yaml({"search.mode", "segmentation.superpixel_size",
                                     "search.nodes.beta", "search.nodes.alpha"},

@@ -18,7 +18,11 @@ using internal::concat;
 using internal::throw_invalid;
 
 constexpr std::size_t kMaxAxisValues = 10'000;
-constexpr std::size_t kMaxPoints = 1'000'000;
+// Every configuration is a whole run of each dataset (seconds to minutes), and
+// each is parsed and kept before the first run: a grid of 10,000 is days of
+// runs already, and is checked in about a second; a million took minutes and
+// gigabytes before it could start (docs/reliability.md).
+constexpr std::size_t kMaxPoints = 10'000;
 constexpr int kMaxDecimals = 9;
 
 std::string trim(const std::string& text) {
@@ -251,7 +255,12 @@ std::vector<SweepPoint> expand_sweep(const std::vector<SweepAxis>& axes,
     }
     keys.push_back(axis.key);
     total *= axis.values.size();
-    if (total > kMaxPoints) throw_invalid("sweep: more than ", kMaxPoints, " configurations");
+    if (total > kMaxPoints) {
+      double all = 1;  // the whole grid, for the message
+      for (const SweepAxis& a : axes) all *= static_cast<double>(a.values.size());
+      throw_invalid("sweep: ", static_cast<std::uint64_t>(all), " configurations, more than the ",
+                    kMaxPoints, " a sweep runs (each one is a whole run of every dataset): sweep fewer values");
+    }
   }
   std::vector<SweepPoint> points;
   points.reserve(total);

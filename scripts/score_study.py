@@ -68,17 +68,22 @@ def z_local(radius):
     return z
 
 
+def otsu_upper(values):
+    """Otsu's split of `values`: the share of their variance it separates, and its upper class."""
+    v = np.sort(values)
+    cs = np.cumsum(v)
+    k = np.arange(1, len(v))
+    w0 = k / len(v)
+    between = w0 * (1 - w0) * ((cs[-1] - cs[k - 1]) / (len(v) - k) - cs[k - 1] / k) ** 2
+    b = int(np.argmax(between))
+    return between[b] / values.var(), v[k[b]:]
+
+
 def z_otsu(eta0):
     """The upper class of Otsu's split when the split separates at least eta0 of the variance."""
     def z(c):
-        v = np.sort(c)
-        cs = np.cumsum(v)
-        k = np.arange(1, len(v))
-        w0 = k / len(v)
-        between = w0 * (1 - w0) * ((cs[-1] - cs[k - 1]) / (len(v) - k) - cs[k - 1] / k) ** 2
-        b = int(np.argmax(between))
-        upper = v[k[b]:]
-        if between[b] / c.var() >= eta0 and len(upper) >= 32:
+        eta, upper = otsu_upper(c)
+        if eta >= eta0 and len(upper) >= 32:
             return (c - upper.mean()) / upper.std()
         return z_global(c)
     return z
@@ -108,14 +113,8 @@ def l2_truncated(q):
 
 def l2_otsu(eta0):
     def stats(A):
-        v = np.sort(A)
-        cs = np.cumsum(v)
-        k = np.arange(1, len(v))
-        w0 = k / len(v)
-        between = w0 * (1 - w0) * ((cs[-1] - cs[k - 1]) / (len(v) - k) - cs[k - 1] / k) ** 2
-        b = int(np.argmax(between))
-        upper = v[k[b]:]
-        if between[b] / A.var() >= eta0 and len(upper) >= 32:
+        eta, upper = otsu_upper(A)
+        if eta >= eta0 and len(upper) >= 32:
             return upper.mean(), upper.std()
         return l2_global(A)
     return stats

@@ -33,18 +33,8 @@ internal::Registry<SearchMode>& registry() {
 std::vector<SearchMode> search_modes() { return registry().entries(); }
 
 void register_search_mode(const SearchMode& mode) {
-  SearchMode entry = mode;
-  if (mode.name != nullptr && !mode.options.empty()) {
-    for (const OptionField<SearchOptions>& f : SearchOptions::fields()) {
-      if (f.name == mode.name) {
-        internal::throw_invalid("register_search_mode: a mode with options cannot be named '",
-                                mode.name, "', an option of search");
-      }
-    }
-    entry.options = checked_own_options(mode.options, "register_search_mode",
-                                        std::string("search.") + mode.name);
-  }
-  registry().add(entry, "register_search_mode");
+  registry().add(internal::with_checked_options<SearchOptions>(mode, "register_search_mode", "mode", "search"),
+                 "register_search_mode");
   internal::count_registration();
 }
 

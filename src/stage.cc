@@ -31,18 +31,9 @@ internal::Registry<StageType>& registry() {
 std::vector<StageType> verification_stage_types() { return registry().entries(); }
 
 void register_verification_stage(const StageType& type) {
-  StageType entry = type;
-  if (type.name != nullptr && !type.options.empty()) {
-    for (const OptionField<VerificationOptions>& f : VerificationOptions::fields()) {
-      if (f.name == type.name) {
-        internal::throw_invalid("register_verification_stage: a stage with options cannot be named '",
-                                type.name, "', an option of verification");
-      }
-    }
-    entry.options = checked_own_options(type.options, "register_verification_stage",
-                                        std::string("verification.") + type.name);
-  }
-  registry().add(entry, "register_verification_stage", "none");
+  registry().add(internal::with_checked_options<VerificationOptions>(type, "register_verification_stage",
+                                                                     "stage", "verification"),
+                 "register_verification_stage", "none");
   internal::count_registration();
 }
 

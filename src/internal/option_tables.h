@@ -10,6 +10,10 @@
 #include <cstdint>
 #include <deque>
 #include <mutex>
+#include <string>
+
+#include "internal/check.h"
+#include "lsgd/options.h"
 
 namespace lsgd::internal {
 
@@ -33,6 +37,25 @@ const Table& current_table(Table (*build)()) {
     built_at = now;
   }
   return tables.back();
+}
+
+// A mode or stage entry about to be registered, its own options checked
+// (checked_own_options) and their defaults made canonical: `what` ("mode",
+// "stage") with options may not be named as an option of S (section
+// "search", "verification"), whose keys its options would sit beside.
+template <class S, class Entry>
+Entry with_checked_options(const Entry& entry, const char* caller, const char* what,
+                           const char* section) {
+  Entry out = entry;
+  if (entry.name == nullptr || entry.options.empty()) return out;
+  for (const OptionField<S>& f : S::fields()) {
+    if (f.name == entry.name) {
+      throw_invalid(caller, ": a ", what, " with options cannot be named '", entry.name,
+                    "', an option of ", section);
+    }
+  }
+  out.options = checked_own_options(entry.options, caller, std::string(section) + "." + entry.name);
+  return out;
 }
 
 }  // namespace lsgd::internal

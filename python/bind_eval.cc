@@ -12,6 +12,7 @@
 #include "lsgd/eval/groundtruth.h"
 #include "lsgd/eval/gt_formats.h"
 #include "lsgd/eval/metrics.h"
+#include "lsgd/eval/runner.h"
 #include "lsgd/eval/sweep.h"
 
 namespace lsgd::python {
@@ -50,7 +51,7 @@ lsgd::eval::Metrics evaluate_results(const std::vector<lsgd::Result>& results, c
     records[static_cast<std::size_t>(f)].skipped = true;
   }
   for (const lsgd::Result& r : results) {
-    lsgd::eval::FrameRecord rec = record_of(r);
+    lsgd::eval::FrameRecord rec = lsgd::eval::record_of(r);
     rec.frame = r.id;
     rec.reported.frame = id(rec.reported.frame);
     if (rec.ranking) rec.ranking->best.frame = id(rec.ranking->best.frame);

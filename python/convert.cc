@@ -149,15 +149,4 @@ py::array mat_to_array(const cv::Mat& m) {
   return out;
 }
 
-lsgd::eval::FrameRecord record_of(const lsgd::Result& r) {
-  lsgd::eval::FrameRecord rec;
-  rec.frame = r.frame;
-  rec.reported = r.best;
-  rec.loop = r.loop;
-  rec.ranking = r.ranking;
-  rec.candidates = r.candidates;
-  rec.timings = r.timings;
-  return rec;
-}
-
 }  // namespace lsgd::python

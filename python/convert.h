@@ -42,7 +42,4 @@ lsgd::ImageView image_view(py::array& a);
 // A copy of the image as a uint8 array (H x W, or H x W x channels).
 py::array mat_to_array(const cv::Mat& m);
 
-// The result as the evaluation's record of its frame.
-lsgd::eval::FrameRecord record_of(const lsgd::Result& r);
-
 }  // namespace lsgd::python

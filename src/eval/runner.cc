@@ -107,8 +107,9 @@ void to_run_ids(Result& result, const std::vector<std::int64_t>& ids) {
   for (StageVerdict& v : result.verification) v.candidate = to_id(v.candidate);
 }
 
-// The record kept of a processed frame (takes its candidates).
-FrameRecord record_of(Result& result, const FrameTimes& times) {
+}  // namespace
+
+FrameRecord record_of(Result result, double load_ms) {
   FrameRecord record;
   record.frame = result.frame;
   record.reported = result.best;
@@ -116,11 +117,9 @@ FrameRecord record_of(Result& result, const FrameTimes& times) {
   record.ranking = result.ranking;
   record.candidates = std::move(result.candidates);
   record.timings = result.timings;
-  record.load_ms = times.load_ms;
+  record.load_ms = load_ms;
   return record;
 }
-
-}  // namespace
 
 FrameSource sequence_source(const io::Sequence& sequence) {
   FrameSource source;
@@ -203,7 +202,7 @@ std::vector<FrameRecord> run_detector(Detector& detector, const FrameSource& sou
     result.frame = id;
     to_run_ids(result, ids);
     if (on_frame) on_frame(result, times);
-    if (options.keep_records) records.push_back(record_of(result, times));
+    if (options.keep_records) records.push_back(record_of(std::move(result), times.load_ms));
   }
   return records;
 }

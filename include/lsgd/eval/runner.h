@@ -26,6 +26,10 @@ struct FrameSource {
   std::function<double(std::int64_t)> stamp;         // its time stamp (empty: none; KITTI's times.txt)
 };
 
+// What the evaluation keeps of a processed frame's result (its report, loop,
+// ranking, candidates and times), `load_ms` the time its image took to read.
+FrameRecord record_of(Result result, double load_ms = 0);
+
 // The images of a sequence, read with io::read_image.
 FrameSource sequence_source(const io::Sequence& sequence);
 

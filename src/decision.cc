@@ -288,8 +288,12 @@ void LoopDecision::list_examined(const DecisionQuery& q, const Window& w, std::s
 // as a first loop: geometry confirms a weak ranking, and a continuation keeps
 // its own bar.
 double LoopDecision::strong(const DecisionQuery& q, const Window& w, const Candidate& c) const {
-  const bool first_loop = w.first != nullptr && c.frame == w.first->frame && !continues(q, w, c);
-  return first_loop ? options_.strong_bonus : 0.0;
+  return first_loop(q, w, c) ? options_.strong_bonus : 0.0;
+}
+
+// The candidate appearance ranks first, taken as a first loop (it continues none).
+bool LoopDecision::first_loop(const DecisionQuery& q, const Window& w, const Candidate& c) const {
+  return w.first != nullptr && c.frame == w.first->frame && !continues(q, w, c);
 }
 
 // The most a candidate can score once confirmed. track_bonus is for the
@@ -297,8 +301,7 @@ double LoopDecision::strong(const DecisionQuery& q, const Window& w, const Candi
 // the last frame (its own check must accept it: a first loop has no relaxed bar).
 double LoopDecision::potential(const DecisionQuery& q, const Window& w, const Candidate& c) const {
   const DecisionOptions& d = options_;
-  const bool first_loop = w.first != nullptr && c.frame == w.first->frame && !continues(q, w, c);
-  const double tracked = first_loop && first_tracks_ ? d.track_bonus : 0.0;
+  const double tracked = first_loop(q, w, c) && first_tracks_ ? d.track_bonus : 0.0;
   return c.score + d.geometric_bonus + strong(q, w, c) + tracked +
          (continues(q, w, c) ? d.continuity_bonus : 0.0);
 }

@@ -289,6 +289,7 @@ class LoopDecision final : public Stateful {
   void list_examined(const DecisionQuery& q, const Window& w, std::size_t n, const Candidate& continuation);
   double potential(const DecisionQuery& q, const Window& w, const Candidate& c) const;
   double strong(const DecisionQuery& q, const Window& w, const Candidate& c) const;
+  bool first_loop(const DecisionQuery& q, const Window& w, const Candidate& c) const;
   Confirmation confirm(const DecisionQuery& q, const Candidate& c, bool continuing, bool is_first,
                        Decision& out);
   void examine(const DecisionQuery& q, const std::vector<VerificationStage*>& stages, std::size_t first,

@@ -122,10 +122,6 @@ py::list run_sweep(const std::vector<std::string>& datasets, const std::vector<s
   for (const std::string& spec : sets) {
     axes.push_back(lsgd::eval::parse_sweep_axis(spec));
     keys.push_back(axes.back().key);
-    if (keys.back() == "search.min_gap") {
-      throw lsgd::InvalidArgument("sweep: set " + spec +
-                                  ": the window is set per dataset: NAME=...,MIN_GAP");
-    }
   }
   const std::vector<lsgd::eval::SweepPoint> points = lsgd::eval::expand_sweep(axes, base);
   std::vector<lsgd::eval::SweepData> data;

@@ -163,6 +163,15 @@ TEST(SweepGrid, BadKeysAndValuesNameTheSpec) {
   }
 }
 
+// Each dataset has its own window (sweep_cells sets it): a swept one would be
+// dropped without a word, so it is refused naming the spec.
+TEST(SweepGrid, TheWindowIsNotSwept) {
+  const std::string message =
+      message_of<InvalidArgument>([] { expand_sweep({parse_sweep_axis("search.min_gap=5,10")}, {}); });
+  EXPECT_NE(message.find("sweep 'search.min_gap=5,10': the window is set per dataset"), std::string::npos)
+      << message;
+}
+
 TEST(SweepGrid, KeySweptTwiceIsAnError) {
   const std::string message = message_of<InvalidArgument>([] {
     expand_sweep({parse_sweep_axis("search.top_n=1"), parse_sweep_axis("search.top_n=2")}, {});
@@ -181,6 +190,14 @@ TEST(SweepGrid, MoreThanTenThousandPointsAreRefusedAtOnce) {
   });
   EXPECT_NE(message.find("sweep: 1000000 configurations, more than the 10000 a sweep runs"), std::string::npos)
       << message;
+  // A grid far beyond 2^64 points is named too.
+  std::vector<SweepAxis> huge;
+  for (const char* key : {"decision.threshold", "decision.geometric_bonus", "decision.continuity_bonus",
+                          "decision.strong_bonus", "decision.track_bonus", "decision.continuity_min_z"}) {
+    huge.push_back(parse_sweep_axis(std::string(key) + "=1:10000:1"));
+  }
+  EXPECT_NE(message_of<InvalidArgument>([&] { expand_sweep(huge, {}); }).find("sweep: 1e+24 configurations"),
+            std::string::npos);
   EXPECT_EQ(expand_sweep({parse_sweep_axis("decision.threshold=1:100:1"), parse_sweep_axis("search.top_n=1:100:1")},
                          {})
                 .size(),
@@ -270,17 +287,7 @@ CmdResult lsgd_cli(const std::string& args) {
   return lsgd::test::run_command(LSGD_CLI, args, kTmp);
 }
 
-std::vector<Strings> read_csv(const fs::path& path) {  // no quoted fields in these tables
-  std::vector<Strings> rows;
-  std::ifstream in(path);
-  for (std::string line; std::getline(in, line);) {
-    Strings fields;
-    std::stringstream s(line);
-    for (std::string f; std::getline(s, f, ',');) fields.push_back(f);
-    rows.push_back(fields);
-  }
-  return rows;
-}
+using lsgd::test::csv_rows;  // no quoted fields in these tables
 
 // A short synthetic street (160x120, 218 frames, revisits from frame ~60).
 class SweepCli : public ::testing::Test {
@@ -346,7 +353,7 @@ TEST_F(SweepCli, FourCellsMatchDirectEvals) {
                " --set search.mode=exhaustive,nodes --verify none --csv '" +
                csv.string() + "' --markdown '" + md.string() + "' --json '" + json.string() + "'");
   ASSERT_EQ(r.code, 0) << r.err;
-  const auto rows = read_csv(csv);
+  const auto rows = csv_rows(csv);
   ASSERT_EQ(rows.size(), 5u);
   EXPECT_EQ(rows[0], kHeader);
   const Strings order[] = {
@@ -417,7 +424,7 @@ TEST_F(SweepCli, ReadsEveryFormatAndSelectionThatEvalReads) {
                                ",10,gt-format=loopinf,every=2' --verify none --csv '" +
                                csv.string() + "'");
   ASSERT_EQ(r.code, 0) << r.err;
-  const auto rows = read_csv(csv);
+  const auto rows = csv_rows(csv);
   ASSERT_EQ(rows.size(), 2u);
   ASSERT_EQ(rows[0].size(), rows[1].size());
   std::map<std::string, std::string> row;  // no --set: no key columns
@@ -446,7 +453,7 @@ TEST_F(SweepCli, ParallelJobsGiveTheSameScores) {
   ASSERT_EQ(b.code, 0) << b.err;
   EXPECT_NE(b.out.find("NOT comparable"), std::string::npos) << b.out;
   EXPECT_EQ(a.out.find("NOT comparable"), std::string::npos) << a.out;
-  auto x = read_csv(one), y = read_csv(two);
+  auto x = csv_rows(one), y = csv_rows(two);
   ASSERT_EQ(x.size(), 5u);
   ASSERT_EQ(y.size(), x.size());
   for (std::size_t i = 1; i < x.size(); ++i) {  // timing columns aside, byte-identical rows
@@ -498,7 +505,7 @@ TEST_F(SweepCli, ABadImageIsSkippedAsByEvalOrStopsUnderStrict) {
   EXPECT_EQ(strict.code, 1);
   EXPECT_NE(strict.err.find("bad.png"), std::string::npos) << strict.err;
   EXPECT_NE(strict.err.find("broken"), std::string::npos) << strict.err;
-  auto rows = read_csv(csv);
+  auto rows = csv_rows(csv);
   ASSERT_EQ(rows.size(), 3u);  // header + the two rows of the good dataset
   EXPECT_EQ(rows[1][0], "street");
   EXPECT_EQ(rows[2][0], "street");
@@ -509,7 +516,7 @@ TEST_F(SweepCli, ABadImageIsSkippedAsByEvalOrStopsUnderStrict) {
   const auto at = r.err.find(skip);
   EXPECT_NE(at, std::string::npos) << r.err;
   EXPECT_EQ(r.err.find(skip, at + 1), std::string::npos) << "reported twice:\n" << r.err;
-  rows = read_csv(csv);
+  rows = csv_rows(csv);
   ASSERT_EQ(rows.size(), 5u);
   EXPECT_EQ(rows[3][0], "broken");
   const std::size_t skipped_column = rows[0].size() - 3;  // skipped_frames, then decision_*

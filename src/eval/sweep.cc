@@ -239,6 +239,14 @@ std::string sweep_yaml(const std::vector<std::string>& keys,
 
 std::vector<SweepPoint> expand_sweep(const std::vector<SweepAxis>& axes,
                                      const DetectorOptions& base) {
+  // The grid's size first: every value and point is parsed below.
+  double all = 1;  // up to 10,000^axes: a double
+  for (const SweepAxis& a : axes) all *= static_cast<double>(a.values.size());
+  if (all > static_cast<double>(kMaxPoints)) {
+    throw_invalid("sweep: ", all < 1e15 ? std::to_string(static_cast<std::int64_t>(all)) : shortest_text(all),
+                  " configurations, more than the ", kMaxPoints,
+                  " a sweep runs (each one is a whole run of every dataset): sweep fewer values");
+  }
   std::vector<std::string> keys;
   std::size_t total = 1;
   for (const SweepAxis& axis : axes) {
@@ -249,18 +257,18 @@ std::vector<SweepPoint> expand_sweep(const std::vector<SweepAxis>& axes,
       }
     }
     if (axis.values.empty()) throw_invalid("sweep '", axis.spec, "': no values");
+    // sweep_cells() gives each dataset its own window: a swept one would be
+    // dropped without a word.
+    if (axis.key == "search.min_gap") {
+      throw_invalid("sweep '", axis.spec, "': the window is set per dataset, by its spec "
+                    "NAME=...,MIN_GAP (lsgd sweep --dataset), not swept");
+    }
     for (const std::string& value : axis.values) {
       parse_as_argument(sweep_yaml({axis.key}, {value}),
                         concat("sweep '", axis.spec, "' (value ", value, ")"), base);
     }
     keys.push_back(axis.key);
     total *= axis.values.size();
-    if (total > kMaxPoints) {
-      double all = 1;  // the whole grid, for the message
-      for (const SweepAxis& a : axes) all *= static_cast<double>(a.values.size());
-      throw_invalid("sweep: ", static_cast<std::uint64_t>(all), " configurations, more than the ",
-                    kMaxPoints, " a sweep runs (each one is a whole run of every dataset): sweep fewer values");
-    }
   }
   std::vector<SweepPoint> points;
   points.reserve(total);

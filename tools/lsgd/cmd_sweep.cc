@@ -279,10 +279,6 @@ void sweep(const SweepArgs& args) {
   for (const std::string& spec : args.sets) {
     axes.push_back(eval::parse_sweep_axis(spec));
     keys.push_back(axes.back().key);
-    if (keys.back() == "search.min_gap") {
-      throw InvalidArgument("--set " + spec +
-                            ": the window is set per dataset: --dataset NAME=...,MIN_GAP");
-    }
   }
   const std::vector<eval::SweepPoint> points = eval::expand_sweep(axes, base);
   std::vector<Dataset> datasets;

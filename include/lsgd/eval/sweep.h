@@ -53,7 +53,8 @@ struct SweepPoint {
 // parsed alone on `base` by io::parse_config, then every point as a whole (so
 // options checked together are checked too). Throws InvalidArgument naming
 // the spec for an unknown key, a value of the wrong type or out of range, a
-// key swept twice, and naming the point's values for an invalid combination;
+// key swept twice or search.min_gap swept (each dataset has its window), and
+// naming the point's values for an invalid combination;
 // also when the grid exceeds 10,000 points (checked before a point is
 // parsed: each is a whole run of every dataset). No axes: one point, `base`.
 std::vector<SweepPoint> expand_sweep(const std::vector<SweepAxis>& axes,

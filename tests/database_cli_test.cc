@@ -36,14 +36,8 @@ int run_cli(const std::string& args, const std::string& out = "") {
 }
 
 std::vector<std::string> csv_columns(const std::string& path, std::vector<int> keep) {
-  std::ifstream in(path);
   std::vector<std::string> rows;
-  std::string line;
-  while (std::getline(in, line)) {
-    std::vector<std::string> fields;
-    std::stringstream s(line);
-    std::string f;
-    while (std::getline(s, f, ',')) fields.push_back(f);
+  for (const std::vector<std::string>& fields : test::csv_rows(path)) {
     std::string row;
     for (const int k : keep) row += (k < static_cast<int>(fields.size()) ? fields[k] : "?") + ",";
     rows.push_back(row);

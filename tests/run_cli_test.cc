@@ -29,6 +29,7 @@
 #include "cli_util.h"
 #include "lsgd/decision.h"
 #include "synthetic/synthetic.h"
+#include "test_util.h"
 
 namespace fs = std::filesystem;
 
@@ -49,13 +50,7 @@ std::string q(const fs::path& p) { return "'" + p.string() + "'"; }
 // The rows of a run CSV without the `ms` column (a time, different in every run).
 std::vector<std::string> rows_without_time(const fs::path& csv) {
   std::vector<std::string> rows;
-  std::istringstream in(slurp(csv));
-  std::string line;
-  while (std::getline(in, line)) {
-    std::vector<std::string> fields;
-    std::stringstream s(line);
-    std::string f;
-    while (std::getline(s, f, ',')) fields.push_back(f);
+  for (const std::vector<std::string>& fields : lsgd::test::csv_rows(csv)) {
     std::string row;
     for (std::size_t k = 0; k < fields.size(); ++k) {
       if (k != 5) row += fields[k] + ",";

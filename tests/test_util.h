@@ -9,6 +9,8 @@
 #include <cstdint>
 #include <exception>
 #include <filesystem>
+#include <fstream>
+#include <sstream>
 #include <string>
 #include <utility>
 #include <vector>
@@ -39,6 +41,20 @@ inline std::filesystem::path removed_at_exit(std::filesystem::path path) {
   };
   ::testing::AddGlobalTestEnvironment(new Remove(path));  // gtest owns it
   return path;
+}
+
+// The lines of a CSV file split at its commas (the tests' tables hold no
+// quoted fields); none when the file cannot be read.
+inline std::vector<std::vector<std::string>> csv_rows(const std::filesystem::path& path) {
+  std::vector<std::vector<std::string>> rows;
+  std::ifstream in(path);
+  for (std::string line; std::getline(in, line);) {
+    std::vector<std::string> fields;
+    std::stringstream s(line);
+    for (std::string f; std::getline(s, f, ',');) fields.push_back(f);
+    rows.push_back(std::move(fields));
+  }
+  return rows;
 }
 
 // The running test's full name as part of a file name ("Suite.Name", or

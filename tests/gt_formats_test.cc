@@ -233,6 +233,49 @@ TEST(ReadMat, V4NameLengthBeyondTheFileIsFormatError) {
   EXPECT_TRUE(contains(e, p.string()) && contains(e, "name length")) << e;
 }
 
+// CI's fuzz_gt run of 2026-12-05: a file without a v5 header whose first v4
+// header (big-endian, int16 sparse) claims 805,974,304 x 807,415,840 values in
+// 202 bytes; matio's Mat_Open filled 1.9 GB for it. Every v4 header must fit
+// the file before matio opens it, in both byte orders.
+TEST(ReadMat, V4ValuesBeyondTheFileAreFormatErrorBeforeMatioOpens) {
+  std::string bytes("\x00\x00\x00\x20" "0\n1 0 0 0\x00\x00\x00\x00\x00\x00\x63", 20);
+  bytes += std::string(182, 'x');
+  const fs::path p = write_file("v4values.mat", bytes);
+  const std::string e = message_of<lsgd::FormatError>([&] { lsgd::eval::read_mat(p.string()); });
+  EXPECT_TRUE(contains(e, p.string()) && contains(e, "corrupt MAT v4 header at byte 0")) << e;
+  // The same claim little-endian (type 32 read as is), and a second variable
+  // that does not fit after a first one that does.
+  std::string little("\x20\x00\x00\x00" "\x20\x31\x0a\x30" "\x20\x30\x20\x30" "\x00\x00\x00\x00"
+                     "\x02\x00\x00\x00", 20);
+  little += std::string(182, 'x');
+  const fs::path q = write_file("v4values_le.mat", little);
+  EXPECT_TRUE(contains(message_of<lsgd::FormatError>([&] { lsgd::eval::read_mat(q.string()); }),
+                       q.string()));
+  std::string two("\x00\x00\x00\x00" "\x01\x00\x00\x00" "\x01\x00\x00\x00" "\x00\x00\x00\x00"
+                  "\x02\x00\x00\x00", 20);
+  two += std::string("g\0", 2) + std::string(8, '\0');            // gt = [0], 1 x 1 double
+  two += std::string("\x00\x00\x00\x00" "\xff\xff\x00\x00" "\xff\xff\x00\x00" "\x00\x00\x00\x00"
+                     "\x02\x00\x00\x00", 20);                   // 65535 x 65535 doubles
+  two += std::string("h\0", 2) + std::string(64, '\0');
+  const fs::path r = write_file("v4second.mat", two);
+  const std::string e2 = message_of<lsgd::FormatError>([&] { lsgd::eval::read_mat(r.string()); });
+  EXPECT_TRUE(contains(e2, r.string()) && contains(e2, "byte 30")) << e2;
+}
+
+// The fuzzer's next find: a v5-looking header ("IM" at byte 126) whose version
+// is not 0x0100 / 0x0200 is read by matio as MAT v4 (a 755 MB malloc); the v4
+// headers are checked whatever the endian mark says.
+TEST(ReadMat, V5MarkWithAnotherVersionIsCheckedAsV4) {
+  std::string bytes("\x00\x00\x00\x00" "\x01\x00\x00\x00" "\x01\x00\x00\x00" "\x00\x00\x00\x00"
+                    "\xff\xff\xff\x7f", 20);  // name length 2^31 - 1
+  bytes += std::string(104, ' ');
+  bytes += std::string("\x08\x01IM", 4);  // version 0x0108, little-endian mark
+  bytes += std::string(64, '\0');
+  const fs::path p = write_file("v5mark_v4.mat", bytes);
+  const std::string e = message_of<lsgd::FormatError>([&] { lsgd::eval::read_mat(p.string()); });
+  EXPECT_TRUE(contains(e, p.string()) && contains(e, "name length 2147483647")) << e;
+}
+
 // A fuzzer find: a MAT v5 matrix whose dimensions sub-element claims more
 // bytes than its matrix element holds; matio would allocate gigabytes for it.
 TEST(ReadMat, V5SubElementBeyondItsMatrixIsFormatError) {

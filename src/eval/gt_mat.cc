@@ -144,35 +144,30 @@ void add_matrix(const matvar_t& v, std::size_t n, GroundTruth& gt, const std::st
   }
 }
 
-// matio 1.5.23 takes a file without a v5 / v7.3 header for MAT v4 and mallocs
-// the first variable's name length unchecked: 20 corrupt bytes can ask for
-// gigabytes (found by fuzz/fuzz_gt). A v4 name must fit in the file.
-void check_v4_name_length(const std::string& path) {
+// matio 1.5.23 reads a file as v5 / v7.3 only when its 128-byte header has
+// the endian mark ("IM" or "MI" at byte 126) and, in that byte order, version
+// 0x0100 or 0x0200 at byte 124; anything else it takes for MAT v4 and, inside
+// Mat_Open, mallocs and fills what the first v4 header claims (a 2 GB name,
+// 755 MB behind a v5 header with version 0x0108, 1.9 GB of a bogus sparse
+// matrix: all found by fuzz/fuzz_gt). So a file matio will read as v4 must
+// have every v4 header fit in it first (check_container's v4 walk).
+bool matio_reads_as_v4(const std::string& path) {
   std::ifstream in(path, std::ios::binary);
   std::array<unsigned char, 128> head{};
   in.read(reinterpret_cast<char*>(head.data()), head.size());
-  const std::size_t got = static_cast<std::size_t>(in.gcount());
-  if (got == head.size() && ((head[126] == 'I' && head[127] == 'M') ||
-                             (head[126] == 'M' && head[127] == 'I'))) {
-    return;  // v5 / v7.3 header: matio checks those itself
-  }
-  if (got < 20) return;  // matio rejects a header this short
-  auto int32_at = [&](std::size_t at, bool little) {
-    std::uint32_t v = 0;
-    for (int i = 0; i < 4; ++i) v |= std::uint32_t{head[at + (little ? i : 3 - i)]} << (8 * i);
-    return static_cast<std::int32_t>(v);
-  };
-  // The type field (MOPT, < 5000) tells the byte order, as in matio.
-  const std::int32_t type_le = int32_at(0, true);
-  const bool little = type_le >= 0 && type_le < 5000;
-  const std::int64_t name_length = int32_at(16, little);
+  if (static_cast<std::size_t>(in.gcount()) != head.size()) return true;
+  const bool little = head[126] == 'I' && head[127] == 'M';
+  const bool big = head[126] == 'M' && head[127] == 'I';
+  if (!little && !big) return true;
+  const unsigned version = little ? head[124] | (head[125] << 8) : (head[124] << 8) | head[125];
+  return version != 0x0100 && version != 0x0200;
+}
+
+void check_v4_before_matio(const std::string& path) {
+  if (!matio_reads_as_v4(path)) return;  // v5 / v7.3: checked after Mat_Open (check_container, HDF5)
   std::error_code ec;
-  const auto size = std::filesystem::file_size(path, ec);
-  if (ec) throw IoError(concat("cannot read MAT file '", path, "': ", ec.message()));
-  if (name_length < 1 || static_cast<std::uint64_t>(name_length) > size - 20) {
-    throw FormatError(concat("'", path, "' is not a readable MAT file: v4 variable name length ",
-                             name_length, " does not fit in the file's ", size, " bytes"));
-  }
+  if (std::filesystem::file_size(path, ec) < 20 && !ec) return;  // matio refuses a header this short
+  check_container(path, MAT_FT_MAT4);
 }
 
 }  // namespace
@@ -182,7 +177,7 @@ GroundTruth read_mat(const std::string& path, std::int64_t frames, const std::st
   std::call_once(log_once, [] { Mat_LogInitFunc("lsgd", matio_log); });
   io::check_input_file(path, "MAT file");
   if (!std::ifstream(path)) throw IoError(concat("cannot open MAT file '", path, "'"));
-  check_v4_name_length(path);
+  check_v4_before_matio(path);
   matio_last_message.clear();
   MatFile mat{Mat_Open(path.c_str(), MAT_ACC_RDONLY)};
   if (!mat) {

@@ -44,19 +44,17 @@ lsgd::eval::Metrics evaluate_results(const std::vector<lsgd::Result>& results, c
                ? ids[static_cast<std::size_t>(frame)]
                : frame;
   };
-  // Every frame of the ground truth: one without a Result is missed.
-  std::vector<lsgd::eval::FrameRecord> records(static_cast<std::size_t>(gt.frames()));
-  for (std::int64_t f = 0; f < gt.frames(); ++f) {
-    records[static_cast<std::size_t>(f)].frame = f;
-    records[static_cast<std::size_t>(f)].skipped = true;
-  }
+  // One record per Result; evaluate() counts every other frame of the ground
+  // truth as a query that reported nothing (missed when it is a revisit).
+  std::vector<lsgd::eval::FrameRecord> records;
+  records.reserve(results.size());
   for (const lsgd::Result& r : results) {
     lsgd::eval::FrameRecord rec = lsgd::eval::record_of(r);
     rec.frame = r.id;
     rec.reported.frame = id(rec.reported.frame);
     if (rec.ranking) rec.ranking->best.frame = id(rec.ranking->best.frame);
     for (lsgd::Candidate& c : rec.candidates) c.frame = id(c.frame);
-    records[static_cast<std::size_t>(r.id)] = rec;
+    records.push_back(std::move(rec));
   }
   return lsgd::eval::evaluate(records, gt, min_gap);
 }

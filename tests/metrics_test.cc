@@ -41,6 +41,27 @@ TEST(Evaluate, CountsPositivesOnlyOutsideTheWindow) {
   EXPECT_EQ(lsgd::eval::evaluate(records, gt, 5).positives, 0);
 }
 
+// A revisit without a record (a frame dropped, skipped or never written)
+// counts as missed: records cannot raise recall by leaving frames out.
+TEST(Evaluate, APositiveWithoutARecordIsMissed) {
+  const std::vector<FrameRecord> some = {report(5, {{0, 0.9}}), report(6, {{1, 0.8}})};
+  std::vector<FrameRecord> all = some;
+  for (const int q : {0, 1, 2, 3, 4, 7, 8, 9}) all.push_back(report(q, {}));
+  const auto a = lsgd::eval::evaluate(some, small_gt(), 2);
+  const auto b = lsgd::eval::evaluate(all, small_gt(), 2);
+  EXPECT_EQ(a.frames, 10);
+  EXPECT_EQ(a.positives, 3);
+  EXPECT_DOUBLE_EQ(a.recall_at_100_precision, 2.0 / 3.0);
+  EXPECT_DOUBLE_EQ(a.recall_at_1, 2.0 / 3.0);
+  EXPECT_EQ(a.frames, b.frames);
+  EXPECT_EQ(a.positives, b.positives);
+  EXPECT_DOUBLE_EQ(a.recall_at_100_precision, b.recall_at_100_precision);
+  EXPECT_DOUBLE_EQ(a.average_precision, b.average_precision);
+  const auto lenient = lsgd::eval::evaluate_lsgddn_reference(some, small_gt(), {2, 3, true});
+  EXPECT_EQ(lenient.positives, 3);
+  EXPECT_DOUBLE_EQ(lenient.recall_at_100_precision, 2.0 / 3.0);
+}
+
 TEST(Evaluate, PerfectRankingGivesFullRecallAtFullPrecision) {
   std::vector<FrameRecord> r = {report(5, {{0, 0.9}}), report(6, {{1, 0.8}}),
                                 report(7, {{2, 0.85}}), report(8, {{3, 0.5}}),
@@ -210,7 +231,8 @@ TEST(Evaluate, TimingsAndPrt) {
 
 TEST(Evaluate, EmptyAndInvalidInput) {
   const auto m = lsgd::eval::evaluate({}, small_gt(), 2);
-  EXPECT_EQ(m.frames, 0);
+  EXPECT_EQ(m.frames, 10);    // every ground-truth frame is a query
+  EXPECT_EQ(m.positives, 3);  // ... and its revisits are missed
   EXPECT_DOUBLE_EQ(m.average_precision, 0.0);
   EXPECT_THROW(lsgd::eval::evaluate({report(10, {})}, small_gt(), 2), lsgd::InvalidArgument);
   EXPECT_THROW(lsgd::eval::evaluate({report(3, {}), report(3, {})}, small_gt(), 2),
@@ -232,6 +254,13 @@ GroundTruth far_gt() {
   return gt;
 }
 
+// The same 300 frames with only query 200's revisit of frame 10.
+GroundTruth one_gt() {
+  GroundTruth gt(300);
+  gt.add(200, 10);
+  return gt;
+}
+
 TEST(ReferenceProtocol, FalsePositiveOnALoopFreeQueryIsInvisible) {
   // Query 250 has no GT loop; its false report has the best score.
   std::vector<FrameRecord> r = {report(200, {{10, 0.9}}), report(201, {{11, 0.8}}),
@@ -246,24 +275,24 @@ TEST(ReferenceProtocol, FalsePositiveOnALoopFreeQueryIsInvisible) {
   EXPECT_DOUBLE_EQ(lenient.threshold_at_100_precision, 0.7);
   EXPECT_DOUBLE_EQ(lenient.average_precision, 1.0);
   EXPECT_EQ(lenient.curve.size(), 3u);  // the 0.95 report never enters the sweep
-  EXPECT_EQ(lenient.frames, 4);
+  EXPECT_EQ(lenient.frames, 300);
 }
 
 TEST(ReferenceProtocol, AcceptsAMatchWithinTheTolerance) {
   // One query (one positive) whose report is 30 frames off GT frame 10.
   std::vector<FrameRecord> r = {report(200, {{40, 0.9}})};
-  EXPECT_DOUBLE_EQ(lsgd::eval::evaluate(r, far_gt(), 50).recall_at_100_precision, 0.0);
-  EXPECT_DOUBLE_EQ(evaluate_lsgddn_reference(r, far_gt()).recall_at_100_precision, 1.0);
-  EXPECT_DOUBLE_EQ(evaluate_lsgddn_reference(r, far_gt()).recall_at_1, 1.0);
+  EXPECT_DOUBLE_EQ(lsgd::eval::evaluate(r, one_gt(), 50).recall_at_100_precision, 0.0);
+  EXPECT_DOUBLE_EQ(evaluate_lsgddn_reference(r, one_gt()).recall_at_100_precision, 1.0);
+  EXPECT_DOUBLE_EQ(evaluate_lsgddn_reference(r, one_gt()).recall_at_1, 1.0);
   ReferenceProtocolOptions tight;
   tight.tolerance = 30;  // |40 - 10| < 30 is false
-  EXPECT_DOUBLE_EQ(evaluate_lsgddn_reference(r, far_gt(), tight).recall_at_100_precision, 0.0);
+  EXPECT_DOUBLE_EQ(evaluate_lsgddn_reference(r, one_gt(), tight).recall_at_100_precision, 0.0);
   tight.tolerance = 31;
-  EXPECT_DOUBLE_EQ(evaluate_lsgddn_reference(r, far_gt(), tight).recall_at_100_precision, 1.0);
+  EXPECT_DOUBLE_EQ(evaluate_lsgddn_reference(r, one_gt(), tight).recall_at_100_precision, 1.0);
   // 50 off is outside the default tolerance: the evaluator tests |j - g| < 50.
   std::vector<FrameRecord> off = {report(200, {{60, 0.9}})};
-  EXPECT_DOUBLE_EQ(evaluate_lsgddn_reference(off, far_gt()).recall_at_100_precision, 0.0);
-  EXPECT_EQ(evaluate_lsgddn_reference(off, far_gt()).curve.at(0).false_positives, 1);
+  EXPECT_DOUBLE_EQ(evaluate_lsgddn_reference(off, one_gt()).recall_at_100_precision, 0.0);
+  EXPECT_EQ(evaluate_lsgddn_reference(off, one_gt()).curve.at(0).false_positives, 1);
 }
 
 TEST(ReferenceProtocol, ReportsInsideTheExclusionAreDropped) {
@@ -300,7 +329,7 @@ TEST(ReferenceProtocol, RecallCountsAnyReportOnALoopQuery) {
 
 TEST(ReferenceProtocol, RecallAtNUsesTheSameTolerance) {
   std::vector<FrameRecord> r = {report(200, {{120, 0.9}, {100, 0.8}, {30, 0.7}})};
-  const auto m = evaluate_lsgddn_reference(r, far_gt());
+  const auto m = evaluate_lsgddn_reference(r, one_gt());
   EXPECT_DOUBLE_EQ(m.recall_at_1, 0.0);
   EXPECT_DOUBLE_EQ(m.recall_at_5, 1.0);  // 30 is 20 off frame 10 (one positive query)
 }

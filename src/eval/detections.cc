@@ -8,6 +8,7 @@
 #include <fstream>
 #include <optional>
 #include <string>
+#include <unordered_map>
 #include <vector>
 
 #include "internal/check.h"
@@ -351,18 +352,18 @@ void set_reported(const Row& r, FrameRecord& out) {
 // Top-k files: each query's candidates in rank order; throws when rank 1 is missing.
 void set_ranked_candidates(const std::string& path, std::vector<Ranks>& ranks_of,
                            std::vector<FrameRecord>& records) {
-  for (std::size_t q = 0; q < ranks_of.size(); ++q) {
-    auto& ranks = ranks_of[q];
+  for (std::size_t k = 0; k < ranks_of.size(); ++k) {
+    auto& ranks = ranks_of[k];
     if (ranks.empty()) continue;
     std::sort(ranks.begin(), ranks.end(), [](const auto& a, const auto& b) { return a.first < b.first; });
+    FrameRecord& out = records[k];
     if (ranks.front().first != 1) {
-      throw FormatError(concat(path, ":", ranks.front().second.second, ": query ", q,
+      throw FormatError(concat(path, ":", ranks.front().second.second, ": query ", out.frame,
                                " has ranks from ", ranks.front().first, " but no rank 1 (its reported match)"));
     }
-    FrameRecord& out = records[q];
     out.candidates.clear();
-    for (const auto& k : ranks) {
-      if (k.second.first.frame >= 0) out.candidates.push_back(k.second.first);
+    for (const auto& rank : ranks) {
+      if (rank.second.first.frame >= 0) out.candidates.push_back(rank.second.first);
     }
   }
 }
@@ -377,23 +378,33 @@ std::vector<FrameRecord> read_detections(const std::string& path, std::int64_t f
   Columns columns;
   const std::vector<Row> rows = read_rows(path, columns);
   frames = frame_count(rows, frames);
-  std::vector<FrameRecord> records(static_cast<std::size_t>(frames));
-  std::vector<std::int64_t> line_of(static_cast<std::size_t>(frames), 0);
-  std::vector<Ranks> ranks_of(columns.rank >= 0 ? static_cast<std::size_t>(frames) : 0);
-  for (std::int64_t i = 0; i < frames; ++i) records[static_cast<std::size_t>(i)].frame = i;
+  // One record per query that has a row, so memory follows the file, not the
+  // frame ids it names (a 12-byte file may name frame 9,999,999).
+  std::vector<FrameRecord> records;
+  std::vector<std::int64_t> line_of;  // per record: its row (one-row-per-query files)
+  std::vector<Ranks> ranks_of;        // per record: its ranked rows (top-k files)
+  std::unordered_map<std::int64_t, std::size_t> record_of_query;
   for (const Row& r : rows) {
     const std::string where = concat(path, ":", r.line);
     check_row_frames(r, frames, where);
-    const auto q = static_cast<std::size_t>(r.query);
+    const auto [it, added] = record_of_query.try_emplace(r.query, records.size());
+    if (added) {
+      records.emplace_back().frame = r.query;
+      line_of.push_back(0);
+      if (columns.rank >= 0) ranks_of.emplace_back();
+    }
+    const std::size_t k = it->second;
     if (columns.rank >= 0) {
       // A top-k file: the query's candidates by rank, rank 1 reported.
-      if (!note_rank(r, ranks_of[q], where)) continue;
+      if (!note_rank(r, ranks_of[k], where)) continue;
     } else {
-      note_single(r, line_of[q], where);
+      note_single(r, line_of[k], where);
     }
-    set_reported(r, records[q]);
+    set_reported(r, records[k]);
   }
   set_ranked_candidates(path, ranks_of, records);
+  std::sort(records.begin(), records.end(),
+            [](const FrameRecord& a, const FrameRecord& b) { return a.frame < b.frame; });
   return records;
 }
 

@@ -54,6 +54,14 @@ bool near_loop(const GroundTruth& gt, std::int64_t query, const Candidate& c, st
   return near != end && *near < c.frame + tolerance;
 }
 
+// Every ground-truth frame is a query: the positives are its frames with a
+// loop outside the window, whether or not a record reports anything for them.
+std::int64_t positive_queries(const GroundTruth& gt, std::int64_t min_gap) {
+  std::int64_t n = 0;
+  for (const std::int64_t q : gt.queries()) n += gt.has_loop(q, min_gap) ? 1 : 0;
+  return n;
+}
+
 // Frame ids inside the ground truth, each at most once.
 void check_records(const std::vector<FrameRecord>& records, const GroundTruth& gt,
                    const char* who) {
@@ -189,11 +197,11 @@ Metrics evaluate(const std::vector<FrameRecord>& records, const GroundTruth& gt,
   if (min_gap < 0) internal::throw_invalid("evaluate: min_gap = ", min_gap, " must be >= 0");
   Metrics m;
   m.min_gap = min_gap;
-  m.frames = static_cast<std::int64_t>(records.size());
+  m.frames = gt.frames();
+  m.positives = positive_queries(gt, min_gap);
   check_records(records, gt, "evaluate");
   std::vector<Report> reports, ranking;
   for (const auto& r : records) {
-    if (gt.has_loop(r.frame, min_gap)) ++m.positives;
     if (r.reported.frame >= 0) {
       const bool correct = correct_loop(gt, r.frame, r.reported, min_gap);
       reports.push_back({r.reported.score, correct, correct, r.loop});
@@ -225,7 +233,8 @@ Metrics evaluate_lsgddn_reference(const std::vector<FrameRecord>& records, const
   m.protocol = "lsgddn-reference";
   m.tolerance = options.tolerance;
   m.min_gap = options.min_gap;
-  m.frames = static_cast<std::int64_t>(records.size());
+  m.frames = gt.frames();
+  m.positives = positive_queries(gt, options.min_gap);
   check_records(records, gt, "evaluate_lsgddn_reference");
   const auto correct = [&](std::int64_t q, const Candidate& c) {
     return near_loop(gt, q, c, options.min_gap, options.tolerance);
@@ -242,7 +251,6 @@ Metrics evaluate_lsgddn_reference(const std::vector<FrameRecord>& records, const
   for (const auto& r : records) {
     // Queries without a ground-truth loop are never looked at: their reports vanish.
     if (!gt.has_loop(r.frame, options.min_gap)) continue;
-    ++m.positives;
     add(r.frame, r.reported, {r.reported.score, false, false, r.loop}, reports);
     add(r.frame, ranked(r), {ranked(r).score, false, false, false, ranked_confirmed(r)}, ranking);
   }

@@ -255,7 +255,7 @@ cv::Mat similarity_image(const ReportInput& in, const Sampling& s, double& lo, d
 // similarity unobstructed.
 cv::Mat gt_mask(const ReportInput& in, const Sampling& s) {
   cv::Mat mask(s.n, s.n, CV_8U, cv::Scalar(0));
-  for (std::int64_t q = 0; q < in.gt->frames(); ++q) {
+  for (const std::int64_t q : in.gt->queries()) {
     const int column = static_cast<int>(std::lround(s.cell(static_cast<double>(q))));
     for (const std::int64_t m : in.gt->matches(q)) {
       if (q - m <= in.metrics->min_gap) continue;

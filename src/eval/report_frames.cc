@@ -5,6 +5,9 @@
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 #include <sstream>
+#include <unordered_map>
+#include <unordered_set>
+#include <vector>
 
 #include "eval/report_svg.h"
 #include "lsgd/error.h"
@@ -66,19 +69,17 @@ void examples_section(std::ostream& html, const ReportInput& in, const Operating
   std::stable_sort(wrong.begin(), wrong.end(), [](const Loop& a, const Loop& b) { return a.score > b.score; });
   wrong.resize(std::min<std::size_t>(wrong.size(), static_cast<std::size_t>(n)));
   // Missed revisits: positive queries without a correct marked loop.
-  std::vector<bool> found(static_cast<std::size_t>(in.gt->frames()), false);
-  for (const Loop& l : right) found[static_cast<std::size_t>(l.query)] = true;
-  std::vector<std::int64_t> reported(static_cast<std::size_t>(in.gt->frames()), -1);
-  std::vector<double> reported_score(static_cast<std::size_t>(in.gt->frames()), 0.0);
-  for (const FrameRecord& r : *in.records) {
-    reported[static_cast<std::size_t>(r.frame)] = r.reported.frame;
-    reported_score[static_cast<std::size_t>(r.frame)] = r.reported.score;
-  }
+  // Held per record and per loop, not per frame: detections may name frames
+  // far beyond their rows.
+  std::unordered_set<std::int64_t> found;
+  for (const Loop& l : right) found.insert(l.query);
+  std::unordered_map<std::int64_t, Candidate> reported;
+  for (const FrameRecord& r : *in.records) reported[r.frame] = r.reported;
   std::vector<std::int64_t> missed;
-  for (const FrameRecord& r : *in.records) {
-    if (!found[static_cast<std::size_t>(r.frame)] && in.gt->has_loop(r.frame, m.min_gap)) missed.push_back(r.frame);
+  // Every ground-truth frame is a query, with a record or not (evaluate()).
+  for (const std::int64_t q : in.gt->queries()) {
+    if (!found.count(q) && in.gt->has_loop(q, m.min_gap)) missed.push_back(q);
   }
-  std::sort(missed.begin(), missed.end());
 
   html << "<section class='examples'><h2>Example loops</h2><p class='caption'>Query on the left, "
        << "the frame it was matched with on the right (loops: " << op.marked << "). Up to " << n
@@ -109,10 +110,12 @@ void examples_section(std::ostream& html, const ReportInput& in, const Operating
     }
     std::vector<std::pair<std::int64_t, std::string>> frames = {
         {q, "query " + std::to_string(q)}, {truth, "true match " + std::to_string(truth)}};
-    const std::int64_t rep = reported[static_cast<std::size_t>(q)];
+    const auto it = reported.find(q);
+    const Candidate rep_of = it == reported.end() ? Candidate{} : it->second;
+    const std::int64_t rep = rep_of.frame;
     if (rep >= 0 && rep != truth) frames.push_back({rep, "reported " + std::to_string(rep)});
     // Its score, against the loops marked: how far from a loop it was.
-    const std::string score = rep >= 0 ? "score " + num(reported_score[static_cast<std::size_t>(q)], 2) +
+    const std::string score = rep >= 0 ? "score " + num(rep_of.score, 2) +
                                              (rep == truth ? ", the right place" : ", another place")
                                        : "nothing reported";
     pair(html, in, kGtFrameColour, frames,
@@ -141,7 +144,7 @@ void timeline_section(std::ostream& html, const ReportInput& in, const Operating
   std::ostringstream svg;
   svg << "<svg class='timeline' width='560' height='480' viewBox='0 0 560 480' role='img'>";
   // Frames with a ground-truth loop outside the window: a band along the bottom.
-  for (std::int64_t q = 0; q < frames; ++q) {
+  for (const std::int64_t q : in.gt->queries()) {
     if (!in.gt->has_loop(q, m.min_gap)) continue;
     svg << "<rect x='" << num(x(static_cast<double>(q)) - 0.5, 1) << "' y='" << kChart.y1 - 6
         << "' width='1.5' height='6' fill='" << kGtFrameColour << "'/>";

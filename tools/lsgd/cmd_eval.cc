@@ -206,7 +206,8 @@ void evaluate_detections(const EvalArgs& args, const io::SequenceOptions& option
   // A pairs file only implies frames up to its largest id; when frame ids map
   // one to one, detections of later (loop-free) frames extend it.
   if (!args.frames && options.layout != io::kFabmapLayout && options.selection.keeps_all()) {
-    const auto extent = static_cast<std::int64_t>(eval::read_detections(args.detections).size());
+    const std::vector<eval::FrameRecord> rows = eval::read_detections(args.detections);
+    const std::int64_t extent = rows.empty() ? 0 : rows.back().frame + 1;
     if (extent > gt.frames()) {
       gt = eval::evaluated_groundtruth(args.gt, gt_options(args), options, options.layout, extent);
     }

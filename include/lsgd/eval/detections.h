@@ -33,8 +33,10 @@
 
 namespace lsgd::eval {
 
-// Reads `path` and returns one record per frame 0 .. frames-1, in order: a
-// frame without a row, or with match -1, reports no loop. A reported match is
+// Reads `path` and returns one record per query that has a row, in frame
+// order (evaluate() counts every other frame of the ground truth as a query
+// that reported nothing); a row with match -1 reports no loop. Memory grows
+// with the rows, not with the frame ids. A reported match is
 // also the record's only candidate, so Recall@1/5/10 of detections read from
 // a file are all the recall of the reported match, unless the file ranks
 // several candidates per query (a rank column). frames = -1 takes the

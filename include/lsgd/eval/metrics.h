@@ -49,7 +49,7 @@ struct Metrics {
   // "strict" (evaluate) or "lsgddn-reference" (evaluate_lsgddn_reference).
   std::string protocol = "strict";
   std::int64_t tolerance = 0;  // lsgddn-reference: match tolerance, frames; 0 for strict
-  std::int64_t frames = 0;     // query frames evaluated
+  std::int64_t frames = 0;     // query frames evaluated: every frame of the ground truth
   std::int64_t positives = 0;  // queries with a GT match j < i - min_gap
   std::int64_t min_gap = 0;    // temporal window w, frames
   // The operating point: the loops the system declared with its own settings
@@ -106,8 +106,13 @@ struct Metrics {
   std::vector<PrPoint> curve;  // the ranking's: one point per distinct score, decreasing threshold
 };
 
-// Scores records (one per query, any order, frame ids in [0, gt.frames()))
-// under the strict protocol with temporal window min_gap. A reported candidate
+// Scores records (any order, frame ids in [0, gt.frames()), each at most once)
+// under the strict protocol with temporal window min_gap. Every ground-truth
+// frame is a query: a frame without a record reported nothing, so a positive
+// query that was dropped, skipped or never written counts as missed, and
+// records may list only the frames that reported (another system's
+// detections: memory grows with its rows, not with the frame count). Metrics::
+// frames is gt.frames(); timings come from the records. A reported candidate
 // inside the window (j >= i - min_gap) is not allowed and counts as a false
 // positive; the ranked candidates only matter for Recall@N. Throws
 // InvalidArgument for a frame id outside the ground truth or a repeated frame.

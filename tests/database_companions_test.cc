@@ -9,6 +9,7 @@
 #include <gtest/gtest.h>
 #include <sched.h>
 #include <sys/mount.h>
+#include <sys/resource.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -90,6 +91,49 @@ int in_read_only_folder(const std::string& folder, const std::function<int()>& c
   int status = 0;
   if (pid < 0 || ::waitpid(pid, &status, 0) != pid || !WIFEXITED(status)) return -1;
   return WEXITSTATUS(status);
+}
+
+// A process out of file descriptors (ulimit -n) gets the reason, not
+// SQLite's bare "unable to open database file": opening and creating, in a
+// child whose soft limit is its lowest free descriptor.
+TEST(DatabaseLimits, OutOfFileDescriptorsIsSaidSo) {
+  const std::string path = database_in_folder("fd_limit", 3, false);
+  const std::string created = fs::path(path).parent_path().string() + "/new.db";
+  std::fflush(nullptr);
+  const pid_t pid = ::fork();
+  if (pid == 0) {
+    const int probe = ::open("/dev/null", O_RDONLY);
+    if (probe < 0) ::_exit(kSkip);
+    ::close(probe);
+    struct rlimit limit{};
+    if (::getrlimit(RLIMIT_NOFILE, &limit) != 0) ::_exit(kSkip);
+    limit.rlim_cur = static_cast<rlim_t>(probe);
+    if (::setrlimit(RLIMIT_NOFILE, &limit) != 0) ::_exit(kSkip);
+    int code = 0;
+    const auto said = [](const std::string& m, const std::string& file) {
+      return m.find(file) != std::string::npos && m.find("Too many open files") != std::string::npos;
+    };
+    try {
+      Database::open(path, Database::Mode::kReadOnly);
+      code |= 1;
+    } catch (const IoError& e) {
+      if (!said(e.what(), path)) std::fprintf(stderr, "open: %s\n", e.what()), code |= 2;
+    }
+    try {
+      Database::create(created, DetectorOptions{});
+      code |= 4;
+    } catch (const IoError& e) {
+      if (!said(e.what(), created)) std::fprintf(stderr, "create: %s\n", e.what()), code |= 8;
+    }
+    std::fflush(nullptr);
+    ::_exit(code);
+  }
+  int status = 0;
+  ASSERT_EQ(::waitpid(pid, &status, 0), pid);
+  ASSERT_TRUE(WIFEXITED(status));
+  if (WEXITSTATUS(status) == kSkip) GTEST_SKIP() << "cannot lower RLIMIT_NOFILE here";
+  EXPECT_EQ(WEXITSTATUS(status), 0) << "1/4: no error, 2/8: the message lacks the file or the reason";
+  EXPECT_FALSE(fs::exists(created));
 }
 
 TEST(DatabaseReadOnly, AReadOnlyFileSystemIsReadExactly) {

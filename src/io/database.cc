@@ -161,7 +161,7 @@ void Database::Impl::open_sqlite(bool writer_active) {
                              : SQLITE_OPEN_READONLY | (immutable ? SQLITE_OPEN_URI : 0);
   const std::string name = immutable ? immutable_uri(path) : path;
   if (sqlite3_open_v2(name.c_str(), &db, flags, nullptr) != SQLITE_OK) {
-    io_error(path, "cannot open (", db ? sqlite3_errmsg(db) : "out of memory", ")");
+    io_error(path, "cannot open (", sqlite_message(db), ")");
   }
   sqlite3_extended_result_codes(db, 1);
   sqlite3_busy_timeout(db, 5000);
@@ -243,7 +243,7 @@ Database Database::create(const std::string& path, const DetectorOptions& option
     impl.path = path;
     if (sqlite3_open_v2(tmp.c_str(), &impl.db, SQLITE_OPEN_READWRITE | SQLITE_OPEN_CREATE,
                         nullptr) != SQLITE_OK) {
-      const std::string message = impl.db ? sqlite3_errmsg(impl.db) : "out of memory";
+      const std::string message = sqlite_message(impl.db);
       io_error(path, "cannot create ", tmp, " (", message, ")");
     }
     try {

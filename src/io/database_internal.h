@@ -52,6 +52,23 @@ template <typename... Parts>
   throw IoError(concat("database ", path, ": ", parts...));
 }
 
+// SQLite's message for the last error on `db`, with the system's reason when
+// a system call failed ("unable to open database file" says nothing of a
+// process out of file descriptors, a full disk or a permission).
+inline std::string sqlite_message(sqlite3* db) {
+  if (!db) return "out of memory";
+  std::string message = sqlite3_errmsg(db);
+  const int err = sqlite3_system_errno(db);
+  if (err != 0) {
+    message += concat(": ", std::strerror(err));
+    if (err == EMFILE || err == ENFILE) {
+      message += err == EMFILE ? " (this process's limit on open files, ulimit -n, is reached)"
+                               : " (the system's limit on open files is reached)";
+    }
+  }
+  return message;
+}
+
 // ---- little-endian blobs (memcpy on little-endian hosts)
 
 inline constexpr bool kLittleEndian = __BYTE_ORDER__ == __ORDER_LITTLE_ENDIAN__;
@@ -179,14 +196,23 @@ inline std::uint32_t meta_checksum(const std::map<std::string, std::string>& met
 
 // ---- SQLite helpers
 
+// A result code that says the file could not be reached (locked, not
+// openable, no permission, no memory), not that it is damaged.
+inline bool is_io_condition(int rc) {
+  const int primary = rc & 0xFF;
+  return primary == SQLITE_BUSY || primary == SQLITE_LOCKED || primary == SQLITE_CANTOPEN ||
+         primary == SQLITE_PERM || primary == SQLITE_NOMEM;
+}
+
 class Statement {
  public:
   Statement() = default;
   Statement(sqlite3* db, const std::string& path, const char* sql) {
-    if (sqlite3_prepare_v2(db, sql, -1, &stmt_, nullptr) != SQLITE_OK) {
-      const std::string message = sqlite3_errmsg(db);
+    if (const int rc = sqlite3_prepare_v2(db, sql, -1, &stmt_, nullptr); rc != SQLITE_OK) {
+      const std::string message = sqlite_message(db);
       sqlite3_finalize(stmt_);
       stmt_ = nullptr;
+      if (is_io_condition(rc)) io_error(path, "cannot read (", message, ") in: ", sql);
       format_error(path, "cannot read (", message, ") in: ", sql);
     }
   }
@@ -208,7 +234,7 @@ class Statement {
 inline void exec_write(sqlite3* db, const std::string& path, const char* sql) {
   char* error = nullptr;
   if (sqlite3_exec(db, sql, nullptr, nullptr, &error) != SQLITE_OK) {
-    const std::string message = error ? error : sqlite3_errmsg(db);
+    const std::string message = error ? error : sqlite_message(db);
     sqlite3_free(error);
     io_error(path, "cannot write (", message, ")");
   }
@@ -219,12 +245,8 @@ inline bool step_read(sqlite3* db, sqlite3_stmt* stmt, const std::string& path) 
   const int rc = sqlite3_step(stmt);
   if (rc == SQLITE_ROW) return true;
   if (rc == SQLITE_DONE) return false;
-  const int primary = rc & 0xFF;
-  if (primary == SQLITE_BUSY || primary == SQLITE_LOCKED || primary == SQLITE_CANTOPEN ||
-      primary == SQLITE_PERM || primary == SQLITE_NOMEM) {
-    io_error(path, "cannot read (", sqlite3_errmsg(db), ")");
-  }
-  format_error(path, "damaged or not an lsgd database (SQLite: ", sqlite3_errmsg(db), ")");
+  if (is_io_condition(rc)) io_error(path, "cannot read (", sqlite_message(db), ")");
+  format_error(path, "damaged or not an lsgd database (SQLite: ", sqlite_message(db), ")");
 }
 
 inline std::string column_text(sqlite3_stmt* stmt, int column) {
@@ -395,7 +417,7 @@ struct Database::Impl {
     if (sqlite3_prepare_v2(db, "INSERT OR REPLACE INTO meta(key, value) VALUES(?1, ?2)", -1, &raw,
                            nullptr) != SQLITE_OK) {
       sqlite3_finalize(raw);
-      io_error(path, "cannot write meta (", sqlite3_errmsg(db), ")");
+      io_error(path, "cannot write meta (", sqlite_message(db), ")");
     }
     const std::unique_ptr<sqlite3_stmt, int (*)(sqlite3_stmt*)> stmt(raw, sqlite3_finalize);
     for (const auto& [key, value] : meta) {
@@ -406,7 +428,7 @@ struct Database::Impl {
         sqlite3_bind_text(stmt.get(), 2, value.c_str(), -1, SQLITE_TRANSIENT);
       }
       if (sqlite3_step(stmt.get()) != SQLITE_DONE) {
-        io_error(path, "cannot write meta key ", key, " (", sqlite3_errmsg(db), ")");
+        io_error(path, "cannot write meta key ", key, " (", sqlite_message(db), ")");
       }
       sqlite3_reset(stmt.get());
     }

@@ -79,7 +79,7 @@ void Database::Impl::insert_frame(const Detector& detector, std::int64_t frame,
   const int rc = sqlite3_step(s);
   sqlite3_reset(s);
   if (rc != SQLITE_DONE)
-    io_error(path, "cannot write frame ", frame, " (", sqlite3_errmsg(db), ")");
+    io_error(path, "cannot write frame ", frame, " (", sqlite_message(db), ")");
 }
 
 
@@ -293,7 +293,7 @@ void Database::Impl::rewrite_from(std::int64_t dense, const Detector& detector,
     try {
       Statement drop(db, path, "DELETE FROM frames WHERE id >= ?1");
       sqlite3_bind_int64(drop.get(), 1, dense);
-      if (sqlite3_step(drop.get()) != SQLITE_DONE) io_error(path, "cannot write (", sqlite3_errmsg(db), ")");
+      if (sqlite3_step(drop.get()) != SQLITE_DONE) io_error(path, "cannot write (", sqlite_message(db), ")");
       // The saved graph numbers the forgotten frames: the next resume builds it again.
       exec_write(db, path, "DELETE FROM indexes");
       for (std::int64_t f = dense; f < detector.size(); ++f) {
@@ -345,7 +345,7 @@ std::int64_t Database::save_index(const Detector& detector) {
   m.transaction([&] {
     Statement drop(m.db, m.path, "DELETE FROM indexes WHERE mode = ?1");
     sqlite3_bind_text(drop.get(), 1, mode.c_str(), static_cast<int>(mode.size()), SQLITE_TRANSIENT);
-    if (sqlite3_step(drop.get()) != SQLITE_DONE) io_error(m.path, "cannot write (", sqlite3_errmsg(m.db), ")");
+    if (sqlite3_step(drop.get()) != SQLITE_DONE) io_error(m.path, "cannot write (", sqlite_message(m.db), ")");
     Statement insert(m.db, m.path,
                      "INSERT INTO indexes(mode, part, frames, data, crc32) VALUES(?1, ?2, ?3, ?4, ?5)");
     std::int64_t part = 0;
@@ -358,7 +358,7 @@ std::int64_t Database::save_index(const Detector& detector) {
       sqlite3_bind_int64(s, 3, covered);
       sqlite3_bind_blob(s, 4, bytes.data() + at, static_cast<int>(n), SQLITE_STATIC);
       sqlite3_bind_int64(s, 5, crc_of(bytes.data() + at, n));
-      if (sqlite3_step(s) != SQLITE_DONE) io_error(m.path, "cannot write (", sqlite3_errmsg(m.db), ")");
+      if (sqlite3_step(s) != SQLITE_DONE) io_error(m.path, "cannot write (", sqlite_message(m.db), ")");
     }
   });
   m.checkpoint("open");
@@ -387,7 +387,7 @@ void Database::Impl::checkpoint(const char* state) {
   int log = -1, moved = -1;
   const int rc = sqlite3_wal_checkpoint_v2(db, nullptr, SQLITE_CHECKPOINT_TRUNCATE, &log, &moved);
   if (rc != SQLITE_OK && (rc & 0xFF) != SQLITE_BUSY) {
-    io_error(path, "cannot checkpoint its write-ahead log (", sqlite3_errmsg(db), ")");
+    io_error(path, "cannot checkpoint its write-ahead log (", sqlite_message(db), ")");
   }
   since_checkpoint = 0;
   log_named = false;  // a new log: its first transaction writes meta

@@ -136,6 +136,37 @@ TEST(DatabaseLimits, OutOfFileDescriptorsIsSaidSo) {
   EXPECT_FALSE(fs::exists(created));
 }
 
+// SQLite refuses an absolute path over 504 bytes (its journal's name would
+// pass 512) with a bare "unable to open database file" and a stale errno;
+// lsgd names the length instead, and 504 bytes still open.
+TEST(DatabaseLimits, APathBeyondSqlitesLimitIsSaidSo) {
+  const std::string short_path = database_in_folder("long_path", 2, false);
+  std::string folder = fs::path(short_path).parent_path().string();
+  while (folder.size() < 600) folder += "/" + std::string(100, 'd');
+  fs::create_directories(folder);
+  const std::string created = folder + "/new.db";
+  const std::string e1 = test::message_of<IoError>([&] { Database::create(created, DetectorOptions{}); });
+  EXPECT_NE(e1.find(created), std::string::npos) << e1;
+  EXPECT_NE(e1.find("absolute path is"), std::string::npos) << e1;
+  EXPECT_FALSE(fs::exists(created));
+  const std::string moved = folder + "/moved.db";
+  fs::rename(short_path, moved);
+  const std::string e2 = test::message_of<IoError>([&] { Database::open(moved, Database::Mode::kReadOnly); });
+  EXPECT_NE(e2.find("SQLite opens paths of at most 504 bytes"), std::string::npos) << e2;
+  // Just under the limit both work.
+  std::string near_folder = fs::absolute(fs::path(short_path).parent_path()).string();
+  while (504 - near_folder.size() > 200) near_folder += "/" + std::string(150, 'n');
+  fs::create_directories(near_folder);
+  const auto named = [&](std::size_t bytes) {
+    return near_folder + "/" + std::string(bytes - near_folder.size() - 1 - 3, 'n') + ".db";
+  };
+  fs::rename(moved, named(505));
+  const std::string e3 = test::message_of<IoError>([&] { Database::open(named(505), Database::Mode::kReadOnly); });
+  EXPECT_NE(e3.find("is 505 bytes long"), std::string::npos) << e3;
+  fs::rename(named(505), named(504));
+  EXPECT_EQ(Database::open(named(504), Database::Mode::kReadOnly).frames(), 2);
+}
+
 TEST(DatabaseReadOnly, AReadOnlyFileSystemIsReadExactly) {
   const std::string path = database_in_folder("closed", 12, false);
   const std::string folder = fs::path(path).parent_path().string();

@@ -70,6 +70,7 @@ void check_file(const std::string& path, bool writable) {
 
 Database Database::open(const std::string& path, Mode mode) {
   const bool writable = mode == Mode::kReadWrite;
+  check_path_length(path, path);
   check_file(path, writable);
   auto impl = std::make_unique<Impl>();
   impl->path = path;
@@ -237,6 +238,7 @@ Database Database::create(const std::string& path, const DetectorOptions& option
              "(nothing was created)");
   }
   const std::string tmp = path + ".tmp-" + std::to_string(::getpid());
+  check_path_length(path, tmp);
   for (const char* suffix : {"", "-journal", "-wal", "-shm"}) ::unlink((tmp + suffix).c_str());
   {
     Impl impl;  // closes the temporary database on every path

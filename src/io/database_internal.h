@@ -17,6 +17,7 @@
 #include <cmath>
 #include <cstdio>
 #include <cstring>
+#include <filesystem>
 #include <limits>
 #include <map>
 #include <mutex>
@@ -67,6 +68,22 @@ inline std::string sqlite_message(sqlite3* db) {
     }
   }
   return message;
+}
+
+// SQLite opens a database by its absolute path and refuses one whose
+// journal name ("-journal", 8 more bytes) would pass its 512-byte limit
+// (SQLITE_MAX_PATHNAME), with a bare "unable to open database file" and a
+// stale errno. `name` is the file SQLite is given for `path`.
+inline constexpr std::size_t kSqliteMaxPathBytes = 512 - 8;
+inline void check_path_length(const std::string& path, const std::string& name) {
+  std::error_code ec;
+  const std::string full = std::filesystem::absolute(name, ec).string();
+  const std::size_t length = ec ? name.size() : full.size();
+  if (length > kSqliteMaxPathBytes) {
+    io_error(path, "its absolute path is ", length, " bytes long, and SQLite opens paths of at "
+             "most ", kSqliteMaxPathBytes, " bytes: give a shorter path (a symbolic link to the "
+             "folder will do)");
+  }
 }
 
 // ---- little-endian blobs (memcpy on little-endian hosts)

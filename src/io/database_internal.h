@@ -59,7 +59,13 @@ template <typename... Parts>
 inline std::string sqlite_message(sqlite3* db) {
   if (!db) return "out of memory";
   std::string message = sqlite3_errmsg(db);
-  const int err = sqlite3_system_errno(db);
+  // Only for a failure of the file itself: the errno of the last system call
+  // SQLite made may be stale (a probe for a log that is not there) otherwise.
+  const int primary = sqlite3_extended_errcode(db) & 0xFF;
+  const bool file_failed = primary == SQLITE_CANTOPEN || primary == SQLITE_IOERR ||
+                           primary == SQLITE_FULL || primary == SQLITE_PERM ||
+                           primary == SQLITE_READONLY;
+  const int err = file_failed ? sqlite3_system_errno(db) : 0;
   if (err != 0) {
     message += concat(": ", std::strerror(err));
     if (err == EMFILE || err == ENFILE) {

@@ -9,7 +9,13 @@
 # (a mixed map's part boundary, from its parts.txt) should stand above every
 # frame inside a real sequence.
 #
-#   PYTHONPATH=build/python scripts/cut_study.py [--k 8] SEQUENCE_FOLDER...
+#   PYTHONPATH=build/python scripts/cut_study.py [--k 8] [--descriptor gradient] SEQUENCE_FOLDER...
+#
+# --descriptor gradient replaces the detector's gray-level histograms by a
+# gradient-orientation histogram (4 x 4 cells of the frame at 160 x 120, 8
+# orientations weighted by gradient magnitude, each cell normalised; the
+# similarity is 1 - half the mean L1 distance of the cells): does a
+# descriptor of structure rather than brightness find the places?
 #
 # SEQUENCE_FOLDER holds sequence.txt (scripts/eval_suite.py's work folders,
 # ../shared/datasets/<name>); a mixed map's parts.txt gives its cuts.
@@ -20,21 +26,49 @@ import lsgd
 
 ap = argparse.ArgumentParser()
 ap.add_argument('--k', type=int, default=8)
+ap.add_argument('--descriptor', choices=['lsgd', 'gradient'], default='lsgd')
 ap.add_argument('folders', nargs='+')
 args = ap.parse_args()
 k = args.k
 
+
+def gradient_descriptor(path, grid=4, bins=8):
+    from PIL import Image
+    g = np.asarray(Image.open(path).convert('L').resize((160, 120)), dtype=np.float32)
+    gy, gx = np.gradient(g)
+    magnitude = np.hypot(gx, gy)
+    b = np.minimum(((np.arctan2(gy, gx) % np.pi) / np.pi * bins).astype(int), bins - 1)
+    rows, cols = g.shape
+    cells = []
+    for r in range(grid):
+        for c in range(grid):
+            part = (slice(r * rows // grid, (r + 1) * rows // grid),
+                    slice(c * cols // grid, (c + 1) * cols // grid))
+            h = np.bincount(b[part].ravel(), weights=magnitude[part].ravel(), minlength=bins)
+            cells.append(h / (h.sum() + 1e-9))
+    return np.array(cells)
+
+
+def gradient_similarity(a, b):
+    return 1 - 0.5 * float(np.abs(a - b).sum()) / len(a)
+
+
 for folder in args.folders:
     images = lsgd.open_sequence(os.path.join(folder, 'sequence.txt'))
-    detector = lsgd.Detector()
-    D = [detector.describe(lsgd.read_image(p)) for p in images]
+    if args.descriptor == 'gradient':
+        D = [gradient_descriptor(p) for p in images]
+        similarity = gradient_similarity
+    else:
+        detector = lsgd.Detector()
+        D = [detector.describe(lsgd.read_image(p)) for p in images]
+        similarity = lsgd.similarity
     n = len(D)
     near = {}
 
     def s(a, b):
         key = (max(a, b), abs(a - b))
         if key not in near:
-            near[key] = lsgd.similarity(D[a], D[b])
+            near[key] = similarity(D[a], D[b])
         return near[key]
 
     r = np.full(n, -np.inf)

@@ -1,6 +1,7 @@
 // The evaluation layer: loop ground truth, the strict metrics
 // (docs/evaluation.md) and scoring a detector's Results or a detections CSV.
 #include <cstdint>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -14,6 +15,7 @@
 #include "lsgd/eval/metrics.h"
 #include "lsgd/eval/runner.h"
 #include "lsgd/eval/sweep.h"
+#include "lsgd/io/config.h"
 
 namespace lsgd::python {
 
@@ -78,12 +80,67 @@ void bind_groundtruth(py::module_& m) {
         "Reads loop ground truth: pairs text, MATLAB .mat, KITTI poses or loopinf.");
 }
 
+// Metrics and PrPoint cross processes (lsgd.sweep(client=...)'s rows come
+// from a cluster's workers) as their fields: every member, bound or not.
+using lsgd::eval::Metrics;
+using lsgd::eval::PrPoint;
+constexpr std::int64_t Metrics::*kMetricsCounts[] = {
+    &Metrics::tolerance, &Metrics::frames, &Metrics::positives, &Metrics::min_gap,
+    &Metrics::declared_loops, &Metrics::declared_true, &Metrics::declared_false};
+constexpr double Metrics::*kMetricsValues[] = {
+    &Metrics::precision_at_decision, &Metrics::recall_at_decision,
+    &Metrics::recall_at_100_precision, &Metrics::threshold_at_100_precision,
+    &Metrics::precision_at_100_recall, &Metrics::average_precision,
+    &Metrics::decision_recall_at_100_precision, &Metrics::decision_threshold_at_100_precision,
+    &Metrics::decision_average_precision, &Metrics::recall_at_1, &Metrics::recall_at_5,
+    &Metrics::recall_at_10, &Metrics::ms_per_frame_median, &Metrics::ms_per_frame_p95,
+    &Metrics::ms_per_frame_mean, &Metrics::load_ms_median, &Metrics::convert_ms_median,
+    &Metrics::segment_ms_median, &Metrics::describe_ms_median, &Metrics::search_ms_median,
+    &Metrics::verify_ms_median, &Metrics::load_ms_p95, &Metrics::convert_ms_p95,
+    &Metrics::segment_ms_p95, &Metrics::describe_ms_p95, &Metrics::search_ms_p95,
+    &Metrics::verify_ms_p95, &Metrics::prt};
+
+py::tuple point_state(const PrPoint& p) {
+  return py::make_tuple(p.threshold, p.confirmed, p.precision, p.recall, p.true_positives,
+                        p.false_positives);
+}
+
+PrPoint point_of_state(const py::tuple& t) {
+  if (t.size() != 6) throw lsgd::InvalidArgument("PrPoint: a pickled state of 6 fields was expected");
+  return {t[0].cast<double>(), t[1].cast<bool>(), t[2].cast<double>(), t[3].cast<double>(),
+          t[4].cast<std::int64_t>(), t[5].cast<std::int64_t>()};
+}
+
+py::tuple metrics_state(const Metrics& m) {
+  py::list counts, values, curve;
+  for (const auto member : kMetricsCounts) counts.append(m.*member);
+  for (const auto member : kMetricsValues) values.append(m.*member);
+  for (const PrPoint& p : m.curve) curve.append(point_state(p));
+  return py::make_tuple(m.protocol, counts, values, curve);
+}
+
+Metrics metrics_of_state(const py::tuple& t) {
+  const auto counts = t.size() == 4 ? t[1].cast<py::list>() : py::list();
+  const auto values = t.size() == 4 ? t[2].cast<py::list>() : py::list();
+  if (t.size() != 4 || counts.size() != std::size(kMetricsCounts) ||
+      values.size() != std::size(kMetricsValues)) {
+    throw lsgd::InvalidArgument("Metrics: the pickled state is of another lsgd version's Metrics");
+  }
+  Metrics m;
+  m.protocol = t[0].cast<std::string>();
+  for (std::size_t k = 0; k < std::size(kMetricsCounts); ++k) m.*kMetricsCounts[k] = counts[k].cast<std::int64_t>();
+  for (std::size_t k = 0; k < std::size(kMetricsValues); ++k) m.*kMetricsValues[k] = values[k].cast<double>();
+  for (const py::handle p : t[3].cast<py::list>()) m.curve.push_back(point_of_state(p.cast<py::tuple>()));
+  return m;
+}
+
 void bind_metrics(py::module_& m) {
   py::class_<lsgd::eval::PrPoint>(m, "PrPoint")
       .def_readonly("threshold", &lsgd::eval::PrPoint::threshold)
       .def_readonly("precision", &lsgd::eval::PrPoint::precision)
       .def_readonly("recall", &lsgd::eval::PrPoint::recall)
-      .def_readonly("confirmed", &lsgd::eval::PrPoint::confirmed);
+      .def_readonly("confirmed", &lsgd::eval::PrPoint::confirmed)
+      .def(py::pickle(&point_state, &point_of_state));
   py::class_<lsgd::eval::Metrics>(m, "Metrics")
       .def_readonly("protocol", &lsgd::eval::Metrics::protocol)
       .def_readonly("frames", &lsgd::eval::Metrics::frames)
@@ -107,46 +164,128 @@ void bind_metrics(py::module_& m) {
       .def_readonly("recall_at_5", &lsgd::eval::Metrics::recall_at_5)
       .def_readonly("recall_at_10", &lsgd::eval::Metrics::recall_at_10)
       .def_readonly("ms_per_frame_median", &lsgd::eval::Metrics::ms_per_frame_median)
-      .def_readonly("curve", &lsgd::eval::Metrics::curve);
+      .def_readonly("curve", &lsgd::eval::Metrics::curve)
+      .def(py::pickle(&metrics_state, &metrics_of_state));
+}
+
+// lsgd sweep's grid, opened and checked: the datasets read, every point and
+// cell validated, before anything runs (cells point into data and points).
+struct SweepGrid {
+  std::vector<std::string> keys;
+  std::vector<std::string> specs;  // each dataset's spec as given, in data's order
+  std::vector<lsgd::eval::SweepPoint> points;
+  std::vector<lsgd::eval::SweepData> data;
+  std::vector<lsgd::eval::SweepCell> cells;
+};
+
+std::unique_ptr<SweepGrid> plan_grid(const std::vector<std::string>& datasets,
+                                     const std::vector<std::string>& sets, const py::object& options,
+                                     int jobs) {
+  if (jobs < 1) throw lsgd::InvalidArgument("sweep jobs = " + std::to_string(jobs) + " must be at least 1");
+  auto grid = std::make_unique<SweepGrid>();
+  const lsgd::DetectorOptions base = make_options(options, py::kwargs());
+  std::vector<lsgd::eval::SweepAxis> axes;
+  for (const std::string& spec : sets) {
+    axes.push_back(lsgd::eval::parse_sweep_axis(spec));
+    grid->keys.push_back(axes.back().key);
+  }
+  grid->points = lsgd::eval::expand_sweep(axes, base);
+  for (const std::string& spec : datasets) {
+    grid->data.push_back(lsgd::eval::open_sweep_dataset(lsgd::eval::parse_dataset_spec(spec)));
+    grid->specs.push_back(spec);
+  }
+  grid->cells = lsgd::eval::sweep_cells(grid->data, grid->points, grid->keys);
+  return grid;
+}
+
+// Cell i's dataset and values, the start of its row.
+py::dict cell_row(const SweepGrid& grid, std::size_t i) {
+  const lsgd::eval::SweepCell& cell = grid.cells[i];
+  py::dict values;
+  for (std::size_t k = 0; k < grid.keys.size(); ++k) values[py::str(grid.keys[k])] = cell.point->values[k];
+  py::dict row;
+  row["dataset"] = cell.dataset->spec.name;
+  row["values"] = values;
+  return row;
+}
+
+// The row of cell i: its dataset and values from the grid, the rest measured.
+py::dict sweep_row(const SweepGrid& grid, std::size_t i, const lsgd::eval::SweepRow& measured) {
+  py::dict row = cell_row(grid, i);
+  row["metrics"] = measured.metrics;
+  row["nodes"] = measured.nodes;
+  row["bytes_per_frame"] = measured.bytes_per_frame;
+  row["skipped_frames"] = measured.skipped;
+  return row;
 }
 
 // lsgd sweep's grid from Python: the same library calls (eval/sweep.h), a
 // row a cell, in grid order.
 py::list run_sweep(const std::vector<std::string>& datasets, const std::vector<std::string>& sets,
                    const py::object& options, int jobs, bool strict) {
-  const lsgd::DetectorOptions base = make_options(options, py::kwargs());
-  std::vector<lsgd::eval::SweepAxis> axes;
-  std::vector<std::string> keys;
-  for (const std::string& spec : sets) {
-    axes.push_back(lsgd::eval::parse_sweep_axis(spec));
-    keys.push_back(axes.back().key);
-  }
-  const std::vector<lsgd::eval::SweepPoint> points = lsgd::eval::expand_sweep(axes, base);
-  std::vector<lsgd::eval::SweepData> data;
-  for (const std::string& spec : datasets) {
-    data.push_back(lsgd::eval::open_sweep_dataset(lsgd::eval::parse_dataset_spec(spec)));
-  }
-  const std::vector<lsgd::eval::SweepCell> cells = lsgd::eval::sweep_cells(data, points, keys);
-  std::vector<lsgd::eval::SweepRow> rows(cells.size());
+  const std::unique_ptr<SweepGrid> grid = plan_grid(datasets, sets, options, jobs);
+  std::vector<lsgd::eval::SweepRow> rows(grid->cells.size());
   {
     py::gil_scoped_release release;
     lsgd::eval::run_sweep(
-        cells, jobs, [&rows](std::size_t i, const lsgd::eval::SweepRow& row) { rows[i] = row; }, {},
+        grid->cells, jobs, [&rows](std::size_t i, const lsgd::eval::SweepRow& row) { rows[i] = row; }, {},
         strict);
   }
   py::list out;
-  for (std::size_t i = 0; i < cells.size(); ++i) {
-    py::dict values;
-    for (std::size_t k = 0; k < keys.size(); ++k) values[py::str(keys[k])] = cells[i].point->values[k];
-    py::dict row;
-    row["dataset"] = cells[i].dataset->spec.name;
-    row["values"] = values;
-    row["metrics"] = rows[i].metrics;
-    row["nodes"] = rows[i].nodes;
-    row["bytes_per_frame"] = rows[i].bytes_per_frame;
-    row["skipped_frames"] = rows[i].skipped;
+  for (std::size_t i = 0; i < grid->cells.size(); ++i) out.append(sweep_row(*grid, i, rows[i]));
+  return out;
+}
+
+// A sweep for a cluster (lsgd/_dask.py): the grid checked here, each cell as
+// what a worker needs to run it alone: its dataset's spec, its whole options
+// as YAML (io::to_yaml, read back equal) and its label; with the row's
+// dataset and values.
+py::list plan_sweep(const std::vector<std::string>& datasets, const std::vector<std::string>& sets,
+                    const py::object& options, int jobs) {
+  const std::unique_ptr<SweepGrid> grid = plan_grid(datasets, sets, options, jobs);
+  py::list out;
+  for (std::size_t i = 0; i < grid->cells.size(); ++i) {
+    const lsgd::eval::SweepCell& cell = grid->cells[i];
+    py::dict row = cell_row(*grid, i);
+    row["dataset_spec"] =
+        grid->specs[static_cast<std::size_t>(cell.dataset - grid->data.data())];
+    row["options"] = lsgd::io::to_yaml(cell.options);
+    row["label"] = cell.label;
     out.append(row);
   }
+  return out;
+}
+
+// One cell of plan_sweep's, run where this is called (a cluster's worker):
+// the dataset opened again from its spec, the options read back from their
+// YAML; errors name the cell as run_sweep's do.
+py::dict run_planned_cell(const std::string& dataset_spec, const std::string& options_yaml,
+                          const std::string& label, bool strict) {
+  lsgd::eval::SweepRow row;
+  {
+    py::gil_scoped_release release;
+    try {
+      const lsgd::eval::SweepData data =
+          lsgd::eval::open_sweep_dataset(lsgd::eval::parse_dataset_spec(dataset_spec));
+      lsgd::eval::SweepCell cell{&data, nullptr,
+                                 lsgd::io::parse_config(options_yaml, "the options of sweep cell " + label),
+                                 label, true};
+      row = lsgd::eval::run_sweep_cell(cell, strict);
+    } catch (const lsgd::InvalidArgument& e) {
+      throw lsgd::InvalidArgument(label + ": " + e.what());
+    } catch (const lsgd::IoError& e) {
+      throw lsgd::IoError(label + ": " + e.what());
+    } catch (const lsgd::FormatError& e) {
+      throw lsgd::FormatError(label + ": " + e.what());
+    } catch (const std::exception& e) {
+      throw lsgd::Error(label + ": " + e.what());
+    }
+  }
+  py::dict out;
+  out["metrics"] = row.metrics;
+  out["nodes"] = row.nodes;
+  out["bytes_per_frame"] = row.bytes_per_frame;
+  out["skipped_frames"] = row.skipped;
   return out;
 }
 
@@ -173,6 +312,14 @@ void bind_eval(py::module_& m) {
         "on top of `options` (a dict or a YAML path), on `jobs` threads; bad frames are skipped "
         "unless strict. A list of rows in grid order: dataset, values, metrics, nodes, "
         "bytes_per_frame, skipped_frames. Everything is checked before the first run.");
+  m.def("_sweep_plan", &plan_sweep, py::arg("datasets"), py::arg("sets"), py::arg("options"),
+        py::arg("jobs"),
+        "sweep(client=...)'s grid, checked as sweep() checks it: a dict a cell, in grid order "
+        "(dataset, values, dataset_spec, options as YAML, label).");
+  m.def("_sweep_cell", &run_planned_cell, py::arg("dataset_spec"), py::arg("options"), py::arg("label"),
+        py::arg("strict"),
+        "Runs one cell of _sweep_plan() here: a dict of metrics, nodes, bytes_per_frame, "
+        "skipped_frames.");
 }
 
 }  // namespace lsgd::python

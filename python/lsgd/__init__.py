@@ -15,6 +15,7 @@ library's messages.
 
 import os
 
+from . import _lsgd
 from ._lsgd import (  # noqa: F401
     Candidate,
     Database,
@@ -48,9 +49,29 @@ from ._lsgd import (  # noqa: F401
     read_image,
     similarity,
     stored_image_name,
-    sweep,
     write_csv,
 )
+
+
+def sweep(datasets, sets=(), options=None, jobs=1, strict=False, client=None):
+    """Runs lsgd sweep's grid: every configuration of `sets` ("KEY=VALUES", as
+    --set) on every dataset ("NAME=SEQUENCE,GT,MIN_GAP" or "NAME=DIR,MIN_GAP",
+    as --dataset), on top of `options` (a dict or a YAML path); bad frames are
+    skipped unless strict. A list of rows in grid order: dataset, values,
+    metrics, nodes, bytes_per_frame, skipped_frames. Everything is checked
+    before the first run.
+
+    Without a client the cells run here on `jobs` threads. With `client` (a
+    distributed.Client: a LocalCluster or a scheduler's address) each cell,
+    its run and its evaluation, is a task on the cluster's workers, and the
+    rows are the same (times aside); the workers must read the datasets at
+    the same paths and import the same lsgd build (docs/evaluation.md,
+    "Sweeps on a Dask cluster").
+    """
+    if client is None:
+        return _lsgd.sweep(list(datasets), list(sets), options, jobs, strict)
+    from . import _dask
+    return _dask.sweep(client, datasets, sets, options, jobs, strict)
 
 
 def run(detector, images):

@@ -13,6 +13,11 @@
 # --level2: the shipped level 1, and variants of the second standardisation
 # (R = (A - mean) / sd over the query's candidates) instead: robust or
 # truncated estimates of the null of A.
+# --parts PARTS: a mixed map's parts.txt (scripts/mixed_map.py): adds the
+# variant "each candidate against its own part": s(i, j) standardised with
+# the query's statistics over the candidates of j's part only, and A the
+# same way at level 2 (a part with fewer than 32 candidates scores 0 there,
+# as a young query: no null to stand out from), as a map that knew where its places begin would do.
 #
 # SEQUENCE is anything `lsgd.open_sequence` reads; GROUNDTRUTH is pairs
 # "query match" (scripts/eval_suite.py writes them); --first: queries before
@@ -29,6 +34,7 @@ ap.add_argument('groundtruth')
 ap.add_argument('--first', type=int, default=0)
 ap.add_argument('--min-gap', type=int, default=50)
 ap.add_argument('--level2', action='store_true')
+ap.add_argument('--parts')
 args = ap.parse_args()
 w = args.min_gap
 
@@ -137,6 +143,36 @@ def l2_quantiles(lo, hi):
     return stats
 
 
+part = np.zeros(n, dtype=int)  # the part of every frame (one part without --parts)
+if args.parts:
+    for line in open(args.parts):
+        fields = line.split()
+        if fields:
+            part[int(fields[0]):] += 1
+
+
+def by_part(standardise_values):
+    """A standardisation applied within each part of the candidates (>= 32 of them), else whole."""
+    def z(c):
+        out = standardise_values(c)
+        for p in np.unique(part[:len(c)]):
+            members = part[:len(c)] == p
+            out[members] = standardise_values(c[members]) if members.sum() >= 32 else 0
+        return out
+    return z
+
+
+def l2_by_part(A):
+    mean, sd = np.full(len(A), A.mean()), np.full(len(A), A.std())
+    for p in np.unique(part[:len(A)]):
+        members = part[:len(A)] == p
+        if members.sum() >= 32:
+            mean[members], sd[members] = A[members].mean(), A[members].std()
+        else:  # too few candidates in the part for a null: no score there
+            mean[members], sd[members] = A[members], 1
+    return mean, sd
+
+
 level2 = [('shipped', l2_global)]
 if args.level2:
     level2 += [('truncated above the median', l2_truncated(0.5)),
@@ -155,6 +191,10 @@ variants = [('shipped: global z, mean of 16 and 48', z_global, combine_mean),
             ('16 only', z_global, lambda a, b: a)]
 if args.level2:
     variants = variants[:1]
+if args.parts:
+    variants = variants[:1] + [('each candidate against its own part', by_part(z_global), combine_mean),
+                               ('... and sequences within a part', by_part(z_global), combine_mean)]
+    level2_of = {variants[1][0]: l2_by_part, variants[2][0]: l2_by_part}
 queries = [i for i in range(max(args.first, w + 32), n)]
 for name, standardise, combine in variants:
     Z = np.zeros((n, n))
@@ -168,16 +208,20 @@ for name, standardise, combine in variants:
             s = np.zeros(m)
             for t in range(L):
                 j = np.arange(m) - t
-                s[j >= 0] += Z[i - t, j[j >= 0]]
+                keep = j >= 0
+                if name.startswith('... and sequences within'):
+                    # A term whose pair crosses a cut counts 0, as one before the map.
+                    keep &= (part[np.maximum(j, 0)] == part[np.arange(m)]) & (part[i - t] == part[i])
+                s[keep] += Z[i - t, j[keep]]
             sums.append(s / L)
         scores.append(combine(*sums))
-    for name2, second in level2:
+    for name2, second in ([(name, level2_of[name])] if args.parts and name in level2_of else level2):
         rows = []  # (best R, correct, has a revisit)
         for i, A in zip(queries, scores):
             mean, sd = second(A)
             R = (A - mean) / sd
             best = int(np.argmax(R))
-            rows.append((R[best], best in gt.get(i, ()), i in gt))
+            rows.append((R[best], best in gt.get(i, ()), i in gt, part[best] != part[i]))
         rows.sort(key=lambda r: -r[0])
         positives = sum(1 for r in rows if r[2])
         before_first_false = next((k for k, r in enumerate(rows) if not r[1]), len(rows))
@@ -187,5 +231,6 @@ for name, standardise, combine in variants:
               f'R@100P {before_first_false / max(positives, 1):.3f}, '
               f'true at 3.5 sigma {sum(1 for r in rows if r[1] and r[0] >= 3.5)}, '
               f'at 2 {sum(1 for r in rows if r[1] and r[0] >= 2)}, '
-              f'wrong at 3.5 {sum(1 for r in rows if not r[1] and r[0] >= 3.5)}, '
+              f'wrong at 3.5 {sum(1 for r in rows if not r[1] and r[0] >= 3.5)} '
+              f'({sum(1 for r in rows if not r[1] and r[0] >= 3.5 and r[3])} in another part), '
               f'best of a query with no revisit {max(nulls) if nulls else float("nan"):.2f}')

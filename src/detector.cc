@@ -102,6 +102,7 @@ SequenceOptions sequence_options(const VerificationOptions& v) {
 
 Detector::Detector(const DetectorOptions& options)
     : options_(options),
+      describing_key_((options.check(), describing_options_key(options))),
       segmenter_((options.check(), options.segmentation)),
       search_(make_search(options.search)),
       evidence_(sequence_options(options.verification), options.search.min_gap,
@@ -257,8 +258,12 @@ Result Detector::process_gray(double convert_ms, std::int64_t start_ns, bool sto
     std::swap(exact_, descriptor_);  // descriptor_ is the frame's descriptor as stored
   }
   result.timings.describe_ms = ms_since(t);
+  return process_described(std::move(result), start_ns, store, nullptr, gray_.width, gray_.height);
+}
 
-  t = now_ns();
+Result Detector::process_described(Result result, std::int64_t start_ns, bool store,
+                                   const FrameDescription* described, int width, int height) {
+  std::int64_t t = now_ns();
   const SimilarityMetric metric = options_.similarity.metric;
   const CandidateSearch::Query search_query{store_, descriptor_.view(), result.frame, metric};
   const CandidateSearch::Outcome outcome = store ? search_->search(search_query, raw_, row_)
@@ -281,7 +286,7 @@ Result Detector::process_gray(double convert_ms, std::int64_t start_ns, bool sto
   result.timings.search_ms = ms_since(t);
 
   t = now_ns();
-  verify(evidence, store, result);
+  verify(evidence, store, result, described, width, height);
   result.timings.verify_ms = ms_since(t);
   result.loop_id = result.best.frame >= 0 ? tags_.ids[static_cast<std::size_t>(result.best.frame)] : -1;
   if (!store) {
@@ -294,9 +299,9 @@ Result Detector::process_gray(double convert_ms, std::int64_t start_ns, bool sto
   // gets a new one rather than an error.
   store_.add(descriptor_, std::clamp<std::int64_t>(result.node, 0, store_.groups()));
   search_->end(result.frame, places_);
-  tags_.ids.push_back(id);
-  tags_.stamps.push_back(stamp);
-  if (result.frame == 0) width_ = gray_.width, height_ = gray_.height;
+  tags_.ids.push_back(result.id);
+  tags_.stamps.push_back(result.stamp);
+  if (result.frame == 0) width_ = width, height_ = height;
 
   result.timings.total_ms = ms_since(start_ns);
   return result;
@@ -335,8 +340,11 @@ void Detector::score_candidates(AppearanceEvidence& evidence, bool every_frame, 
 }
 
 // The verification stages and the loop decision (decision.h).
-void Detector::verify(AppearanceEvidence& evidence, bool store, Result& result) {
-  const StageQuery query{result.frame, gray_, store_, descriptor_.view()};
+void Detector::verify(AppearanceEvidence& evidence, bool store, Result& result,
+                      const FrameDescription* described, int width, int height) {
+  static const GrayImage kNoImage;  // a described frame's: its records stand for it
+  const StageQuery query{result.frame, described != nullptr ? kNoImage : gray_, store_,
+                         descriptor_.view(), width, height};
   // A query that is not stored: every stage begun forgets it again, and the
   // decision is put back, however the query ends.
   std::size_t begun = 0;
@@ -353,8 +361,15 @@ void Detector::verify(AppearanceEvidence& evidence, bool store, Result& result) 
       d.decision_.restore(checkpoint);
     }
   } undo{*this, begun, result.frame, checkpoint, !store};
-  for (const auto& stage : stages_) {
-    stage->begin(query);
+  for (std::size_t k = 0; k < stages_.size(); ++k) {
+    if (described != nullptr) {
+      const std::vector<std::uint8_t>& record = described->records[k];
+      stages_[k]->begin_described(
+          query, StateReader(record.data(), record.size(),
+                             std::string("the frame description's ") + stages_[k]->name() + " record"));
+    } else {
+      stages_[k]->begin(query);
+    }
     ++begun;
   }
   const bool sequence = options_.verification.has(kTemporalStage);

@@ -256,7 +256,8 @@ GeometricVerifier& GeometricVerifier::operator=(const GeometricVerifier& other) 
   return *this;
 }
 
-void GeometricVerifier::add(const GrayImage& image) {
+void GeometricVerifier::compute(const GrayImage& image, std::vector<float>& points,
+                                std::vector<std::uint8_t>& descriptors) const {
   if (image.empty() || image.width < 0 || image.height < 0 ||
       image.pixels.size() != static_cast<std::size_t>(image.width) * image.height) {
     internal::throw_invalid("GeometricVerifier::add: image ", image.width, "x", image.height,
@@ -277,44 +278,35 @@ void GeometricVerifier::add(const GrayImage& image) {
   }
 
   std::vector<cv::KeyPoint> keypoints;
-  cv::Mat descriptors;
+  cv::Mat found;
   try {
-    orb_->orb->detectAndCompute(work, cv::noArray(), keypoints, descriptors);
+    orb_->orb->detectAndCompute(work, cv::noArray(), keypoints, found);
   } catch (const cv::Exception&) {
     // ORB has nothing to say about this image (e.g. smaller than its border):
     // the frame is kept with no keypoints and every check against it rejects.
     keypoints.clear();
-    descriptors.release();
+    found.release();
   }
-  const int n = descriptors.empty() ? 0 : std::min<int>(descriptors.rows, keypoints.size());
-  if (n > 0 && (descriptors.type() != CV_8UC1 || descriptors.cols != kOrbBytes)) {
+  const int n = found.empty() ? 0 : std::min<int>(found.rows, keypoints.size());
+  if (n > 0 && (found.type() != CV_8UC1 || found.cols != kOrbBytes)) {
     internal::throw_invalid("GeometricVerifier::add: unexpected ORB descriptor layout");
   }
-
-  std::vector<float> points(2 * static_cast<std::size_t>(n));
+  points.resize(2 * static_cast<std::size_t>(n));
+  descriptors.resize(static_cast<std::size_t>(n) * kOrbBytes);
   for (int i = 0; i < n; ++i) {
     // cv::resize maps pixel centres: x_up + 0.5 = (x + 0.5) * sx.
     points[2 * i] = static_cast<float>((keypoints[i].pt.x + 0.5) / sx - 0.5);
     points[2 * i + 1] = static_cast<float>((keypoints[i].pt.y + 0.5) / sy - 0.5);
+    const std::uint8_t* row = found.ptr<std::uint8_t>(i);
+    std::copy(row, row + kOrbBytes, descriptors.begin() + static_cast<std::ptrdiff_t>(i) * kOrbBytes);
   }
-  // Append with the vectors' geometric growth (an exact reserve() per frame
-  // would copy the whole store on every add); roll back if an append throws.
-  const std::size_t old_points = points_.size(), old_descriptors = descriptors_.size();
-  const std::size_t old_frames = scales_.size();
-  try {
-    points_.insert(points_.end(), points.begin(), points.end());
-    for (int i = 0; i < n; ++i) {
-      const std::uint8_t* row = descriptors.ptr<std::uint8_t>(i);
-      descriptors_.insert(descriptors_.end(), row, row + kOrbBytes);
-    }
-    scales_.push_back(static_cast<float>(scale));
-    offsets_.push_back(offsets_.back() + n);
-  } catch (...) {
-    points_.resize(old_points);
-    descriptors_.resize(old_descriptors);
-    scales_.resize(old_frames);
-    throw;
-  }
+}
+
+void GeometricVerifier::add(const GrayImage& image) {
+  std::vector<float> points;
+  std::vector<std::uint8_t> descriptors;
+  compute(image, points, descriptors);
+  add_features(points, descriptors, image.width, image.height);
 }
 
 double GeometricOptions::working_scale(int width, int height) const {

@@ -7,6 +7,7 @@
 #include <cstdint>
 #include <limits>
 #include <memory>
+#include <string>
 #include <vector>
 
 #include "lsgd/decision.h"
@@ -103,6 +104,40 @@ struct Result {
   Timings timings;
 };
 
+// A frame described apart from the map (Detector::describe_frame()): what
+// process() computes from the image before it reads any stored frame, so
+// that one process (a robot) describes its frames and another (the map)
+// stores and searches them, with the Results process(image) gives. Its
+// bytes (encode_frame_description) are the compact descriptor's plus each
+// stage's record (geometric: the ORB features, ~40 bytes a keypoint).
+struct FrameDescription {
+  int width = 0;  // the image's size
+  int height = 0;
+  // describing_options_key() of the options that described it: a map
+  // refuses a description made under other segmentation, descriptor or
+  // verification options.
+  std::uint64_t options_key = 0;
+  Descriptor descriptor;  // as the map stores it (descriptor.storage)
+  // Each verification stage's record (VerificationStage::describe()), in
+  // the order of verification.stages, named.
+  std::vector<std::string> stages;
+  std::vector<std::vector<std::uint8_t>> records;
+  // What describing took: convert, segment and describe (the histograms'
+  // encoding and the stages' records); Result::timings reports them.
+  double convert_ms = 0;
+  double segment_ms = 0;
+  double describe_ms = 0;
+};
+// A hash of every option a description depends on (segmentation.*,
+// descriptor.*, verification.*), as their option texts.
+std::uint64_t describing_options_key(const DetectorOptions& options);
+// Bytes a description travels or is kept as (little-endian, versioned), and
+// back: decode throws FormatError naming what is wrong for bytes that are
+// not one (truncated, another version, sizes that do not add up); nothing
+// it allocates exceeds the bytes given.
+std::vector<std::uint8_t> encode_frame_description(const FrameDescription& description);
+FrameDescription decode_frame_description(const std::uint8_t* data, std::size_t size);
+
 // Threads: a Detector is used by one thread at a time, its const calls
 // included (process() changes what they read). Use one Detector per thread,
 // or a mutex around every call. process() and restore_frame() detect an
@@ -150,6 +185,22 @@ class Detector {
   // a size other than the stored frames').
   Descriptor describe(const cv::Mat& frame);
   Descriptor describe(const ImageView& frame);
+
+  // The frame as process() would take it, nothing stored or changed: its
+  // descriptor and each stage's record (FrameDescription). process() and
+  // query() of it give the Results process() and query() of the image give,
+  // in this detector or another made with the same options (a robot
+  // describes, the map stores). InvalidArgument for a frame process() would
+  // refuse, or a stage that cannot describe (VerificationStage::describes()).
+  FrameDescription describe_frame(const cv::Mat& frame);
+  FrameDescription describe_frame(const ImageView& frame);
+  // process() and query() of a described frame. InvalidArgument, with
+  // nothing changed, for a description made under other options
+  // (describing_options_key()), of another size than the stored frames, or
+  // whose descriptor or records do not fit (each stage's
+  // check_description()).
+  Result process(const FrameDescription& frame, std::int64_t id = -1, double stamp = kNoStamp);
+  Result query(const FrameDescription& frame, std::int64_t id = -1, double stamp = kNoStamp);
 
   // The caller's id and time stamp of stored frame `frame` (InvalidArgument
   // for one not stored), and the stored frame of caller id `id` (-1: none).
@@ -235,6 +286,15 @@ class Detector {
   // store: process(), else query() (nothing stored or changed); id -1: the next.
   Result process_gray(double convert_ms, std::int64_t start_ns, bool store, std::int64_t id,
                       double stamp);
+  // The rest of process() once descriptor_ holds the frame's descriptor;
+  // `described`: the stages' records (a FrameDescription's), else gray_.
+  Result process_described(Result result, std::int64_t start_ns, bool store,
+                           const FrameDescription* described, int width, int height);
+  Result run_described(const FrameDescription& frame, bool store, std::int64_t id, double stamp);
+  template <typename Image>
+  FrameDescription describe_image(const Image& frame);
+  void check_description(const FrameDescription& frame) const;
+  void check_stages_describe(const char* call) const;
   // The id a frame given `id` gets (-1: the one after the last); InvalidArgument
   // for one not above the last or a stamp that is infinite.
   std::int64_t next_id(std::int64_t id, double stamp) const;
@@ -245,13 +305,15 @@ class Detector {
   // every_frame: the search scored every frame for this query (row_ written),
   // so its places are ranked over every diagonal; else its shortlist is realigned.
   void score_candidates(AppearanceEvidence& evidence, bool every_frame, Result& result);
-  void verify(AppearanceEvidence& evidence, bool store, Result& result);
+  void verify(AppearanceEvidence& evidence, bool store, Result& result,
+              const FrameDescription* described, int width, int height);
   // The components with per-frame state, in the order their records are saved.
   std::vector<Stateful*> stateful() const;
   // Restores this (new) detector from `from`'s frames for which after(f) >= 0.
   void restore_kept(const Detector& from, const FrameRenumbering& renumbered);
 
   DetectorOptions options_;
+  std::uint64_t describing_key_ = 0;  // describing_options_key(options_)
   int width_ = 0;  // size of the first frame; every later frame must match
   int height_ = 0;
   Segmenter segmenter_;

@@ -92,6 +92,12 @@ class GeometricVerifier {
   // unchanged, only for an empty image or one whose pixel count is not
   // width x height.
   void add(const GrayImage& image);
+  // The features add() would keep for `image` (x, y per keypoint in its
+  // pixels, 32 bytes of ORB descriptor per keypoint), keeping nothing: what
+  // add_features() takes back (a frame described apart from the map,
+  // Detector::describe_frame()). Throws as add() does.
+  void compute(const GrayImage& image, std::vector<float>& points,
+               std::vector<std::uint8_t>& descriptors) const;
 
   // Checks frames `query` and `candidate` (both added). Never throws on
   // degenerate geometry (identical images, pure rotation, planar scenes, too

@@ -31,9 +31,13 @@ namespace lsgd {
 // The query as a stage sees it, once per frame before any check.
 struct StageQuery {
   std::int64_t frame;  // its id (== store.size(): stored after the stages ran)
+  // Its gray image; empty when the frame came described (Detector::
+  // process(const FrameDescription&)): begin_described() has its record instead.
   const GrayImage& gray;
   const FrameStore& store;
   DescriptorView descriptor;  // as stored
+  int width = 0;   // the frame's size (also when gray is empty)
+  int height = 0;
 };
 
 // One stage's verdict on one candidate.
@@ -83,6 +87,26 @@ class VerificationStage : public Stateful {
   // that cannot.
   virtual bool answers_queries() const { return !has_state(); }
   virtual void discard(std::int64_t query) { (void)query; }
+
+  // A frame described apart from the map (Detector::describe_frame(): a
+  // robot describes its frames, the map's process takes the descriptions).
+  // describes(): the stage takes such frames; what begin() needs of the
+  // image, describe() writes into the frame's record, and begin_described()
+  // reads it back (with query.gray empty). Detector::process() and query()
+  // of a FrameDescription refuse (InvalidArgument naming the stage) a stage
+  // that does not describe. By default a stage does not: an application's
+  // begin() may read the image.
+  virtual bool describes() const { return false; }
+  // Writes what begin() would take from `gray` (nothing by default); changes nothing.
+  virtual void describe(const GrayImage& gray, StateWriter& out) const { (void)gray, (void)out; }
+  // Checks a record describe() wrote (InvalidArgument "<what>: ..." for one
+  // begin_described() cannot take), before the frame changes anything.
+  virtual void check_description(StateReader record) const { record.finish(); }
+  // begin() of a described frame, from its checked record.
+  virtual void begin_described(const StageQuery& query, StateReader record) {
+    record.finish();
+    begin(query);
+  }
 };
 
 // A registered stage.

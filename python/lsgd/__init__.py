@@ -23,6 +23,7 @@ from ._lsgd import (  # noqa: F401
     Detector,
     Error,
     FormatError,
+    FrameDescription,
     GroundTruth,
     InvalidArgument,
     IoError,

@@ -93,7 +93,8 @@ def test_a_failing_cell_is_named_with_its_worker(route, client, tmp_path):  # no
     (folder / "groundtruth.txt").write_text("2 0\n")
     for name in names:
         os.remove(name)
-    with pytest.raises(lsgd.Error, match=r"\[1/2\] gone search.mode=exhaustive.*(skipped|read).*on worker"):
+    # The cells run at once on the two workers: the first to fail is raised.
+    with pytest.raises(lsgd.Error, match=r"\[[12]/2\] gone search.mode=(exhaustive|nodes): .*skipped.*on worker"):
         lsgd.sweep(["gone=%s,1" % folder], ["search.mode=exhaustive,nodes"], client=client)
     local = None
     with pytest.raises(lsgd.Error) as local:
@@ -108,3 +109,29 @@ def test_a_worker_with_another_build_is_refused(route):  # noqa: F811
         _dask._run_cell(cell["dataset_spec"], cell["options"], cell["label"], False, "0123abc")
     row = _dask._run_cell(cell["dataset_spec"], cell["options"], cell["label"], False, lsgd.__commit__)
     assert row["metrics"].recall_at_1 == lsgd.sweep(["route=%s,10" % route])[0]["metrics"].recall_at_1
+
+
+def _describe(options, path):
+    """A robot: describes one of its frames (on a worker)."""
+    return lsgd.Detector(options).describe_frame(lsgd.read_image(path))
+
+
+def test_robots_describe_on_workers_and_the_map_stores(route, client):  # noqa: F811
+    # Frames described in the workers' processes travel back pickled, and the
+    # map here gives the Results of the images (issue 34: robots describe
+    # their frames locally and send the compact descriptor).
+    import sys
+    import cloudpickle
+    cloudpickle.register_pickle_by_value(sys.modules[__name__])  # workers cannot import this file
+    options = {"search.min_gap": 10, "descriptor.storage": "compact"}
+    images = lsgd.open_sequence(os.path.join(route, "sequence.txt"))
+    with distributed.get_task_stream(client) as stream:
+        described = client.gather(client.map(_describe, [options] * len(images), images))
+    assert len([t for t in stream.data if t["key"].startswith("_describe")]) == len(images)
+    reference, map_ = lsgd.Detector(options), lsgd.Detector(options)
+    for path, d in zip(images, described):
+        expected = reference.process(lsgd.read_image(path))
+        got = map_.process(d)
+        assert (got.loop, got.best.frame, [c.frame for c in got.candidates]) == (
+            expected.loop, expected.best.frame, [c.frame for c in expected.candidates])
+    assert reference.size == map_.size == len(images)

@@ -22,6 +22,19 @@ class GeometricStage final : public VerificationStage {
   bool answers_queries() const override { return true; }
   void discard(std::int64_t) override { verifier_.remove_last(); }
 
+  // A described frame's record is its features, as save_frame() writes them.
+  bool describes() const override { return true; }
+  void describe(const GrayImage& gray, StateWriter& out) const override {
+    verifier_.compute(gray, points_, orb_);
+    out.put_f32s(points_.data(), points_.size());
+    out.put_bytes(orb_.data(), orb_.size());
+  }
+  void check_description(StateReader in) const override { check_features(in); }
+  void begin_described(const StageQuery& query, StateReader in) override {
+    read(in);
+    verifier_.add_features(points_, orb_, query.width, query.height);
+  }
+
   StageCheck check(std::int64_t query, const Candidate& candidate) override {
     const GeometricCheck c = verifier_.verify(query, candidate.frame);
     return {c.accepted, static_cast<double>(c.inliers), c.reason, c.ms, c.geometry};
@@ -38,19 +51,11 @@ class GeometricStage final : public VerificationStage {
   void check_frame(std::int64_t frame, int, int, std::uint32_t version,
                    StateReader in) const override {
     check_state_version(in.what(), name(), version, 1);
-    if (!in.present()) internal::throw_invalid(in.what(), ": there is no record of its features");
-    if (in.remaining() % kFeatureBytes != 0) {
-      internal::throw_invalid(in.what(), ": ", in.remaining(), " bytes of features are not a "
-                              "multiple of ", kFeatureBytes);
-    }
     if (frame != verifier_.size()) {
       internal::throw_invalid(in.what(), ": frame ", frame, " restored after ", verifier_.size(),
                               " frames");
     }
-    read(in);
-    if (!std::all_of(points_.begin(), points_.end(), [](float v) { return std::isfinite(v); })) {
-      internal::throw_invalid(in.what(), ": a keypoint coordinate is not finite");
-    }
+    check_features(in);
   }
   void restore_frame(std::int64_t, int width, int height, std::uint32_t, StateReader in) override {
     read(in);
@@ -69,6 +74,19 @@ class GeometricStage final : public VerificationStage {
     const std::uint8_t* orb = in.get_bytes(n * kOrbBytes);
     orb_.assign(orb, orb + n * kOrbBytes);
     in.finish();
+  }
+
+  // A record of features (a stored frame's or a description's) add_features() takes.
+  void check_features(StateReader& in) const {
+    if (!in.present()) internal::throw_invalid(in.what(), ": there is no record of its features");
+    if (in.remaining() % kFeatureBytes != 0) {
+      internal::throw_invalid(in.what(), ": ", in.remaining(), " bytes of features are not a "
+                              "multiple of ", kFeatureBytes);
+    }
+    read(in);
+    if (!std::all_of(points_.begin(), points_.end(), [](float v) { return std::isfinite(v); })) {
+      internal::throw_invalid(in.what(), ": a keypoint coordinate is not finite");
+    }
   }
 
   GeometricVerifier verifier_;

@@ -73,6 +73,8 @@ class TemporalStage final : public VerificationStage {
   explicit TemporalStage(const TemporalOptions& options) : verifier_(options) {}
   const char* name() const override { return kTemporalStage; }
   Role role() const override { return Role::kGate; }
+  // begin() reads nothing of the image: a described frame needs no record.
+  bool describes() const override { return true; }
   bool has_state() const override { return true; }
   bool examines() const override { return verifier_.options().agree > 0; }
 

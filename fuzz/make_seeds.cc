@@ -93,7 +93,22 @@ int main(int argc, char** argv) {
     return 2;
   }
   const fs::path out = argv[1];
-  for (const char* d : {"config", "pairs", "gt", "db"}) fs::create_directories(out / d);
+  for (const char* d : {"config", "pairs", "gt", "db", "description"}) fs::create_directories(out / d);
+  // description: frames described under fuzz_description's options (and one compact, refused).
+  for (const char* storage : {"exact", "compact"}) {
+    lsgd::DetectorOptions options;
+    options.segmentation.superpixel_size = 8;
+    options.search.min_gap = 1;
+    options.descriptor.storage = lsgd::parse_histogram_storage(storage);
+    lsgd::Detector detector(options);
+    for (int i = 0; i < (storage[0] == 'e' ? 2 : 1); ++i) {
+      cv::Mat frame(48, 64, CV_8UC1);
+      cv::randu(frame, 0, 255);
+      const std::vector<std::uint8_t> bytes = lsgd::encode_frame_description(detector.describe_frame(frame));
+      put(out / "description" / (std::string(storage) + std::to_string(i)),
+          std::string(bytes.begin(), bytes.end()));
+    }
+  }
   put(out / "db" / "temporal", db_bytes(out / "scratch.db", "temporal", 4));
   put(out / "db" / "none", db_bytes(out / "scratch.db", "none", 2));
   put(out / "db" / "geometric", db_bytes(out / "scratch.db", "temporal,geometric", 3));

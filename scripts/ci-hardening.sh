@@ -41,7 +41,7 @@ cmake -S . -B build-fuzz -DCMAKE_CXX_COMPILER=clang++ -DCMAKE_BUILD_TYPE=RelWith
 cmake --build build-fuzz -j"$jobs"
 
 status=0
-for target in config pairs gt db; do
+for target in config pairs gt db description; do
   corpus=build-fuzz/fuzz/corpus/$target
   artifacts=build-fuzz/fuzz/artifacts/$target/
   mkdir -p "$corpus" "$artifacts"
@@ -49,6 +49,8 @@ for target in config pairs gt db; do
   # Databases are bigger (seeds 40-100 KB) and slower to open: longer inputs, fewer runs.
   max_len=8192 runs=$fuzz_runs
   if [ "$target" = db ]; then max_len=131072 runs=$((fuzz_runs / 3)); fi
+  # A description carries ~500 ORB keypoints (~20 KB; the seeds are 22-30 KB).
+  if [ "$target" = description ]; then max_len=65536; fi
   echo "ci-hardening: fuzz_$target, $runs inputs"
   # New inputs go to corpus/ (kept between runs of the same build dir); seeds are read only.
   # matio (Debian 1.5.23) allocates what a corrupt .mat header claims before

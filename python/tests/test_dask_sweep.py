@@ -66,6 +66,10 @@ def test_rows_on_a_cluster_equal_the_local_sweep(route, client):  # noqa: F811
     # Each cell ran as a task on the workers.
     tasks = [t for t in stream.data if t["key"].startswith("lsgd-sweep-")]
     assert len(tasks) == 12 and {t["worker"] for t in tasks} <= set(client.scheduler_info()["workers"])
+    # Without sets: one evaluation per dataset (lsgd eval's), on the cluster.
+    evaluations = lsgd.sweep(datasets, client=client)
+    assert [r["dataset"] for r in evaluations] == ["route", "again"]
+    assert plain(evaluations) == plain(lsgd.sweep(datasets))
 
 
 def test_the_grid_is_checked_before_any_task(route, client):  # noqa: F811

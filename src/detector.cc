@@ -102,8 +102,8 @@ SequenceOptions sequence_options(const VerificationOptions& v) {
 
 Detector::Detector(const DetectorOptions& options)
     : options_(options),
-      describing_key_((options.check(), describing_options_key(options))),
-      segmenter_((options.check(), options.segmentation)),
+      describing_key_((options.check(), describing_options_key(options))),  // validated first
+      segmenter_(options.segmentation),
       search_(make_search(options.search)),
       evidence_(sequence_options(options.verification), options.search.min_gap,
                 !search_->scores_every_frame(), kExactStatisticsCandidates,
@@ -162,12 +162,15 @@ Descriptor Detector::describe(const ImageView& frame) {
   return describe_gray();
 }
 
-Descriptor Detector::describe_gray() {
-  if (store_.size() > 0 && (gray_.width != width_ || gray_.height != height_)) {
-    internal::throw_invalid("the frame is ", gray_.width, "x", gray_.height,
-                            " but the stored frames are ", width_, "x", height_,
-                            ": every frame must have the same size");
+void Detector::check_size(int width, int height) const {
+  if (store_.size() > 0 && (width != width_ || height != height_)) {
+    internal::throw_invalid("the frame is ", width, "x", height, " but the stored frames are ",
+                            width_, "x", height_, ": every frame must have the same size");
   }
+}
+
+Descriptor Detector::describe_gray() {
+  check_size(gray_.width, gray_.height);
   segment_and_describe(segmenter_, gray_, segmentation_, exact_, describe_scratch_);
   if (options_.descriptor.storage == HistogramStorage::kCompact) {
     Descriptor out;
@@ -234,11 +237,7 @@ double Detector::similarity(std::int64_t a, std::int64_t b) const {
 
 Result Detector::process_gray(double convert_ms, std::int64_t start_ns, bool store, std::int64_t id,
                                double stamp) {
-  if (store_.size() > 0 && (gray_.width != width_ || gray_.height != height_)) {
-    internal::throw_invalid("the frame is ", gray_.width, "x", gray_.height,
-                            " but the first frame was ", width_, "x", height_,
-                            ": every frame must have the same size");
-  }
+  check_size(gray_.width, gray_.height);
   Result result;
   result.frame = store_.size();
   result.id = id;

@@ -195,11 +195,7 @@ FrameDescription Detector::describe_image(const Image& frame) {
   std::int64_t t = now_ns();
   to_gray(frame, gray_);
   out.convert_ms = ms_since(t);
-  if (store_.size() > 0 && (gray_.width != width_ || gray_.height != height_)) {
-    internal::throw_invalid("the frame is ", gray_.width, "x", gray_.height,
-                            " but the stored frames are ", width_, "x", height_,
-                            ": every frame must have the same size");
-  }
+  check_size(gray_.width, gray_.height);
   out.width = gray_.width;
   out.height = gray_.height;
   out.options_key = describing_key_;
@@ -234,11 +230,7 @@ void Detector::check_description(const FrameDescription& frame) const {
   if (frame.width <= 0 || frame.height <= 0) {
     internal::throw_invalid("the described frame's size ", frame.width, "x", frame.height);
   }
-  if (store_.size() > 0 && (frame.width != width_ || frame.height != height_)) {
-    internal::throw_invalid("the frame is ", frame.width, "x", frame.height,
-                            " but the first frame was ", width_, "x", height_,
-                            ": every frame must have the same size");
-  }
+  check_size(frame.width, frame.height);
   const Descriptor& x = frame.descriptor;
   const GridSize grid = grid_size(frame.width, frame.height, options_.segmentation.superpixel_size);
   if (x.storage != options_.descriptor.storage || x.grid.rows != grid.rows || x.grid.cols != grid.cols) {

@@ -123,7 +123,8 @@ struct FrameDescription {
   std::vector<std::string> stages;
   std::vector<std::vector<std::uint8_t>> records;
   // What describing took: convert, segment and describe (the histograms'
-  // encoding and the stages' records); Result::timings reports them.
+  // encoding and the stages' records); Result::timings reports them, and
+  // its total_ms is the describing plus the process() or query() call.
   double convert_ms = 0;
   double segment_ms = 0;
   double describe_ms = 0;
@@ -294,6 +295,8 @@ class Detector {
   template <typename Image>
   FrameDescription describe_image(const Image& frame);
   void check_description(const FrameDescription& frame) const;
+  // InvalidArgument unless a width x height frame fits the stored frames' size.
+  void check_size(int width, int height) const;
   void check_stages_describe(const char* call) const;
   // The id a frame given `id` gets (-1: the one after the last); InvalidArgument
   // for one not above the last or a stamp that is infinite.

@@ -13,7 +13,9 @@
 #include "lsgd/eval/distractors.h"
 #include "lsgd/eval/results_csv.h"
 #include "lsgd/io/files.h"
+#include "lsgd/image.h"
 #include "lsgd/options.h"
+#include "lsgd/places.h"
 #include "lsgd/similarity.h"
 
 namespace lsgd::python {
@@ -120,6 +122,25 @@ void bind_descriptor(py::module_& m) {
           return lsgd::similarity(a.view(), b.view(), lsgd::parse_similarity_metric(metric.c_str()));
         }, py::arg("a"), py::arg("b"), py::arg("metric") = std::string(lsgd::to_string(lsgd::SimilarityOptions{}.metric)),
         "Similarity of two descriptors (the detector's similarity.metric by default).");
+  m.def("place_signature", [](py::array image) {
+          lsgd::GrayImage gray;
+          lsgd::to_gray(image_view(image), gray);
+          const std::vector<std::uint8_t> s = lsgd::place_signature(gray);
+          return py::bytes(reinterpret_cast<const char*>(s.data()), s.size());
+        }, py::arg("image"),
+        "The frame's place signature (lsgd/places.h): 4 x 4 cells x 8 gradient orientations of "
+        "the frame at 160 x 120, 128 bytes; what verification.temporal.place_cut finds places by.");
+  m.def("signature_similarity", [](const py::bytes& a, const py::bytes& b) {
+          const std::string x = a, y = b;
+          if (x.size() != lsgd::kSignatureBytes || y.size() != lsgd::kSignatureBytes) {
+            throw lsgd::InvalidArgument("signature_similarity: signatures of " + std::to_string(x.size()) +
+                                        " and " + std::to_string(y.size()) + " bytes, expected " +
+                                        std::to_string(lsgd::kSignatureBytes));
+          }
+          return lsgd::signature_similarity(reinterpret_cast<const std::uint8_t*>(x.data()),
+                                            reinterpret_cast<const std::uint8_t*>(y.data()));
+        }, py::arg("a"), py::arg("b"),
+        "Similarity of two place signatures: 1 - half the mean L1 distance of their cells.");
   m.def("make_distractor", [](const lsgd::Descriptor& base, std::int64_t k, std::int64_t run,
                              const std::string& storage) {
           lsgd::Descriptor exact, out;

@@ -123,6 +123,9 @@ void bind_detector_state(DetectorClass& detector) {
       .def_property_readonly("size", &lsgd::Detector::size)
       .def("__len__", &lsgd::Detector::size)
       .def_property_readonly("nodes", &lsgd::Detector::nodes)
+      .def_property_readonly("place_starts", &lsgd::Detector::place_starts,
+                             "the first frames of the places found after the first "
+                             "(verification.temporal.place_cut), ascending")
       .def_property_readonly("options", [](const lsgd::Detector& d) { return options_dict(d.options()); })
       .def("describe",
            [](lsgd::Detector& d, py::array image) {

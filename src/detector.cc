@@ -110,7 +110,10 @@ Detector::Detector(const DetectorOptions& options)
                 search_->scores_every_frame_up_to()),
       query_evidence_(evidence_),
       stages_(make_stages(options.verification)),
-      decision_(options.decision) {
+      decision_(options.decision),
+      place_cuts_(options.verification.has(kTemporalStage)
+                      ? options.verification.temporal_options.place_cut
+                      : 0.0) {
   for (const auto& stage : stages_) stage_list_.push_back(stage.get());
 }
 
@@ -256,6 +259,7 @@ Result Detector::process_gray(double convert_ms, std::int64_t start_ns, bool sto
   } else {
     std::swap(exact_, descriptor_);  // descriptor_ is the frame's descriptor as stored
   }
+  if (place_cuts_.enabled()) signature_ = place_signature(gray_);
   result.timings.describe_ms = ms_since(t);
   return process_described(std::move(result), start_ns, store, nullptr, gray_.width, gray_.height);
 }
@@ -272,7 +276,10 @@ Result Detector::process_described(Result result, std::int64_t start_ns, bool st
   result.timings.insert_ms = outcome.insert_ms;
   // After a restore the evidence is recomputed from the stored frames first.
   const std::int64_t evidence_start = now_ns();
-  if (evidence_.last_query() != result.frame - 1) evidence_.rebuild(store_, metric);
+  if (evidence_.last_query() != result.frame - 1) {
+    evidence_.set_places(place_cuts_.cuts());
+    evidence_.rebuild(store_, metric);
+  }
   // A query that is not stored adds itself to a copy of the evidence: its
   // rows, sums and cached terms (kept by query id) stay out of the map's.
   if (!store) query_evidence_ = evidence_;
@@ -298,6 +305,12 @@ Result Detector::process_described(Result result, std::int64_t start_ns, bool st
   // gets a new one rather than an error.
   store_.add(descriptor_, std::clamp<std::int64_t>(result.node, 0, store_.groups()));
   search_->end(result.frame, places_);
+  // A new place found (kPlaceBlock + 1 frames late): the kept rows are
+  // recomputed with each candidate's place, as a restored map computes them.
+  if (place_cuts_.add(result.frame, signature_) >= 0) {
+    evidence_.set_places(place_cuts_.cuts());
+    evidence_.rebuild(store_, metric);
+  }
   tags_.ids.push_back(result.id);
   tags_.stamps.push_back(result.stamp);
   if (result.frame == 0) width_ = width, height_ = height;
@@ -408,7 +421,11 @@ std::int64_t estimated_map_bytes(const DetectorOptions& options, std::int64_t fr
   const auto descriptor =
       static_cast<std::int64_t>(Descriptor::bytes_per_frame(options.descriptor.storage, cells));
   const std::int64_t extra = mode.bytes_per_frame != nullptr ? mode.bytes_per_frame(options, cells) : 0;
-  return frames * (descriptor + extra);
+  // The place signatures, with their contrast and cut found (places.h).
+  const bool places = options.verification.has(kTemporalStage) &&
+                      options.verification.temporal_options.place_cut > 0;
+  const std::int64_t signature = places ? kPlaceBytesPerFrame : 0;
+  return frames * (descriptor + extra + signature);
 }
 
 }  // namespace lsgd

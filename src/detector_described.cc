@@ -16,7 +16,7 @@ using internal::now_ns;
 namespace {
 
 constexpr std::uint8_t kMagic[8] = {'L', 'S', 'G', 'D', 'F', 'R', 'M', 'D'};
-constexpr std::int64_t kVersion = 1;
+constexpr std::int64_t kVersion = 2;  // 2: the place signature (1 read as without)
 
 bool describing_option(const std::string& name) {
   for (const char* prefix : {"segmentation.", "descriptor.", "verification."}) {
@@ -84,6 +84,8 @@ std::vector<std::uint8_t> encode_frame_description(const FrameDescription& d) {
     out.put_i64(static_cast<std::int64_t>(d.records[k].size()));
     out.put_bytes(d.records[k].data(), d.records[k].size());
   }
+  out.put_i64(static_cast<std::int64_t>(d.signature.size()));
+  out.put_bytes(d.signature.data(), d.signature.size());
   return out.take();
 }
 
@@ -106,8 +108,8 @@ FrameDescription decode(StateReader& in) {
     throw FormatError("frame description: the bytes do not start with its mark (LSGDFRMD)");
   }
   const std::int64_t version = in.get_i64();
-  if (version != kVersion) {
-    throw FormatError(internal::concat("frame description: version ", version, ", this lsgd reads ",
+  if (version != 1 && version != kVersion) {
+    throw FormatError(internal::concat("frame description: version ", version, ", this lsgd reads 1 to ",
                                        kVersion));
   }
   const std::int64_t width = in.get_i64(), height = in.get_i64();
@@ -156,6 +158,11 @@ FrameDescription decode(StateReader& in) {
     const std::size_t m = count_of(in, 1, "stage record length");
     const std::uint8_t* record = in.get_bytes(m);
     d.records.emplace_back(record, record + m);
+  }
+  if (version >= 2) {
+    const std::size_t n = count_of(in, 1, "signature length");
+    const std::uint8_t* signature = in.get_bytes(n);
+    d.signature.assign(signature, signature + n);
   }
   in.finish();
   try {
@@ -214,6 +221,7 @@ FrameDescription Detector::describe_image(const Image& frame) {
     out.stages.emplace_back(stage->name());
     out.records.push_back(record.take());
   }
+  if (place_cuts_.enabled()) out.signature = place_signature(gray_);
   out.describe_ms = ms_since(t);
   return out;
 }
@@ -240,6 +248,12 @@ void Detector::check_description(const FrameDescription& frame) const {
                             " of a ", frame.width, "x", frame.height, " frame");
   }
   x.check_consistent("the described frame's descriptor");
+  const std::size_t signature = place_cuts_.enabled() ? static_cast<std::size_t>(kSignatureBytes) : 0;
+  if (frame.signature.size() != signature) {
+    internal::throw_invalid("the frame description has a place signature of ", frame.signature.size(),
+                            " bytes; this detector takes ", signature,
+                            " (verification.temporal.place_cut)");
+  }
   if (frame.stages.size() != stages_.size() || frame.records.size() != stages_.size()) {
     internal::throw_invalid("the frame description has ", frame.stages.size(), " stages and ",
                             frame.records.size(), " records; this detector runs ", stages_.size());
@@ -270,6 +284,7 @@ Result Detector::run_described(const FrameDescription& frame, bool store, std::i
   result.timings.segment_ms = frame.segment_ms;
   result.timings.describe_ms = frame.describe_ms;
   descriptor_ = frame.descriptor;
+  signature_ = frame.signature;
   Result out = process_described(std::move(result), start, store, &frame, frame.width, frame.height);
   // The whole frame's work, wherever it ran: describing and this call.
   out.timings.total_ms += frame.convert_ms + frame.segment_ms + frame.describe_ms;

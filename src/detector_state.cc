@@ -78,6 +78,7 @@ std::int64_t Detector::forget(std::int64_t first_id, std::int64_t last_id) {
   std::swap(stages_, kept->stages_);
   std::swap(stage_list_, kept->stage_list_);
   std::swap(decision_, kept->decision_);
+  std::swap(place_cuts_, kept->place_cuts_);
   std::swap(tags_, kept->tags_);
   return forgotten;
 }
@@ -133,6 +134,7 @@ std::vector<Stateful*> Detector::stateful() const {
     if (stage->has_state()) out.push_back(stage.get());
   }
   out.push_back(const_cast<LoopDecision*>(&decision_));
+  if (place_cuts_.has_state()) out.push_back(const_cast<PlaceCuts*>(&place_cuts_));
   out.push_back(const_cast<FrameTags*>(&tags_));
   return out;
 }

@@ -13,6 +13,10 @@ namespace {
 constexpr double kZScale = 1024.0;   // fixed point: 1/1024 sigma
 constexpr double kZLimit = 64.0;     // |z| is clamped to 64 sigma
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+// With places, the least standard deviation a place's sequence scores are
+// standardised with, as a share of the whole map's (docs/results.md, "Places
+// found from the frames").
+constexpr double kPlaceSpreadFloor = 0.5;
 // A term not computed yet (quantise() stays within +-kZLimit * kZScale).
 constexpr std::int32_t kUnknownTerm = std::numeric_limits<std::int32_t>::min();
 
@@ -121,12 +125,82 @@ std::int64_t AppearanceEvidence::statistics_stride(std::int64_t query) const {
 }
 
 ScoreStatistics AppearanceEvidence::kept_statistics(std::int64_t query,
-                                                    const std::vector<double>& values) {
+                                                    const std::vector<double>& values,
+                                                    std::vector<ScoreStatistics>& by_place) {
   const auto every = static_cast<std::size_t>(statistics_stride(query) / stride(query));
-  if (every == 1) return statistics(values.data(), values.size());
-  subset_.clear();
-  for (std::size_t k = 0; k < values.size(); k += every) subset_.push_back(values[k]);
-  return statistics(subset_.data(), subset_.size());
+  ScoreStatistics all;
+  if (every == 1) {
+    all = statistics(values.data(), values.size());
+  } else {
+    subset_.clear();
+    for (std::size_t k = 0; k < values.size(); k += every) subset_.push_back(values[k]);
+    all = statistics(subset_.data(), subset_.size());
+  }
+  by_place.clear();
+  if (cuts_.empty()) return all;
+  // Each place's own: the same diagonals, summed by the place of their frame.
+  summaries_.assign(cuts_.size() + 1, StatisticsSummary{});
+  const std::int64_t newest = query - min_gap_ - 1, s = stride(query);
+  for (std::size_t k = 0; k < values.size(); k += every) {
+    summaries_[place_of(newest - static_cast<std::int64_t>(k) * s)].add(values[k]);
+  }
+  for (const StatisticsSummary& summary : summaries_) by_place.push_back(summary.statistics());
+  return all;
+}
+
+void AppearanceEvidence::set_places(const std::vector<std::int64_t>& cuts) {
+  for (std::size_t k = 0; k < cuts.size(); ++k) {
+    if (cuts[k] <= 0 || (k > 0 && cuts[k] <= cuts[k - 1])) {
+      internal::throw_invalid("AppearanceEvidence::set_places: place ", k + 1, " begins at frame ",
+                              cuts[k], ", not after the one before");
+    }
+  }
+  cuts_ = cuts;
+}
+
+std::size_t AppearanceEvidence::place_of(std::int64_t frame) const {
+  return static_cast<std::size_t>(std::upper_bound(cuts_.begin(), cuts_.end(), frame) - cuts_.begin());
+}
+
+const ScoreStatistics& AppearanceEvidence::of_place(const std::vector<ScoreStatistics>& by_place,
+                                                    std::int64_t frame) const {
+  static const ScoreStatistics kNoPlace;
+  const std::size_t p = place_of(frame);
+  return p < by_place.size() ? by_place[p] : kNoPlace;
+}
+
+std::int64_t AppearanceEvidence::place_start(std::int64_t frame) const {
+  const std::size_t p = place_of(frame);
+  return p == 0 ? 0 : cuts_[p - 1];
+}
+
+double AppearanceEvidence::standardise_min(const ScoreStatistics& all,
+                                           const std::vector<ScoreStatistics>& places,
+                                           std::int64_t frame, double value) const {
+  const double z = all.standardise(value);
+  if (cuts_.empty() || places.empty()) return z;
+  const ScoreStatistics& place = of_place(places, frame);
+  return std::min(z, place.valid() ? place.standardise(value) : 0.0);
+}
+
+void AppearanceEvidence::quantise_row(Row& row, const std::vector<double>& values,
+                                      std::size_t every) const {
+  row.z.clear();
+  const std::int64_t newest = row.query - min_gap_ - 1, s = stride(row.query);
+  for (std::size_t k = 0; k < values.size(); k += every) {
+    row.z.push_back(quantise(row.stats, row.places, newest - static_cast<std::int64_t>(k) * s, values[k]));
+  }
+}
+
+double AppearanceEvidence::place_score(std::int64_t frame, double a) const {
+  if (cuts_.empty()) return level2_.standardise(a);
+  const ScoreStatistics& place = of_place(level2_places_, frame);
+  if (!place.valid()) return std::min(0.0, level2_.standardise(a));  // a young place: no score of its own
+  // Above the higher of the place's mean and the map's, in the place's spread
+  // but at least kPlaceSpreadFloor of the map's: a place whose sequences all
+  // score alike (another environment, far from the query) does not make its
+  // small deviations large.
+  return (a - std::max(place.mean, level2_.mean)) / std::max(place.sd, kPlaceSpreadFloor * level2_.sd);
 }
 
 bool AppearanceEvidence::young(std::int64_t query) const {
@@ -146,6 +220,15 @@ std::int64_t AppearanceEvidence::diagonals(std::int64_t query) const {
 std::int32_t AppearanceEvidence::quantise(const ScoreStatistics& stats, double similarity) const {
   if (!stats.valid()) return 0;
   const double z = std::clamp(stats.standardise(similarity), -kZLimit, kZLimit);
+  return static_cast<std::int32_t>(std::lround(z * kZScale));
+}
+
+std::int32_t AppearanceEvidence::quantise(const ScoreStatistics& stats,
+                                          const std::vector<ScoreStatistics>& places,
+                                          std::int64_t frame, double similarity) const {
+  if (!stats.valid()) return 0;
+  if (places.empty()) return quantise(stats, similarity);
+  const double z = std::clamp(standardise_min(stats, places, frame, similarity), -kZLimit, kZLimit);
   return static_cast<std::int32_t>(std::lround(z * kZScale));
 }
 
@@ -230,9 +313,13 @@ void AppearanceEvidence::add_query(const FrameStore& store, const DescriptorView
   diagonal_similarities(store, descriptor, query, metric, row, scratch_);
   // A young query's own statistics are not valid: its row's z stay 0 (no
   // sequence term) and it is scored on the prior alone.
-  const ScoreStatistics own = kept_statistics(query, scratch_);
+  Row r;
+  r.query = query;
+  r.stats = kept_statistics(query, scratch_, r.places);
+  const ScoreStatistics own = r.stats;
   level1_ = young(query) ? prior(scratch_) : own;
   level2_ = ScoreStatistics{};
+  level2_places_.clear();
   scored_.clear();
   // The previous query's carries are this one's (add_query takes the queries in order).
   std::swap(carried_, carrying_);
@@ -251,21 +338,50 @@ void AppearanceEvidence::add_query(const FrameStore& store, const DescriptorView
       for (std::size_t k = 0; k < v.size(); k += every) v[n++] = v[k];
       v.resize(n);
     };
-    for (Row& r : ring_) keep(r.z);
+    for (Row& kept : ring_) keep(kept.z);
     keep(short_sum_);
     keep(long_sum_);
   }
-  Row r;
-  r.query = query;
-  r.stats = own;
-  r.z.resize(scratch_.size());
-  for (std::size_t k = 0; k < scratch_.size(); ++k) r.z[k] = quantise(own, scratch_[k]);
+  quantise_row(r, scratch_, 1);
   push_row(std::move(r));
 
   const std::size_t n = scratch_.size();
   sequence_.resize(n);
   for (std::size_t k = 0; k < n; ++k) sequence_[k] = sequence_mean(short_sum_[k], long_sum_[k]);
-  if (own.valid()) level2_ = kept_statistics(query, sequence_);
+  if (!cuts_.empty()) sums_within_places(query);
+  if (own.valid()) level2_ = kept_statistics(query, sequence_, level2_places_);
+}
+
+void AppearanceEvidence::sums_within_places(std::int64_t query) {
+  const std::int64_t query_start = place_start(query);
+  const std::int64_t newest = query - min_gap_ - 1, s = stride(query);
+  const auto n = static_cast<std::int64_t>(sequence_.size());
+  // Slot k's sums again from the rows, without the pairs across a place.
+  const auto within = [&](std::int64_t k, std::int64_t frame) {
+    const std::int64_t frame_start = place_start(frame);
+    std::int64_t short_sum = 0, long_sum = 0;
+    for (const Row& row : ring_) {
+      const std::int64_t t = query - row.query;
+      if (row.query < query_start || frame - t < frame_start ||
+          k >= static_cast<std::int64_t>(row.z.size())) {
+        continue;
+      }
+      const std::int32_t z = row.z[static_cast<std::size_t>(k)];
+      if (t < options_.frames) short_sum += z;
+      if (options_.long_frames > 0 && t < options_.long_frames) long_sum += z;
+    }
+    sequence_[static_cast<std::size_t>(k)] = sequence_mean(short_sum, long_sum);
+  };
+  if (query - query_start < span_) {  // rows of another place are in the ring: every slot
+    for (std::int64_t k = 0; k < n; ++k) within(k, newest - k * s);
+    return;
+  }
+  // Only the frames less than a sequence after a place's first.
+  for (const std::int64_t c : cuts_) {
+    for (std::int64_t j = c; j < c + span_ - 1 && j <= newest; ++j) {
+      if ((newest - j) % s == 0 && (newest - j) / s < n) within((newest - j) / s, j);
+    }
+  }
 }
 
 double AppearanceEvidence::single_frame(double similarity) const {
@@ -332,9 +448,9 @@ std::size_t AppearanceEvidence::terms(std::int64_t d) {
 
 std::int32_t AppearanceEvidence::term(std::size_t r, const FrameStore& store,
                                       const DescriptorView& view, std::int64_t a, std::int64_t d,
-                                      const ScoreStatistics& stats, SimilarityMetric metric) {
+                                      const Row& row, SimilarityMetric metric) {
   const std::int64_t b = a - d;
-  if (b < 0 || !stats.valid()) return 0;
+  if (b < 0 || !row.stats.valid()) return 0;
   std::int32_t* z = term_z_.data() + r * static_cast<std::size_t>(term_ring_);
   const std::int64_t mask = term_ring_ - 1;
   std::int64_t& newest = term_records_[r].newest;
@@ -346,7 +462,7 @@ std::int32_t AppearanceEvidence::term(std::size_t r, const FrameStore& store,
     newest = a;
   }
   std::int32_t& v = z[a & mask];
-  if (v == kUnknownTerm) v = quantise(stats, similarity(view, store.view(b), metric));
+  if (v == kUnknownTerm) v = quantise(row.stats, row.places, b, similarity(view, store.view(b), metric));
   return v;
 }
 
@@ -373,7 +489,7 @@ double AppearanceEvidence::sequence(const FrameStore& store, const DescriptorVie
                                     std::int64_t frame, SimilarityMetric metric) {
   if (!options_.enabled) internal::throw_invalid("AppearanceEvidence: sequences are off");
   if (!level2_.valid() || level2_.sd <= 0) return kNaN;
-  if (const double* a = scored_.find(frame)) return level2_.standardise(*a);
+  if (const double* a = scored_.find(frame)) return place_score(frame, *a);
   const std::int64_t i = last_query_;
   // On a kept diagonal the sums are already there.
   const std::int64_t d = i - frame, s = stride(i);
@@ -382,23 +498,30 @@ double AppearanceEvidence::sequence(const FrameStore& store, const DescriptorVie
     if (k >= 0 && k < static_cast<std::int64_t>(sequence_.size())) {
       const double a = sequence_[static_cast<std::size_t>(k)];
       scored_.insert(frame, a);
-      return level2_.standardise(a);
+      return place_score(frame, a);
     }
   }
   // Term t of the sequence, z(i - t, frame - t): the query's own (t = 0,
   // kept for the next queries' sequences on this diagonal) or a stored
   // query's (0 when it left the ring or was never calibrated).
   const std::size_t r = terms(d);
+  const std::int64_t query_start = cuts_.empty() ? 0 : place_start(i);
+  const std::int64_t frame_start = cuts_.empty() ? 0 : place_start(frame);
   const auto z = [&](int t) -> std::int32_t {
-    if (t == 0) return term(r, store, descriptor, i, d, ring_.back().stats, metric);
+    if (t == 0) return term(r, store, descriptor, i, d, ring_.back(), metric);
+    // Across a place (with cuts): as a term before the map.
+    if (i - t < query_start || frame - t < frame_start) return 0;
     const Row* row = ring_row(i - t);
-    return row == nullptr ? 0 : term(r, store, store.view(i - t), i - t, d, row->stats, metric);
+    return row == nullptr ? 0 : term(r, store, store.view(i - t), i - t, d, *row, metric);
   };
   const std::int32_t z0 = z(0);
   std::int64_t short_sum = z0;
   std::int64_t long_sum = z0;
   const int steps = std::max(options_.frames, options_.long_frames);
-  if (const Carry* c = carried_.find(d)) {
+  const Carry* c = carried_.find(d);
+  // A carry from the frame or query before a place's first leaves out other pairs.
+  if (!cuts_.empty() && (frame == frame_start || i == query_start)) c = nullptr;
+  if (c != nullptr) {
     // The previous query scored this diagonal: its terms t >= 1 are that
     // sequence's, less its oldest (the same fixed-point values, so the same sums).
     short_sum += c->short_sum;
@@ -416,7 +539,7 @@ double AppearanceEvidence::sequence(const FrameStore& store, const DescriptorVie
   carrying_.insert(d, Carry{short_sum - z(s_last), long_sum - z(l_last)});
   const double a = sequence_mean(short_sum, long_sum);
   scored_.insert(frame, a);
-  return level2_.standardise(a);
+  return place_score(frame, a);
 }
 
 void AppearanceEvidence::rebuild(const FrameStore& store, SimilarityMetric metric) {
@@ -432,6 +555,7 @@ void AppearanceEvidence::rebuild(const FrameStore& store, SimilarityMetric metri
   term_z_.clear();
   term_limit_ = kTermRecords;
   level1_ = level2_ = ScoreStatistics{};
+  level2_places_.clear();
   last_query_ = store.size() - 1;
   // The prior, when the next query is young: every young query's similarities.
   prior_.clear();
@@ -454,10 +578,8 @@ void AppearanceEvidence::rebuild(const FrameStore& store, SimilarityMetric metri
     const std::int64_t ratio = s_last / stride(q);
     Row r;
     r.query = q;
-    r.stats = kept_statistics(q, scratch_);
-    for (std::size_t k = 0; k < scratch_.size(); k += static_cast<std::size_t>(ratio)) {
-      r.z.push_back(quantise(r.stats, scratch_[k]));
-    }
+    r.stats = kept_statistics(q, scratch_, r.places);
+    quantise_row(r, scratch_, static_cast<std::size_t>(ratio));
     ring_.push_back(std::move(r));
   }
   // Sums over the windows ending at the last query.

@@ -1,7 +1,9 @@
 #include "lsgd/evidence.h"
 
 #include <algorithm>
+#include <cmath>
 #include <cstdlib>
+#include <limits>
 #include <utility>
 
 // AppearanceEvidence's places: the best ones of the last query (best_places())
@@ -23,10 +25,20 @@ void AppearanceEvidence::best_places(int top_n, std::vector<Candidate>& out) con
   const std::int64_t n = static_cast<std::int64_t>(sequence_.size());
   const std::int64_t radius = 2 * static_cast<std::int64_t>(options_.tolerance) + 1;
   const std::int64_t newest = last_query_ - min_gap_ - 1;  // frame of slot 0
-  // A place is a local maximum of A within `radius` (ties: the older frame);
-  // two such maxima are never closer than radius + 1.
+  // The score a place is found by: A with one place (R is A standardised
+  // once for all), else R (the lower of its place's and the map's).
+  std::vector<double> by_place;
+  if (!cuts_.empty()) {
+    by_place.resize(sequence_.size());
+    for (std::int64_t k = 0; k < n; ++k) {
+      by_place[static_cast<std::size_t>(k)] = place_score(newest - k, sequence_[static_cast<std::size_t>(k)]);
+    }
+  }
+  const std::vector<double>& score = cuts_.empty() ? sequence_ : by_place;
+  // A place is a local maximum of the score within `radius` (ties: the older
+  // frame); two such maxima are never closer than radius + 1.
   const auto beats = [&](std::int64_t k, std::int64_t m) {
-    const double a = sequence_[static_cast<std::size_t>(k)], b = sequence_[static_cast<std::size_t>(m)];
+    const double a = score[static_cast<std::size_t>(k)], b = score[static_cast<std::size_t>(m)];
     return a != b ? a > b : k > m;  // higher slot = older frame
   };
   for (std::int64_t k = 0; k < n; ++k) {
@@ -34,12 +46,14 @@ void AppearanceEvidence::best_places(int top_n, std::vector<Candidate>& out) con
     for (std::int64_t m = std::max<std::int64_t>(0, k - radius); m <= std::min(n - 1, k + radius) && peak; ++m) {
       if (m != k && beats(m, k)) peak = false;
     }
-    if (peak) out.push_back({newest - k, sequence_[static_cast<std::size_t>(k)]});
+    if (peak) out.push_back({newest - k, score[static_cast<std::size_t>(k)]});
   }
   const std::size_t keep = std::min(out.size(), static_cast<std::size_t>(std::max(top_n, 0)));
   std::partial_sort(out.begin(), out.begin() + static_cast<std::ptrdiff_t>(keep), out.end(), better);
   out.resize(keep);
-  for (Candidate& c : out) c.score = level2_.standardise(c.score);
+  if (cuts_.empty()) {
+    for (Candidate& c : out) c.score = level2_.standardise(c.score);
+  }
 }
 
 

@@ -22,6 +22,9 @@ const OptionTable<TemporalOptions>& TemporalOptions::fields() {
                      "realignment radius of a candidate and slack of the agreement gate"),
       integer_option("agree", &S::agree, 0, 100, "queries",
                      "previous queries that must agree on consecutive places (0: no gate)"),
+      real_option("place_cut", &S::place_cut, 0.0, 1000.0, false, "",
+                  "block contrast of the frames' gradient signatures at which a new place "
+                  "begins, each candidate then scored against its own place (0: one place)"),
   };
   return table;
 }

@@ -287,11 +287,13 @@ TEST(Distractor, MapMemoryIsEstimatedAndCheckedAgainstTheMachine) {
   lsgd::DetectorOptions options;
   options.descriptor.storage = lsgd::HistogramStorage::kCompact;
   // KITTI size (80 cells), compact: 10,240 descriptor bytes; the index adds
-  // its key (16 a cell), 2 M links of 4 bytes and 64 of bookkeeping.
-  EXPECT_EQ(map_bytes("index", 1000, 80, options), 1000 * (10240 + 1280 + 128 + 64));
-  EXPECT_EQ(map_bytes("exhaustive", 1000, 80, options), 1000 * (10240 + 8 * 48));
+  // its key (16 a cell), 2 M links of 4 bytes and 64 of bookkeeping; every
+  // frame its place signature (lsgd::kPlaceBytesPerFrame).
+  const std::int64_t places = lsgd::kPlaceBytesPerFrame;
+  EXPECT_EQ(map_bytes("index", 1000, 80, options), 1000 * (10240 + 1280 + 128 + 64 + places));
+  EXPECT_EQ(map_bytes("exhaustive", 1000, 80, options), 1000 * (10240 + 8 * 48 + places));
   options.descriptor.storage = lsgd::HistogramStorage::kExact;
-  EXPECT_EQ(map_bytes("exhaustive", 1000, 80, options), 1000 * (41280 + 8 * 48));
+  EXPECT_EQ(map_bytes("exhaustive", 1000, 80, options), 1000 * (41280 + 8 * 48 + places));
   options.verification.stages = {};
   EXPECT_EQ(map_bytes("exhaustive", 2, 80, options), 2 * (41280 + 8));
 

@@ -80,6 +80,7 @@ std::string older_database(int format) {
     DetectorOptions o = options(kExhaustiveSearch, "temporal,geometric");
     o.search.min_gap = 2;
     o.verification.geometric_options.max_features = 32;
+    o.verification.temporal_options.place_cut = 0;  // formats 1 to 3 predate the places' records
     Database db = Database::create(path, o);
     Detector d(o);
     run(d, 0, 12);
@@ -232,6 +233,7 @@ TEST(Database, Format3IsReadAsTheComponentsRecordsAndUpgradedInPlace) {
   DetectorOptions o = options(kExhaustiveSearch, "temporal,geometric");
   o.search.min_gap = 2;
   o.verification.geometric_options.max_features = 32;
+  o.verification.temporal_options.place_cut = 0;  // as older_database()
   Detector fresh(o);
   run(fresh, 0, 12);
   {

@@ -110,8 +110,8 @@ TEST(DescribedFrames, DamagedBytesAreFormatErrors) {
   EXPECT_NE(message_of<FormatError>([&] { decode_frame_description(other.data(), other.size()); }).find("mark"),
             std::string::npos);
   other = bytes;
-  other[8] = 2;  // version 2
-  EXPECT_NE(message_of<FormatError>([&] { decode_frame_description(other.data(), other.size()); }).find("version 2"),
+  other[8] = 3;  // version 3
+  EXPECT_NE(message_of<FormatError>([&] { decode_frame_description(other.data(), other.size()); }).find("version 3"),
             std::string::npos);
   // A huge count in the header asks for nothing beyond the bytes given.
   for (std::size_t at = 8; at < 120; ++at) {

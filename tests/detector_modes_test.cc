@@ -132,7 +132,9 @@ TEST(SearchModes, ARegisteredModeRunsInTheDetectorThroughTheInterfaceAlone) {
 TEST(SearchModes, EstimatedMapBytesAddTheModesOwnMemoryModel) {
   register_test_modes();
   DetectorOptions o;
-  const std::int64_t exact = static_cast<std::int64_t>(Descriptor::bytes_per_frame(HistogramStorage::kExact, 80));
+  // Each frame's place signature too (verification.temporal.place_cut).
+  const std::int64_t exact =
+      static_cast<std::int64_t>(Descriptor::bytes_per_frame(HistogramStorage::kExact, 80)) + kPlaceBytesPerFrame;
   o.search.mode = kExhaustiveSearch;
   EXPECT_EQ(estimated_map_bytes(o, 1000, 80), 1000 * (exact + 8 * 48));
   o.search.mode = kNodesSearch;
@@ -143,6 +145,8 @@ TEST(SearchModes, EstimatedMapBytesAddTheModesOwnMemoryModel) {
   EXPECT_EQ(estimated_map_bytes(o, 1000, 80), 1000 * (exact + 8 + 160));
   o.search.mode = "test-copy";  // no model: the descriptors alone
   EXPECT_EQ(estimated_map_bytes(o, 10, 80), 10 * exact);
+  o.verification.temporal_options.place_cut = 0;  // no places: no signatures
+  EXPECT_EQ(estimated_map_bytes(o, 10, 80), 10 * (exact - kPlaceBytesPerFrame));
   o.search.mode = "no-such-mode";
   EXPECT_THROW(estimated_map_bytes(o, 10, 80), InvalidArgument);
 }

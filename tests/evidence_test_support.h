@@ -43,6 +43,13 @@ struct Reference {
   SequenceOptions options;
   bool sample;
   AppearanceEvidence stride_of{{}, 0, false};  // only for stride() / statistics_stride()
+  // The places' first frames after the first (AppearanceEvidence::set_places).
+  std::vector<std::int64_t> cuts;
+  std::int64_t start_of(std::int64_t f) const {
+    std::int64_t s = 0;
+    for (const std::int64_t c : cuts) s = f >= c ? c : s;
+    return s;
+  }
 
   Reference(std::vector<Descriptor> f, std::int64_t w, SequenceOptions o, bool s,
             std::int64_t exact = kExactStatisticsCandidates)
@@ -65,19 +72,33 @@ struct Reference {
     return level1_of[q] = statistics(v.data(), v.size());
   }
   mutable std::map<std::int64_t, ScoreStatistics> level1_of;  // level1(), computed once
+  // Query q's level 1 over the candidates in the place that begins at `start`.
+  ScoreStatistics level1_place(std::int64_t q, std::int64_t start) const {
+    std::vector<double> v;
+    for (std::int64_t j : sampled(q)) {
+      if (start_of(j) == start) v.push_back(sim(q, j));
+    }
+    return statistics(v.data(), v.size());
+  }
   std::int64_t z(std::int64_t a, std::int64_t b) const {
     if (a < 0 || b < 0) return 0;
     const ScoreStatistics s = level1(a);
     if (!s.valid()) return 0;
-    const double v = std::clamp(s.standardise(sim(a, b)), -64.0, 64.0);
-    return std::lround(v * kScale);
+    double v = s.standardise(sim(a, b));
+    if (!cuts.empty()) {  // the lower of the map's and the place's (0: a young place)
+      const ScoreStatistics p = level1_place(a, start_of(b));
+      v = std::min(v, p.valid() ? p.standardise(sim(a, b)) : 0.0);
+    }
+    return std::lround(std::clamp(v, -64.0, 64.0) * kScale);
   }
   // A(q, j): terms that do not exist count as 0, the divisor is the full length.
   double sequence_mean(std::int64_t q, std::int64_t j) const {
     std::int64_t a = 0, b = 0;
     const int steps = std::max(options.frames, options.long_frames);
     for (int t = 0; t < steps; ++t) {
-      const std::int64_t v = z(q - t, j - t);
+      // With places, a pair before the place of either end counts 0.
+      const bool across = q - t < start_of(q) || j - t < start_of(j);
+      const std::int64_t v = across ? 0 : z(q - t, j - t);
       if (t < options.frames) a += v;
       b += v;
     }
@@ -96,7 +117,15 @@ struct Reference {
     }
     const ScoreStatistics& s = it->second;
     if (!s.valid()) return std::numeric_limits<double>::quiet_NaN();
-    return s.standardise(sequence_mean(q, j));
+    const double a = sequence_mean(q, j);
+    if (cuts.empty()) return s.standardise(a);
+    std::vector<double> mine;
+    for (std::int64_t f : sampled(q)) {
+      if (start_of(f) == start_of(j)) mine.push_back(sequence_mean(q, f));
+    }
+    const ScoreStatistics p = statistics(mine.data(), mine.size());
+    if (!p.valid()) return std::min(0.0, s.standardise(a));
+    return (a - std::max(p.mean, s.mean)) / std::max(p.sd, 0.5 * s.sd);
   }
   mutable std::map<std::int64_t, ScoreStatistics> level2_of;  // evidence(), computed once
 };

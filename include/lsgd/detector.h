@@ -15,6 +15,7 @@
 #include "lsgd/evidence.h"
 #include "lsgd/frame_store.h"
 #include "lsgd/image.h"
+#include "lsgd/places.h"
 #include "lsgd/search.h"
 #include "lsgd/segmentation.h"
 #include "lsgd/similarity.h"
@@ -122,6 +123,9 @@ struct FrameDescription {
   // the order of verification.stages, named.
   std::vector<std::string> stages;
   std::vector<std::vector<std::uint8_t>> records;
+  // The frame's place signature (lsgd/places.h), with
+  // verification.temporal.place_cut on; empty otherwise.
+  std::vector<std::uint8_t> signature;
   // What describing took: convert, segment and describe (the histograms'
   // encoding and the stages' records); Result::timings reports them, and
   // its total_ms is the describing plus the process() or query() call.
@@ -252,6 +256,10 @@ class Detector {
   const VerificationStage* stage(const std::string& name) const;
   // The decision's state after the last frame (the loop declared for it).
   const ContinuityState& continuity() const { return decision_.continuity(); }
+  // The first frames of the places found after the first, ascending
+  // (verification.temporal.place_cut; lsgd/places.h): each is found
+  // kPlaceBlock + 1 frames after it. Empty with place_cut 0.
+  const std::vector<std::int64_t>& place_starts() const { return place_cuts_.cuts(); }
 
   // ---- Persistence (lsgd::io::Database): a stored frame is its descriptor
   // plus the per-frame state of every component that keeps state (the search
@@ -327,6 +335,8 @@ class Detector {
   std::vector<std::unique_ptr<VerificationStage>> stages_;  // made from options_.verification
   std::vector<VerificationStage*> stage_list_;              // the same, for the decision
   LoopDecision decision_;
+  PlaceCuts place_cuts_;                // verification.temporal.place_cut
+  std::vector<std::uint8_t> signature_;  // the frame's place signature (with place_cut)
   // The caller's id and time stamp of every stored frame, kept with the
   // frame's state as the component "frame" (record version 1: id int64,
   // stamp float64; a frame saved without it gets the id the database row

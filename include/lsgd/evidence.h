@@ -40,6 +40,21 @@
 // All sums are exact: z is kept in fixed point (1/1024 sigma), so a detector
 // restored from a database (which recomputes the last long_frames queries'
 // rows from the stored descriptors) scores exactly as one that never stopped.
+//
+// Places (set_places(); places.h finds them): in a map of several places a
+// candidate must stand out from its own place and from the whole map. At
+// level 1, z is the lower of the two standardisations (the query's
+// statistics over the candidates of j's place, and over all); at level 2, R
+// is A less the higher of the place's mean and the map's, over the place's
+// standard deviation but at least half the map's. A place with fewer than
+// kMinCalibration candidates has no statistics of its own: it counts 0 there
+// (no null to stand out from). A sequence's terms stay within
+// the places of its two ends: z(i - t, j - t) counts 0 when frame j - t lies
+// before the place of j or query i - t before the place of i (as a frame
+// before the map). The whole map's statistics stay what
+// similarity_statistics(), sequence_statistics() and single_frame() give.
+// With one place (no cut) every score is the one of a map without places,
+// bit for bit. docs/results.md, "Places found from the frames".
 #pragma once
 
 #include <cstddef>
@@ -142,8 +157,16 @@ class AppearanceEvidence {
   void add_query(const FrameStore& store, const DescriptorView& descriptor, std::int64_t query,
                  SimilarityMetric metric, const std::vector<double>* row);
 
+  // The first frames of the places after the first (ascending, from
+  // PlaceCuts::cuts()). The rows kept are not recomputed: rebuild() after a
+  // change (the detector does, on a cut found).
+  void set_places(const std::vector<std::int64_t>& cuts);
+  const std::vector<std::int64_t>& places() const { return cuts_; }
+  // The place of frame j (0 before the first cut).
+  std::size_t place_of(std::int64_t frame) const;
+
   // Statistics of the last added query's similarities (level 1) and, with
-  // sequences on, of its sequence scores (level 2).
+  // sequences on, of its sequence scores (level 2), over the whole map.
   const ScoreStatistics& similarity_statistics() const { return level1_; }
   const ScoreStatistics& sequence_statistics() const { return level2_; }
 
@@ -237,16 +260,39 @@ class AppearanceEvidence {
   struct Row {
     std::int64_t query = -1;
     ScoreStatistics stats;
+    std::vector<ScoreStatistics> places;  // by place of the candidate (empty without cuts)
     std::vector<std::int32_t> z;  // fixed point, one per kept diagonal (slot order)
   };
   std::int32_t quantise(const ScoreStatistics& stats, double similarity) const;
+  // The same for candidate `frame` with places: the lower of its z over the
+  // whole map (`stats`) and over its place (`places`).
+  std::int32_t quantise(const ScoreStatistics& stats, const std::vector<ScoreStatistics>& places,
+                        std::int64_t frame, double similarity) const;
+  // The lower of value standardised with `all` and with frame's place's
+  // statistics (0 for a young place); `all` alone without cuts.
+  double standardise_min(const ScoreStatistics& all, const std::vector<ScoreStatistics>& places,
+                         std::int64_t frame, double value) const;
+  // The first frame of frame's place.
+  std::int64_t place_start(std::int64_t frame) const;
+  // The sequence sums of the last query with the terms across a place left
+  // out (add_query, with cuts).
+  void sums_within_places(std::int64_t query);
   bool young(std::int64_t query) const;
   // Adds a young query's similarities to the prior and returns its statistics.
   ScoreStatistics prior(const std::vector<double>& values);
   void push_row(Row row);
   // Statistics of `values` (one per kept diagonal of `query`) over the
-  // diagonals of statistics_stride(query).
-  ScoreStatistics kept_statistics(std::int64_t query, const std::vector<double>& values);
+  // diagonals of statistics_stride(query): of all of them (returned) and,
+  // with cuts, of those of each place (`by_place`, else empty).
+  ScoreStatistics kept_statistics(std::int64_t query, const std::vector<double>& values,
+                                  std::vector<ScoreStatistics>& by_place);
+  // The place statistics a value of candidate `frame` is standardised with
+  // (an invalid one: the place is too young).
+  const ScoreStatistics& of_place(const std::vector<ScoreStatistics>& by_place, std::int64_t frame) const;
+  // R of candidate `frame` from its sequence score A (with places: see the top).
+  double place_score(std::int64_t frame, double a) const;
+  // z of every kept diagonal of `row.query` (every `every`-th value).
+  void quantise_row(Row& row, const std::vector<double>& values, std::size_t every) const;
   // Fills `out` with s(query, query - d) for the kept diagonals of `query`.
   void diagonal_similarities(const FrameStore& store, const DescriptorView& descriptor,
                              std::int64_t query, SimilarityMetric metric,
@@ -258,8 +304,7 @@ class AppearanceEvidence {
   // valid), from record r of diagonal d or computed into it; `view` is query
   // a's descriptor, `stats` its row's statistics.
   std::int32_t term(std::size_t r, const FrameStore& store, const DescriptorView& view,
-                    std::int64_t a, std::int64_t d, const ScoreStatistics& stats,
-                    SimilarityMetric metric);
+                    std::int64_t a, std::int64_t d, const Row& row, SimilarityMetric metric);
   // Drops the records that hold no query of the ring any more (add_query).
   void prune_terms();
   const Row* ring_row(std::int64_t query) const;
@@ -293,6 +338,9 @@ class AppearanceEvidence {
   std::vector<std::int32_t> short_sum_, long_sum_;  // per kept diagonal
   std::vector<double> sequence_;   // A per kept diagonal of the last query
   ScoreStatistics level1_, level2_;
+  std::vector<ScoreStatistics> level2_places_;  // level 2 by place
+  std::vector<std::int64_t> cuts_;              // set_places()
+  std::vector<StatisticsSummary> summaries_;    // kept_statistics()
   std::vector<double> scratch_;
   std::vector<double> subset_;     // kept_statistics()
   // The prior: the similarities of every young query so far, pooled.

@@ -44,6 +44,14 @@ struct TemporalOptions {
   // revisit still scores on its first frames. Memory: long_frames rows of 4
   // bytes per stored frame (exhaustive search).
   int long_frames = 48;
+  // Places (issue 32, lsgd/places.h): the block contrast of the frames'
+  // gradient-orientation signatures at which a new place begins; a candidate
+  // must then stand out from its own place and from the whole map
+  // (evidence.h). 0: one place (the whole map's statistics, as before).
+  // 1.1: chosen by leaving one sequence out (docs/results.md, "Places found
+  // from the frames"): no real sequence here reaches 1.01, every cut between
+  // two environments of scripts/mixed_map.py's maps 1.24 or more.
+  double place_cut = 1.1;
   void check() const;
   static const OptionTable<TemporalOptions>& fields();  // lsgd/options.h
 };

@@ -17,6 +17,10 @@
 # similarity is 1 - half the mean L1 distance of the cells): does a
 # descriptor of structure rather than brightness find the places?
 #
+# --descriptor signature: the same, computed by the library
+# (lsgd.place_signature, lsgd/places.h), as verification.temporal.place_cut
+# finds the places.
+#
 # SEQUENCE_FOLDER holds sequence.txt (scripts/eval_suite.py's work folders,
 # ../shared/datasets/<name>); a mixed map's parts.txt gives its cuts.
 import argparse, os
@@ -26,7 +30,7 @@ import lsgd
 
 ap = argparse.ArgumentParser()
 ap.add_argument('--k', type=int, default=8)
-ap.add_argument('--descriptor', choices=['lsgd', 'gradient'], default='lsgd')
+ap.add_argument('--descriptor', choices=['lsgd', 'gradient', 'signature'], default='lsgd')
 ap.add_argument('folders', nargs='+')
 args = ap.parse_args()
 k = args.k
@@ -58,6 +62,9 @@ for folder in args.folders:
     if args.descriptor == 'gradient':
         D = [gradient_descriptor(p) for p in images]
         similarity = gradient_similarity
+    elif args.descriptor == 'signature':  # the library's own (verification.temporal.place_cut)
+        D = [lsgd.place_signature(lsgd.read_image(p)) for p in images]
+        similarity = lsgd.signature_similarity
     else:
         detector = lsgd.Detector()
         D = [detector.describe(lsgd.read_image(p)) for p in images]

@@ -9,6 +9,7 @@
 # No geometry and no decision: a study of the ranking the decision starts from.
 #
 #   PYTHONPATH=build/python scripts/score_study.py SEQUENCE GROUNDTRUTH [--first Q] [--min-gap 50] [--level2]
+#       [--parts PARTS | --cuts C1,C2]
 #
 # --level2: the shipped level 1, and variants of the second standardisation
 # (R = (A - mean) / sd over the query's candidates) instead: robust or
@@ -17,7 +18,12 @@
 # variant "each candidate against its own part": s(i, j) standardised with
 # the query's statistics over the candidates of j's part only, and A the
 # same way at level 2 (a part with fewer than 32 candidates scores 0 there,
-# as a young query: no null to stand out from), as a map that knew where its places begin would do.
+# as a young query: no null to stand out from), as a map that knew where its places begin would do,
+# and the variants that take the lower of the place's score and the whole
+# map's (the shipped one, verification.temporal.place_cut: "min at level 1,
+# mean-max, sd floor at level 2", with sequences within a part).
+# --cuts C1,C2: the places' first frames instead of --parts (the places a
+# detector found, e.g. with one of them missed).
 #
 # SEQUENCE is anything `lsgd.open_sequence` reads; GROUNDTRUTH is pairs
 # "query match" (scripts/eval_suite.py writes them); --first: queries before
@@ -35,6 +41,8 @@ ap.add_argument('--first', type=int, default=0)
 ap.add_argument('--min-gap', type=int, default=50)
 ap.add_argument('--level2', action='store_true')
 ap.add_argument('--parts')
+ap.add_argument('--cuts', help='first frames of the places after the first, comma-separated '
+                '(instead of the parts of --parts: the places a detector found)')
 args = ap.parse_args()
 w = args.min_gap
 
@@ -144,7 +152,10 @@ def l2_quantiles(lo, hi):
 
 
 part = np.zeros(n, dtype=int)  # the part of every frame (one part without --parts)
-if args.parts:
+if args.cuts:
+    for c in args.cuts.split(','):
+        part[int(c):] += 1
+elif args.parts:
     for line in open(args.parts):
         fields = line.split()
         if fields:
@@ -160,6 +171,31 @@ def by_part(standardise_values):
             out[members] = standardise_values(c[members]) if members.sum() >= 32 else 0
         return out
     return z
+
+
+def by_part_min(c):
+    """The lower of the place's z and the whole map's: a candidate stands out from both."""
+    return np.minimum(by_part(z_global)(c), z_global(c))
+
+
+def l2_min(A):
+    """The lower of the place's R and the whole map's, as (mean, sd) per candidate."""
+    mean, sd = l2_by_part(A)
+    m, s = A.mean(), A.std()
+    use_map = (A - m) / s < (A - mean) / sd
+    return np.where(use_map, m, mean), np.where(use_map, s, sd)
+
+
+def l2_mean_max(A):
+    """The place's sd, and the higher of the place's mean and the map's."""
+    mean, sd = l2_by_part(A)
+    return np.maximum(mean, A.mean()), sd
+
+
+def l2_mean_max_floor(A):
+    """mean-max with the place's sd at least half the map's."""
+    mean, sd = l2_by_part(A)
+    return np.maximum(mean, A.mean()), np.maximum(sd, 0.5 * A.std())
 
 
 def l2_by_part(A):
@@ -191,10 +227,20 @@ variants = [('shipped: global z, mean of 16 and 48', z_global, combine_mean),
             ('16 only', z_global, lambda a, b: a)]
 if args.level2:
     variants = variants[:1]
-if args.parts:
+if args.parts or args.cuts:
     variants = variants[:1] + [('each candidate against its own part', by_part(z_global), combine_mean),
-                               ('... and sequences within a part', by_part(z_global), combine_mean)]
-    level2_of = {variants[1][0]: l2_by_part, variants[2][0]: l2_by_part}
+                               ('... and sequences within a part', by_part(z_global), combine_mean),
+                               ('the shipped z, level 2 against its own part', z_global, combine_mean),
+                               ('min of place and map at level 1, place at level 2', by_part_min, combine_mean),
+                               ('min of place and map at both levels', by_part_min, combine_mean),
+                               ('place at level 1, min at level 2', by_part(z_global), combine_mean),
+                               ('... and sequences within a part: min of place and map at both levels', by_part_min, combine_mean),
+                               ('... and sequences within a part: place at level 1, min at level 2', by_part(z_global), combine_mean),
+                               ('... and sequences within a part: min at level 1, mean-max at level 2', by_part_min, combine_mean),
+                               ('... and sequences within a part: min at level 1, mean-max, sd floor at level 2', by_part_min, combine_mean)]
+    level2_of = {variants[1][0]: l2_by_part, variants[2][0]: l2_by_part, variants[3][0]: l2_by_part,
+                 variants[4][0]: l2_by_part, variants[5][0]: l2_min, variants[6][0]: l2_min,
+                 variants[7][0]: l2_min, variants[8][0]: l2_min, variants[9][0]: l2_mean_max, variants[10][0]: l2_mean_max_floor}
 queries = [i for i in range(max(args.first, w + 32), n)]
 for name, standardise, combine in variants:
     Z = np.zeros((n, n))
@@ -215,7 +261,7 @@ for name, standardise, combine in variants:
                 s[keep] += Z[i - t, j[keep]]
             sums.append(s / L)
         scores.append(combine(*sums))
-    for name2, second in ([(name, level2_of[name])] if args.parts and name in level2_of else level2):
+    for name2, second in ([(name, level2_of[name])] if (args.parts or args.cuts) and name in level2_of else level2):
         rows = []  # (best R, correct, has a revisit)
         for i, A in zip(queries, scores):
             mean, sd = second(A)

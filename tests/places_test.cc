@@ -304,6 +304,23 @@ TEST(PlacesDetector, FindsThePlacesAndRestoresThem) {
             decode_records(restored.frame_state(0).data(), restored.frame_state(0).size()).size() - 1);
 }
 
+// Forgetting frames renumbers the places; a place whose first frame is
+// forgotten is none; the map goes on finding places.
+TEST(PlacesDetector, ForgettingFramesRenumbersThePlaces) {
+  Detector d(place_options());
+  for (std::int64_t i = 0; i < 200; ++i) d.process(two_place_frame(i));
+  ASSERT_EQ(d.place_starts().size(), 1u);
+  const std::int64_t cut = d.place_starts()[0];
+  EXPECT_EQ(d.forget(0, 19), 20);
+  EXPECT_EQ(d.place_starts(), (std::vector<std::int64_t>{cut - 20}));
+  for (std::int64_t i = 200; i < 230; ++i) d.process(two_place_frame(i));
+  EXPECT_EQ(d.place_starts(), (std::vector<std::int64_t>{cut - 20}));
+  // The place's first frame forgotten (ids cut .. cut + 4): no place there any more.
+  EXPECT_EQ(d.forget(cut, cut + 4), 5);
+  EXPECT_TRUE(d.place_starts().empty());
+  EXPECT_EQ(d.process(two_place_frame(230)).frame, 205);
+}
+
 TEST(PlacesDetector, DescribedFramesCarryTheirSignature) {
   const std::int64_t n = 200;
   Detector reference(place_options()), robot(place_options()), map(place_options());

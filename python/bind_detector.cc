@@ -54,6 +54,9 @@ void bind_frame_description(py::module_& m) {
              for (const auto& r : d.records) n += r.size();
              return n;
            }, "bytes of the stages' records (the geometric stage's features)")
+      .def_property_readonly("signature", [](const lsgd::FrameDescription& d) {
+             return py::bytes(reinterpret_cast<const char*>(d.signature.data()), d.signature.size());
+           }, "the frame's place signature (128 bytes with verification.temporal.place_cut, else empty)")
       .def("to_bytes", &description_bytes, "The description as bytes (versioned, little-endian).")
       .def_static("from_bytes", &description_of_bytes, py::arg("data"),
                   "A description back from to_bytes(); lsgd.FormatError for bytes that are not one.")

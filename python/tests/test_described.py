@@ -47,6 +47,8 @@ def test_a_description_shows_what_it_holds():
     assert d.stages == ["temporal", "geometric"]
     assert d.descriptor.grid == lsgd.Detector().describe(frames()[0]).grid
     assert len(d.to_bytes()) > d.record_bytes > 0
+    assert d.signature == lsgd.place_signature(frames()[0])  # the map finds its places by it
+    assert lsgd.Detector({"verification.temporal.place_cut": 0}).describe_frame(frames()[0]).signature == b""
 
 
 def test_what_does_not_fit_is_refused():

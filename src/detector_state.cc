@@ -199,6 +199,10 @@ void Detector::restore_frame(int width, int height, const Descriptor& descriptor
       internal::throw_invalid("restore_frame: frame ", frame, " has state of '", r.component,
                               "', which these options do not have (search mode ", search_->name(),
                               ", verification stages ", verification_stages(options_.verification),
+                              options_.verification.has(kTemporalStage)
+                                  ? ", verification.temporal.place_cut " +
+                                        option_text(options_, "verification.temporal.place_cut")
+                                  : std::string(),
                               ")");
     }
   }

@@ -294,6 +294,19 @@ TEST(PlacesDetector, FindsThePlacesAndRestoresThem) {
     test::expect_same(restored.process(two_place_frame(i)), first.process(two_place_frame(i)));
   }
   test::expect_same_state(restored, first);
+  // A map saved with places is not restored under options without them.
+  DetectorOptions off = place_options();
+  off.verification.temporal_options.place_cut = 0;
+  Detector other(off);
+  Descriptor first_copy;
+  first_copy.grid = first.store().grid();
+  first_copy.hist.assign(first.store().view(0).hist, first.store().view(0).hist + first.store().view(0).cells * kBins);
+  first_copy.pixels.assign(first.store().view(0).pixels, first.store().view(0).pixels + first.store().view(0).cells);
+  const std::string m = test::message_of<InvalidArgument>(
+      [&] { other.restore_frame(first.width(), first.height(), first_copy, first.frame_state(0)); });
+  EXPECT_NE(m.find("state of 'places', which these options do not have"), std::string::npos) << m;
+  EXPECT_NE(m.find("verification.temporal.place_cut 0"), std::string::npos) << m;
+  EXPECT_EQ(other.size(), 0);
   // Without place_cut: no places, no record.
   DetectorOptions plain = place_options();
   plain.verification.temporal_options.place_cut = 0;

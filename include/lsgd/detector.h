@@ -54,7 +54,7 @@ std::string option_text(const DetectorOptions& options, const std::string& key);
 struct Timings {
   double convert_ms = 0;   // conversion to 8-bit gray
   double segment_ms = 0;   // superpixel-grid segmentation, histograms counted in its last pass
-  double describe_ms = 0;  // storage encoding (compact) of the histograms
+  double describe_ms = 0;  // storage encoding (compact) of the histograms, the place signature (places.h)
   double search_ms = 0;    // candidate search (and node assignment, index insertion)
   double insert_ms = 0;    // ... of which adding frames to the search's index (index mode)
   double evidence_ms = 0;  // ... and the appearance evidence: statistics, sequence scores, realignment

@@ -173,7 +173,7 @@ nlohmann::json to_json(const Setup& setup, const DetectorOptions& o, const RunDa
     j[std::string(name) + "_ms_p95"] = sp.p95;
   }
   j["timed_part"] = "Detector::process on the gray frame (render and cvtcolor are outside it)";
-  j["segment_includes_histograms"] = true;  // describe_ms: the storage encoding only
+  j["segment_includes_histograms"] = true;  // describe_ms: the storage encoding and the place signature
   j["bytes_per_frame"] = d.bytes_per_frame;
   j["store_bytes"] = static_cast<double>(d.stored) * static_cast<double>(d.bytes_per_frame);
   j["peak_rss_bytes"] = peak_rss_bytes();
@@ -217,7 +217,7 @@ void print_report(const Setup& setup, const DetectorOptions& o, const RunData& d
       << "\n";
   print_row(out, "  convert (lsgd's copy of the gray frame)", s.convert);
   print_row(out, "  segment (histograms counted in its last pass)", s.segment);
-  print_row(out, "  describe (storage encoding)", s.describe);
+  print_row(out, "  describe (storage encoding, place signature)", s.describe);
   print_row(out, "  query (search)", s.query);
   print_row(out, "  verify", s.verify);
   print_row(out, "  total (Detector::process)", s.total);

@@ -305,7 +305,7 @@ Result Detector::process_described(Result result, std::int64_t start_ns, bool st
   // gets a new one rather than an error.
   store_.add(descriptor_, std::clamp<std::int64_t>(result.node, 0, store_.groups()));
   search_->end(result.frame, places_);
-  // A new place found (kPlaceBlock + 1 frames late): the kept rows are
+  // A new place found (with its ninth frame, places.h): the kept rows are
   // recomputed with each candidate's place, as a restored map computes them.
   if (place_cuts_.add(result.frame, signature_) >= 0) {
     evidence_.set_places(place_cuts_.cuts());

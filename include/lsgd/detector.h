@@ -257,8 +257,8 @@ class Detector {
   // The decision's state after the last frame (the loop declared for it).
   const ContinuityState& continuity() const { return decision_.continuity(); }
   // The first frames of the places found after the first, ascending
-  // (verification.temporal.place_cut; lsgd/places.h): each is found
-  // kPlaceBlock + 1 frames after it. Empty with place_cut 0.
+  // (verification.temporal.place_cut; lsgd/places.h): each is found when
+  // its frame c + kPlaceBlock (its ninth) is stored. Empty with place_cut 0.
   const std::vector<std::int64_t>& place_starts() const { return place_cuts_.cuts(); }
 
   // ---- Persistence (lsgd::io::Database): a stored frame is its descriptor

@@ -19,8 +19,8 @@
 // of the kBlock frames before c and the kBlock frames from c on (within: the
 // mean similarity of the frames inside each block, cross: between the two)
 // reaches the threshold, is the highest of c - 1, c, c + 1, and the place
-// before has at least kMinPlaceFrames frames. So a cut is found when frame
-// c + kBlock arrives: kBlock + 1 frames late.
+// before has at least kMinPlaceFrames frames. So a place beginning at c is
+// found when frame c + kPlaceBlock (its ninth) is stored.
 #pragma once
 
 #include <cstdint>

@@ -31,6 +31,6 @@ def test_a_detector_finds_the_second_place():
         noisy = np.clip(image.astype(int) + rng.integers(-20, 20, image.shape), 0, 255).astype(np.uint8)
         detector.process(noisy)
         if k == 60 + 7:
-            assert detector.place_starts == []  # found 9 frames late
+            assert detector.place_starts == []  # found with the place's ninth frame
     assert detector.place_starts == [60]
     assert lsgd.Detector({"verification.temporal.place_cut": 0}).place_starts == []

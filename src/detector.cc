@@ -98,6 +98,11 @@ SequenceOptions sequence_options(const VerificationOptions& v) {
   return s;
 }
 
+// The place_cut the detector finds places with (0: none; the temporal stage's).
+double place_cut(const DetectorOptions& options) {
+  return options.verification.has(kTemporalStage) ? options.verification.temporal_options.place_cut : 0.0;
+}
+
 }  // namespace
 
 Detector::Detector(const DetectorOptions& options)
@@ -111,9 +116,7 @@ Detector::Detector(const DetectorOptions& options)
       query_evidence_(evidence_),
       stages_(make_stages(options.verification)),
       decision_(options.decision),
-      place_cuts_(options.verification.has(kTemporalStage)
-                      ? options.verification.temporal_options.place_cut
-                      : 0.0) {
+      place_cuts_(place_cut(options)) {
   for (const auto& stage : stages_) stage_list_.push_back(stage.get());
 }
 
@@ -259,7 +262,7 @@ Result Detector::process_gray(double convert_ms, std::int64_t start_ns, bool sto
   } else {
     std::swap(exact_, descriptor_);  // descriptor_ is the frame's descriptor as stored
   }
-  if (place_cuts_.enabled()) signature_ = place_signature(gray_);
+  if (place_cuts_.enabled() && store) signature_ = place_signature(gray_);  // a query stores none
   result.timings.describe_ms = ms_since(t);
   return process_described(std::move(result), start_ns, store, nullptr, gray_.width, gray_.height);
 }
@@ -422,9 +425,7 @@ std::int64_t estimated_map_bytes(const DetectorOptions& options, std::int64_t fr
       static_cast<std::int64_t>(Descriptor::bytes_per_frame(options.descriptor.storage, cells));
   const std::int64_t extra = mode.bytes_per_frame != nullptr ? mode.bytes_per_frame(options, cells) : 0;
   // The place signatures, with their contrast and cut found (places.h).
-  const bool places = options.verification.has(kTemporalStage) &&
-                      options.verification.temporal_options.place_cut > 0;
-  const std::int64_t signature = places ? kPlaceBytesPerFrame : 0;
+  const std::int64_t signature = place_cut(options) > 0 ? kPlaceBytesPerFrame : 0;
   return frames * (descriptor + extra + signature);
 }
 

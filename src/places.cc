@@ -23,8 +23,8 @@ std::vector<std::uint8_t> place_signature(const GrayImage& gray) {
   const cv::Mat in(gray.height, gray.width, CV_8UC1, const_cast<std::uint8_t*>(gray.pixels.data()));
   // Area averaging in two steps: by whole factors first (OpenCV's fast
   // path; the last fx - 1 columns and fy - 1 rows left out), then the rest
-  // on a frame at most twice the size (a 1241 x 376 frame in one step took
-  // 0.8 ms, in two 0.2).
+  // on a frame at most twice the size (a 1241 x 376 frame: 0.79 ms in one
+  // step, 0.45 ms in two, lsgd.place_signature from Python).
   const int fx = std::max(1, gray.width / kWidth), fy = std::max(1, gray.height / kHeight);
   cv::Mat whole = in, small;
   if (fx > 1 || fy > 1) {

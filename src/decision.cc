@@ -56,7 +56,7 @@ std::int64_t ContinuityState::window_end(std::int64_t q, int tolerance) const {
 }
 
 void ContinuityState::record(std::int64_t q, std::int64_t frame, int frame_inliers,
-                             bool continued) {
+                             bool continued, int gap) {
   query = q;
   loop = frame;
   if (frame < 0) {
@@ -64,9 +64,39 @@ void ContinuityState::record(std::int64_t q, std::int64_t frame, int frame_inlie
   } else {
     const double v = frame_inliers > 0 ? frame_inliers : 0;
     inliers = continued ? 0.8 * held.inliers + 0.2 * v : v;
-    held = {q, frame, inliers};
+    hold(q, frame, inliers, gap);
   }
 }
+
+void ContinuityState::hold(std::int64_t q, std::int64_t frame, double frame_inliers, int gap) {
+  const bool run = held.loop >= 0 && held.query < q && q - held.query <= 1 + gap;
+  held = {q, frame, frame_inliers, run ? held.since : q};
+}
+
+namespace {
+
+// The first frame of the place holding `frame` (0: the first place).
+std::int64_t place_start(const std::vector<std::int64_t>* places, std::int64_t frame) {
+  if (places == nullptr) return 0;
+  const auto it = std::upper_bound(places->begin(), places->end(), frame);
+  return it == places->begin() ? 0 : *(it - 1);
+}
+
+// The last frame of the place holding `frame`.
+std::int64_t place_end(const std::vector<std::int64_t>* places, std::int64_t frame) {
+  if (places == nullptr) return std::numeric_limits<std::int64_t>::max();
+  const auto it = std::upper_bound(places->begin(), places->end(), frame);
+  return it == places->end() ? std::numeric_limits<std::int64_t>::max() : *it - 1;
+}
+
+// The held loop's run began in the query's place: it may be continued there
+// (within its frame j's place: place_end()).
+bool same_place(const std::vector<std::int64_t>* places, const ContinuityState::Held& held,
+                std::int64_t query) {
+  return held.since >= place_start(places, query);
+}
+
+}  // namespace
 
 LoopDecision::LoopDecision(const DecisionOptions& options) : options_(options) { options_.check(); }
 
@@ -99,8 +129,8 @@ LoopStatus parse_loop_status(const std::string& name) {
 }
 
 void LoopDecision::record(std::int64_t frame, std::int64_t loop, int inliers, bool continued) {
-  state_.record(frame, loop, inliers, continued);
-  history_.resize(static_cast<std::size_t>(frame));
+  state_.record(frame, loop, inliers, continued, options_.continuity_gap);
+  history_.resize(static_cast<std::size_t>(frame), kUndecided);
   history_.push_back({state_.loop, state_.inliers, track_.loop, track_.inliers});
 }
 
@@ -109,7 +139,8 @@ double LoopDecision::rank(const DecisionQuery& q, const Candidate& best,
   first_checks_.clear();
   out.ranking.best = best;
   out.ranking.confirmed = best.frame >= 0;
-  bool tracking = q.continuity && best.frame >= 0 && track_.continues(q.frame, best.frame, q.tolerance, 0);
+  bool tracking = q.continuity && best.frame >= 0 && track_.continues(q.frame, best.frame, q.tolerance, 0) &&
+                  same_place(q.places, track_.held, q.frame) && best.frame <= place_end(q.places, track_.held.loop);
   if (tracking && q.single_frame && !confirms.empty()) {
     tracking = !(q.single_frame(best.frame) < kRankingTrackMinZ);  // a scene cut; NaN: not unlike
   }
@@ -131,7 +162,7 @@ double LoopDecision::rank(const DecisionQuery& q, const Candidate& best,
     }
   }
   const bool tracked = out.ranking.confirmed && !confirms.empty();
-  track_.record(q.frame, tracked ? best.frame : -1, static_cast<int>(support), tracked && tracking);
+  track_.record(q.frame, tracked ? best.frame : -1, static_cast<int>(support), tracked && tracking, 0);
   return support;
 }
 
@@ -196,8 +227,10 @@ LoopDecision::Window LoopDecision::open_window(const DecisionQuery& q, const Can
   w.first = first;
   w.held = state_.held.loop;  // the loop a candidate may continue
   w.open = q.continuity && d.continuity_bonus > 0 &&
-           state_.continues(q.frame, w.held, q.tolerance, d.continuity_gap);
-  w.end = state_.window_end(q.frame, q.tolerance);
+           state_.continues(q.frame, w.held, q.tolerance, d.continuity_gap) &&
+           same_place(q.places, state_.held, q.frame);
+  // Frame j stays in its place.
+  w.end = std::min(state_.window_end(q.frame, q.tolerance), place_end(q.places, w.held));
   // Over more than one frame without a loop, only the candidate appearance
   // ranks first continues it (a track kept by weaker candidates falls
   // behind the revisit).
@@ -223,7 +256,7 @@ bool LoopDecision::unlike(const Window& w, std::int64_t frame) const {
 bool LoopDecision::continues(const DecisionQuery& q, const Window& w, const Candidate& c) const {
   if (w.long_gap && !(w.first != nullptr && c.frame == w.first->frame)) return false;
   return w.open && state_.continues(q.frame, c.frame, q.tolerance, options_.continuity_gap) &&
-         !unlike(w, c.frame);
+         c.frame <= w.end && !unlike(w, c.frame);
 }
 
 // The best-scored frame that continues the held loop, outside the temporal
@@ -447,24 +480,24 @@ void LoopDecision::restore_renumbered(std::int64_t frame, int, int, std::uint32_
   // As record() leaves it: a frame without a loop keeps the last one held
   // (the frames are restored in order), a loop to a forgotten frame is none.
   ContinuityState s{frame, -1, 0, state_.held}, t{frame, -1, 0, track_.held};
-  const auto read = [&](ContinuityState& c) {
+  const auto read = [&](ContinuityState& c, int gap) {
     const std::int64_t loop = in.get_i64();
     c.inliers = in.get_f64();
     c.loop = renumbered.after(loop);
     if (c.loop >= 0) {
-      c.held = {frame, c.loop, c.inliers};
+      c.hold(frame, c.loop, c.inliers, gap);
     } else if (loop >= 0) {
       c.inliers = 0;  // forgotten
       c.held = {};
     }
   };
   if (in.present()) {
-    read(s);
-    if (version >= 2) read(t);
+    read(s, options_.continuity_gap);
+    if (version >= 2) read(t, 0);
   }
   state_ = s;
   track_ = t;
-  history_.resize(static_cast<std::size_t>(frame));
+  history_.resize(static_cast<std::size_t>(frame), kUndecided);
   history_.push_back({s.loop, s.inliers, t.loop, t.inliers});
 }
 

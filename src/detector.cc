@@ -398,6 +398,7 @@ void Detector::verify(AppearanceEvidence& evidence, bool store, Result& result,
   q.tolerance = options_.verification.temporal_options.tolerance;
   q.cells = descriptor_.grid.cells();
   q.young = evidence.young();
+  q.places = &place_cuts_.cuts();
   q.single_frame = [&](std::int64_t j) {
     return evidence.single_frame(lsgd::similarity(descriptor_.view(), store_.view(j), metric));
   };

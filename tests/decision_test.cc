@@ -198,6 +198,59 @@ TEST(LoopDecision, NothingContinuesAcrossACut) {
   }
 }
 
+// A place the map found (DecisionQuery::places) ends a loop: frame 51 would
+// continue the run of loops that began at frame 49 (49 -> 9, 50 -> 10), but
+// not once a place is found to begin at 50 or 51 (the query's side: found
+// late, as the detector finds them) or at 11 (frame j's side). A place that
+// began before the run, or one elsewhere, changes nothing; the run survives
+// a restore frame by frame.
+TEST(LoopDecision, NoLoopIsContinuedIntoAnotherPlace) {
+  struct Variant {
+    std::vector<std::int64_t> places;
+    bool restored, continues;
+  };
+  for (const Variant& v : {Variant{{}, false, true}, Variant{{50}, false, false},
+                           Variant{{51}, false, false}, Variant{{11}, false, false},
+                           Variant{{49}, false, true}, Variant{{20}, false, true},
+                           Variant{{50}, true, false}, Variant{{20, 49}, true, true}}) {
+    SCOPED_TRACE(testing::Message() << "places " << testing::PrintToString(v.places)
+                                    << (v.restored ? " restored" : ""));
+    DecisionOptions d;
+    auto decision = std::make_unique<LoopDecision>(d);
+    FixedSupport stage(std::map<std::int64_t, int>{{9, 60}, {10, 13}, {11, 13}});
+    DecisionQuery q = sequence_query(true);
+    std::vector<Candidate> candidates;
+    q.appearance = [&](std::int64_t j) { return j == candidates[0].frame ? candidates[0].score : 0.0; };
+    q.single_frame = [](std::int64_t) { return 0.0; };
+    q.candidates = &candidates;
+    // Frame 49: a first loop (4 + 3.5); frame 50 continues it (1.5 + 3.5 +
+    // 2.5 with 13 inliers, 0.2 of 60 needed), as frame 51 would.
+    candidates = {{9, 4.0}};
+    q.frame = 49;
+    ASSERT_TRUE(decision->decide(q, {&stage}).loop);
+    candidates = {{10, 1.5}};
+    q.frame = 50;
+    ASSERT_TRUE(decision->decide(q, {&stage}).evidence.continues);
+    EXPECT_EQ(decision->continuity().held.since, 49);
+    if (v.restored) {  // a new process restores the frames' states in order
+      auto restored = std::make_unique<LoopDecision>(d);
+      for (std::int64_t f = 0; f <= 50; ++f) {
+        StateWriter out;
+        decision->save_frame(f, out);
+        restored->restore_frame(f, 64, 48, 2, StateReader(out.bytes().data(), out.bytes().size(), "t"));
+      }
+      EXPECT_EQ(restored->continuity().held.since, 49);
+      decision = std::move(restored);
+    }
+    candidates = {{11, 1.5}};
+    q.frame = 51;
+    q.places = &v.places;
+    const Decision out = decision->decide(q, {&stage});
+    EXPECT_EQ(out.loop, v.continues);
+    EXPECT_EQ(out.evidence.continues, v.continues);
+  }
+}
+
 // decision.continuity_gap: a loop is continued over a frame that declared
 // none (frame 51: its candidate has no geometric support), not over more
 // than the gap; over two frames or more only by the candidate ranked first;
@@ -299,8 +352,10 @@ TEST(LoopDecision, TheRankingsTrackLowersAFirstLoopsBar) {
 // reaches, it is the same.
 TEST(LoopDecision, TheRankingTracksItsOwnConfirmedCandidates) {
   for (const double threshold : {7.0, 1000.0}) {
-    // 0: tracked, 1: no temporal stage, 2: cut, 3: frame 11 unlike the query (a scene cut)
-    for (const int variant : {0, 1, 2, 3}) {
+    // 0: tracked, 1: no temporal stage, 2: cut, 3: frame 11 unlike the query
+    // (a scene cut), 4: a place found to begin at 51 (the query's side), 5:
+    // at 11 (frame j's side), 6: at 40 (the track began in the query's place)
+    for (const int variant : {0, 1, 2, 3, 4, 5, 6}) {
       SCOPED_TRACE(testing::Message() << "threshold " << threshold << " variant " << variant);
       DecisionOptions d;
       d.threshold = threshold;
@@ -321,10 +376,15 @@ TEST(LoopDecision, TheRankingTracksItsOwnConfirmedCandidates) {
       std::vector<Candidate> second = {{11, 0.4}};
       q.frame = 51;
       q.candidates = &second;
+      const std::vector<std::int64_t> places =
+          variant == 4 ? std::vector<std::int64_t>{51}
+                       : variant == 5 ? std::vector<std::int64_t>{11}
+                                      : variant == 6 ? std::vector<std::int64_t>{40} : std::vector<std::int64_t>{};
+      q.places = &places;
       const Decision b = decision.decide(q, {&stage});
       EXPECT_FALSE(b.loop);
       // 13 inliers: below geometric.min_inliers (20), above 0.2 of 60.
-      EXPECT_EQ(b.ranking.confirmed, variant == 0);
+      EXPECT_EQ(b.ranking.confirmed, variant == 0 || variant == 6);
       ASSERT_FALSE(b.verdicts.empty());
       EXPECT_FALSE(b.verdicts[0].accepted);  // the stage's own verdict, as it is
       // The track is persisted with the decision's state (version 2).
@@ -362,17 +422,20 @@ TEST(LoopDecision, RestoresAVersion1StateWithoutATrack) {
 TEST(ContinuityState, ContinuesForwardFromTheLastLoop) {
   ContinuityState s;
   EXPECT_FALSE(s.continues(0, 0, 2, 0));
-  s.record(10, 40, 30, false);
+  s.record(10, 40, 30, false, 0);
   EXPECT_EQ(s.inliers, 30);
+  EXPECT_EQ(s.held.since, 10);
   for (std::int64_t f = 40; f <= 43; ++f) EXPECT_TRUE(s.continues(11, f, 2, 0)) << f;
   EXPECT_FALSE(s.continues(11, 39, 2, 0));  // backwards
   EXPECT_FALSE(s.continues(11, 44, 2, 0));
   EXPECT_FALSE(s.continues(12, 41, 2, 0));  // not the next frame
-  s.record(11, 41, 10, true);               // continued: the average moves by 0.2
+  s.record(11, 41, 10, true, 0);            // continued: the average moves by 0.2
   EXPECT_DOUBLE_EQ(s.inliers, 0.8 * 30 + 0.2 * 10);
-  s.record(12, 90, 50, false);  // a new loop starts its own average
+  EXPECT_EQ(s.held.since, 10);
+  s.record(12, 90, 50, false, 0);  // a new loop starts its own average
   EXPECT_DOUBLE_EQ(s.inliers, 50);
-  s.record(13, -1, -1, false);
+  EXPECT_EQ(s.held.since, 10);  // in the same run of loops
+  s.record(13, -1, -1, false, 0);
   EXPECT_FALSE(s.continues(14, 91, 2, 0));
   EXPECT_EQ(s.inliers, 0);
   EXPECT_EQ(s.loop, -1);
@@ -383,9 +446,9 @@ TEST(ContinuityState, ContinuesForwardFromTheLastLoop) {
 // held loop's.
 TEST(ContinuityState, ContinuesOverAGapOfFramesWithoutLoop) {
   ContinuityState s;
-  s.record(10, 40, 30, false);
-  s.record(11, -1, -1, false);
-  s.record(12, -1, -1, false);
+  s.record(10, 40, 30, false, 0);
+  s.record(11, -1, -1, false, 0);
+  s.record(12, -1, -1, false, 0);
   EXPECT_EQ(s.loop, -1);  // the last frame declared none
   EXPECT_EQ(s.held.query, 10);
   EXPECT_EQ(s.window_end(13, 2), 45);
@@ -394,10 +457,13 @@ TEST(ContinuityState, ContinuesOverAGapOfFramesWithoutLoop) {
   EXPECT_FALSE(s.continues(13, 39, 2, 2));
   EXPECT_FALSE(s.continues(13, 42, 2, 1));  // two frames without a loop: gap 1 is too short
   EXPECT_FALSE(s.continues(14, 42, 2, 2));  // three
-  s.record(13, 43, 10, true);
+  s.record(13, 43, 10, true, 2);
   EXPECT_DOUBLE_EQ(s.inliers, 0.8 * 30 + 0.2 * 10);
   EXPECT_EQ(s.held.query, 13);
+  EXPECT_EQ(s.held.since, 10);  // its run: two frames without a loop, gap 2
   EXPECT_TRUE(s.continues(14, 44, 2, 0));
+  s.record(17, 50, 10, false, 2);  // three frames without: a run of its own
+  EXPECT_EQ(s.held.since, 17);
 }
 
 }  // namespace

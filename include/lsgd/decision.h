@@ -26,7 +26,10 @@
 // Continuity stops at a scene cut: a frame that would continue the loop but
 // scores below continuity_min_z for the query, single frame, is another
 // place than the query and continues nothing (a new session starts with no
-// loop to continue at all: Detector::cut()).
+// loop to continue at all: Detector::cut()). Nor does it cross a place the
+// map found (DecisionQuery::places, lsgd/places.h): a loop is continued only
+// while its run of loops began in the query's place and its frame j stays in
+// the place it was in; past a cut a loop must be found again, as a first one.
 //
 // Continuity: the geometric check of a continuing candidate passes with
 // `continuity_inliers` times the inliers its loop has had so far (an average
@@ -138,6 +141,9 @@ struct ContinuityState {
     std::int64_t query = -1;  // the last frame that declared a loop (-1: none)
     std::int64_t loop = -1;   // its loop
     double inliers = 0;       // its loop's inlier average
+    // The first frame of its run: the frames that declared loops with at
+    // most `gap` frames between them (record()), ending at `query`.
+    std::int64_t since = -1;
   } held;
 
   // True when candidate `frame` of query `query` continues the last loop
@@ -148,8 +154,12 @@ struct ContinuityState {
   // loop moved on by the frames since, plus `tolerance`.
   std::int64_t window_end(std::int64_t query, int tolerance) const;
   // Records the decision for `query`: a loop to `frame` with `inliers`
-  // (frame -1: no loop).
-  void record(std::int64_t query, std::int64_t frame, int inliers, bool continued);
+  // (frame -1: no loop); a loop within 1 + gap frames of the held one
+  // belongs to its run (Held::since).
+  void record(std::int64_t query, std::int64_t frame, int inliers, bool continued, int gap);
+  // The loop held, loop `frame` with `inliers` declared for `query` (a
+  // restored frame, record()'s rule for its run).
+  void hold(std::int64_t query, std::int64_t frame, double inliers, int gap);
 };
 
 // One query as the decision sees it.
@@ -174,6 +184,10 @@ struct DecisionQuery {
   // The standardised similarity (single frame) of frame j for this query
   // (NaN: not available): a continuation must not look unlike the query.
   std::function<double(std::int64_t)> single_frame;
+  // The first frames of the places after the first that the map has found
+  // so far, ascending (Detector::place_starts(); nullptr or empty: one
+  // place). No loop is continued, and no track followed, across one.
+  const std::vector<std::int64_t>* places = nullptr;
 };
 
 // The ranking no decision setting changes (what R@100P and AP are computed
@@ -185,8 +199,8 @@ struct DecisionQuery {
 // that frame or one of the next 1 + verification.temporal.tolerance) passes
 // the geometric check with kRankingTrackInliers of the track's average
 // inliers, unless it looks unlike the query (single frame below
-// kRankingTrackMinZ: a scene cut); the track is the ranking's own, whatever
-// the decision declared. (The constants are the decision's defaults.)
+// kRankingTrackMinZ: a scene cut) or crosses a place found (the continuity
+// rule's); the track is the ranking's own, whatever the decision declared. (The constants are the decision's defaults.)
 struct Ranking {
   Candidate best;          // frame -1: no candidate (or every one gated)
   bool confirmed = false;  // every confirming stage accepts it (true without one)
@@ -308,6 +322,7 @@ class LoopDecision final : public Stateful {
     std::int64_t track;
     double track_inliers;
   };
+  static constexpr Loop kUndecided{-1, 0, -1, 0};  // a frame decide() never saw: no loop
   std::vector<Loop> history_;  // state_ and track_ after every frame
   // Scratch reused across frames.
   std::vector<char> gated_;          // 1 for a candidate a gate rejected

@@ -76,15 +76,18 @@ void bind_database_contents(DatabaseClass& database) {
            }, py::arg("first_id"), py::arg("last_id"),
            "Forgets the frames whose ids lie in [first_id, last_id], in one transaction (as "
            "Detector.forget); returns how many.")
-      .def("plan_session", [](const PyDatabase& db, const lsgd::Detector& d, const py::list& images,
+      .def("plan_session", [](const PyDatabase& db, lsgd::Detector& d, const py::list& images,
                               std::optional<std::int64_t> session) {
              std::vector<std::string> paths;
              for (const py::handle& image : images) paths.push_back(path_of(py::reinterpret_borrow<py::object>(image)));
-             return lsgd::io::plan_session(db.get(), d, paths, session);
+             const lsgd::io::SessionPlan plan = lsgd::io::plan_session(db.get(), d, paths, session);
+             lsgd::io::begin_session(d, plan);
+             return plan;
            }, py::arg("detector"), py::arg("images"), py::arg("session") = py::none(),
            "Where a run of `images` (paths) continues, as `lsgd run --database` decides: the last "
            "session from its next image when the images are that session's, else a new session "
-           "(`session`, or the last + 1). `detector` holds the stored frames (Database.detector()). "
+           "(`session`, or the last + 1). `detector` holds the stored frames (Database.detector()); "
+           "for a new session it continues no loop of them (Detector.cut(), as lsgd run does). "
            "Image i is frame plan.first_id + i; store it under lsgd.stored_image_name(path).")
       .def("forget_session", [](PyDatabase& db, std::int64_t session) {
              return db.get().forget_session(session);

@@ -163,8 +163,14 @@ def test_database_resumes_a_session_as_lsgd_run_does(tmp_path):
         others = [str(tmp_path / ("other-%d.pgm" % k)) for k in range(5)]
         for k, name in enumerate(others):
             write_pgm(name, frames[k])
+        # The new session's first image is where the route starts again, within the window of
+        # the last stored frame's loop: a detector cut for the new session continues nothing.
+        restored = db.detector()
+        assert restored.process(lsgd.read_image(others[0])).evidence.continues
         other = db.plan_session(d, others)
         assert (other.session, other.first_id, other.first, other.resume) == (1, 80, 0, False)
+        r = d.process(lsgd.read_image(others[0]), id=other.first_id)
+        assert not r.evidence.continues
         with pytest.raises(lsgd.InvalidArgument, match="already stored in session 0"):
             db.plan_session(d, images[::2])
         assert db.plan_session(d, images[::2], session=7).session == 7

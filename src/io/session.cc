@@ -176,4 +176,8 @@ SessionPlan plan_session(const Database& db, const Detector& detector,
   return new_session(db, last + 1, count);
 }
 
+void begin_session(Detector& detector, const SessionPlan& plan) {
+  if (!plan.resume && detector.size() > 0) detector.cut();
+}
+
 }  // namespace lsgd::io

@@ -200,7 +200,7 @@ void run_session(const RunArgs& args, const io::Sequence& sequence, bool exists,
   check_frame_size(args.database, detector, source, plan.first);
   print_session_start(args.database, exists, detector, plan, images);
   // A new session is another sequence: nothing continues across it.
-  if (!plan.resume && detector.size() > 0) detector.cut();
+  io::begin_session(detector, plan);
   const std::unique_ptr<CsvWriter> csv =
       plan.resume ? continue_csv(args, plan) : std::make_unique<CsvWriter>(args.output);
   const FrameRun run = store_frames(args, sequence, source, plan, detector, db, *csv);

@@ -50,4 +50,11 @@ SessionPlan plan_session(const Database& db, const Detector& detector,
                          const std::vector<std::string>& images,
                          const std::optional<std::int64_t>& chosen = std::nullopt);
 
+// Prepares `detector` (holding the database's frames) for the run `plan`
+// describes: a new session is another sequence, so no frame of it continues
+// a loop of the stored frames (Detector::cut()); a resumed session goes on as
+// if it had never stopped (nothing changes). Call it after plan_session(),
+// before the first frame.
+void begin_session(Detector& detector, const SessionPlan& plan);
+
 }  // namespace lsgd::io

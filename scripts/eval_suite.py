@@ -2,8 +2,9 @@
 # The sequences every change of the loop decision is measured on, with the
 # shipped defaults (or the --option values given): the real sequences of
 # ../shared/datasets, the synthetic worlds of `lsgd demo`, the real ones at
-# other sizes and exposures, short sequences whose revisits come before the
-# statistics fill, and maps of two and three places (scripts/mixed_map.py).
+# other sizes and exposures, their revisits seen by another camera, short
+# sequences whose revisits come before the statistics fill, and maps of two
+# and three places (scripts/mixed_map.py).
 # One `lsgd eval` a sequence; a markdown table (declared TP / FP, recall at
 # decision, R@100P, R@1, and for a mixed map each part's true loops against
 # the part alone), and the whole as JSON. docs/results.md runs it.
@@ -51,17 +52,24 @@ def write_dataset(out, images, gt):
         f.writelines(f'{q} {m}\n' for q, m in gt)
 
 
-def variant(name, dataset, gt, size=None, gamma=None, n=None):
-    """dataset's first n frames (all), gray, resized to size and/or with a gamma."""
+def variant(name, dataset, gt, size=None, gamma=None, n=None, shift=None):
+    """dataset's first n frames (all), gray, resized to size and/or with a gamma; with shift,
+    every frame from the first revisit on (the first query of the ground truth) shows only
+    its right 1 - shift of the width, stretched back to the frame: another camera for the
+    revisit, looking from further right with a narrower lens."""
     out = os.path.join(W, name)
     if not os.path.isfile(os.path.join(out, 'groundtruth.txt')):
         images = frames(dataset)[:n]
         os.makedirs(os.path.join(out, 'images'), exist_ok=True)
         listed = []
         lut = [round(255 * (v / 255) ** gamma) for v in range(256)] if gamma else None
+        revisit = min(q for q, m in pairs(gt)) if shift else None
         for k, path in enumerate(images):
             target = os.path.join(out, 'images', f'{k:06d}.png')
             im = Image.open(path).convert('L')
+            if shift and k >= revisit:
+                w, h = im.size
+                im = im.crop((round(shift * w), 0, w, h)).resize((w, h), Image.BICUBIC)
             if size:
                 im = im.resize(size, Image.BICUBIC if n is None else Image.BOX)
             if lut:
@@ -130,6 +138,11 @@ for name, base, size, gamma in [('lip6-640x480', lip6, (640, 480), None), ('lip6
     if want(name):
         out = variant(name, *base, size=size, gamma=gamma)
         add(name, out, os.path.join(out, 'groundtruth.txt'), 50, 'resized / darkened')
+# The revisit seen by another camera: shifted right and narrower (variant()'s shift).
+for name, base, shift in [('lip6-shifted', lip6, 0.15), ('corridor-shifted', corridor, 0.15), ('lip6-shifted-30', lip6, 0.3), ('corridor-shifted-30', corridor, 0.3)]:
+    if want(name):
+        out = variant(name, *base, shift=shift)
+        add(name, out, os.path.join(out, 'groundtruth.txt'), 50, 'revisit by another camera')
 # Revisits before the statistics fill: a walk back to the start after 40 frames.
 for name, base, ranges in [('lip6-short', lip6, [(0, 40), (460, 500)]),
                            ('corridor-short', corridor, [(0, 40), (111, 151)]),

@@ -15,10 +15,11 @@
 # --baseline lists every sequence on which R@1 or the declared-loop recall is
 # lower than in OLD.json, or a false loop was added, and exits 1 when there is
 # one. Built sequences are kept in --work (default /tmp/lsgd-suite) and reused.
-# Needs Pillow (python3-pil, brought by scripts/install-deps.sh).
+# Needs Pillow and numpy (python3-pil, python3-numpy: scripts/install-deps.sh).
 import argparse, concurrent.futures, csv, json, os, subprocess, sys
 
-from PIL import Image
+import numpy
+from PIL import Image, ImageFilter
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 sys.path.insert(0, HERE)
@@ -52,24 +53,30 @@ def write_dataset(out, images, gt):
         f.writelines(f'{q} {m}\n' for q, m in gt)
 
 
-def variant(name, dataset, gt, size=None, gamma=None, n=None, shift=None):
+def variant(name, dataset, gt, size=None, gamma=None, n=None, shift=None, night=False):
     """dataset's first n frames (all), gray, resized to size and/or with a gamma; with shift,
     every frame from the first revisit on (the first query of the ground truth) shows only
     its right 1 - shift of the width, stretched back to the frame: another camera for the
-    revisit, looking from further right with a narrower lens."""
+    revisit, looking from further right with a narrower lens; with night, the revisit is
+    dark (gamma 2.6 at 60 % of the range), blurred (radius 1.2) and noisy (+-6, seed 1)."""
     out = os.path.join(W, name)
     if not os.path.isfile(os.path.join(out, 'groundtruth.txt')):
         images = frames(dataset)[:n]
         os.makedirs(os.path.join(out, 'images'), exist_ok=True)
         listed = []
         lut = [round(255 * (v / 255) ** gamma) for v in range(256)] if gamma else None
-        revisit = min(q for q, m in pairs(gt)) if shift else None
+        revisit = min(q for q, m in pairs(gt)) if shift or night else None
+        dark = [round(255 * (v / 255) ** 2.6 * 0.6 + 4) for v in range(256)]
+        noise = numpy.random.default_rng(1)
         for k, path in enumerate(images):
             target = os.path.join(out, 'images', f'{k:06d}.png')
             im = Image.open(path).convert('L')
             if shift and k >= revisit:
                 w, h = im.size
                 im = im.crop((round(shift * w), 0, w, h)).resize((w, h), Image.BICUBIC)
+            if night and k >= revisit:
+                im = numpy.asarray(im.point(dark).filter(ImageFilter.GaussianBlur(1.2)), dtype=numpy.int16)
+                im = Image.fromarray(numpy.clip(im + noise.integers(-6, 7, im.shape), 0, 255).astype(numpy.uint8))
             if size:
                 im = im.resize(size, Image.BICUBIC if n is None else Image.BOX)
             if lut:
@@ -138,11 +145,15 @@ for name, base, size, gamma in [('lip6-640x480', lip6, (640, 480), None), ('lip6
     if want(name):
         out = variant(name, *base, size=size, gamma=gamma)
         add(name, out, os.path.join(out, 'groundtruth.txt'), 50, 'resized / darkened')
-# The revisit seen by another camera: shifted right and narrower (variant()'s shift).
-for name, base, shift in [('lip6-shifted', lip6, 0.15), ('corridor-shifted', corridor, 0.15), ('lip6-shifted-30', lip6, 0.3), ('corridor-shifted-30', corridor, 0.3)]:
+# The revisit seen by another camera (shifted right and narrower) or at night
+# (variant()'s shift and night): the night revisits are loops no appearance
+# method here finds; they must get no loop, never a false one.
+for name, base, shift, night in [('lip6-shifted', lip6, 0.15, False), ('corridor-shifted', corridor, 0.15, False),
+                                 ('lip6-shifted-30', lip6, 0.3, False), ('corridor-shifted-30', corridor, 0.3, False),
+                                 ('lip6-night', lip6, None, True), ('corridor-night', corridor, None, True)]:
     if want(name):
-        out = variant(name, *base, shift=shift)
-        add(name, out, os.path.join(out, 'groundtruth.txt'), 50, 'revisit by another camera')
+        out = variant(name, *base, shift=shift, night=night)
+        add(name, out, os.path.join(out, 'groundtruth.txt'), 50, 'revisit by another camera' if shift else 'revisit at night')
 # Revisits before the statistics fill: a walk back to the start after 40 frames.
 for name, base, ranges in [('lip6-short', lip6, [(0, 40), (460, 500)]),
                            ('corridor-short', corridor, [(0, 40), (111, 151)]),

@@ -18,6 +18,7 @@ packages=(
   libhnswlib-dev  # the index search mode's graph (header-only)
   pybind11-dev python3-dev python3-numpy  # the Python module (python/), for /usr/bin/python3
   python3-pytest python3-matplotlib  # its tests and python/examples/evaluate.py
+  python3-pil  # scripts/eval_suite.py and mixed_map.py build the suite's sequences
   python3-distributed  # lsgd.sweep(client=...): cells on a Dask cluster (issue 34)
   clang libclang-rt-14-dev  # scripts/ci-hardening.sh: libFuzzer targets in fuzz/
 )

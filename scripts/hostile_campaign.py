@@ -2888,6 +2888,45 @@ def class11():
         c.check(read(wal) == before, 'the log was changed', r)
     c.done()
 
+    # Another SQLite database's hot rollback journal (a transaction cut off by
+    # a kill) at the path: a new database there, and a database beside one,
+    # refuse it (SQLite would roll its pages back into the file).
+    cwd = fresh(os.path.join(root, 'journal'))
+    c = Case(11, "a killed SQLite writer's rollback journal at a new database's path, then beside a database",
+             'refused naming the -journal; no database created; the journal and the file untouched')
+    jpath = os.path.join(cwd, 'd.db')
+    code = ("import os, sqlite3, sys\n"
+            "c = sqlite3.connect(sys.argv[1], isolation_level=None)\n"
+            "c.execute('PRAGMA journal_mode=DELETE'); c.execute('CREATE TABLE t(x BLOB)')\n"
+            "for i in range(50): c.execute('INSERT INTO t VALUES (randomblob(3000))')\n"
+            "c.execute('PRAGMA cache_size=1'); c.execute('BEGIN'); c.execute('UPDATE t SET x = randomblob(3000)')\n"
+            "for i in range(50): c.execute('INSERT INTO t VALUES (randomblob(3000))')\n"
+            "os._exit(0)\n")
+    subprocess.run(['/usr/bin/python3', '-c', code, jpath], check=True)
+    journal = jpath + '-journal'
+    if c.check(os.path.isfile(journal) and os.path.getsize(journal) > 0, 'no hot journal was left (harness)'):
+        os.remove(jpath)
+        before = read(journal)
+        r = c.run(['run', '--sequence', seq, '--database', 'd.db', '--output', 'c.csv', '--min-gap', '20'], cwd)
+        msg(11, c.name, r)
+        c.check(r.rc != 0 and 'd.db-journal' in r.stderr, 'a new database was not refused naming the journal', r)
+        c.check(not os.path.exists(jpath), 'a database was created', r)
+        c.check(read(journal) == before, 'the journal was changed', r)
+        os.rename(journal, journal + '.old')
+        r = c.run(['run', '--sequence', seq, '--database', 'd.db', '--output', 'c.csv', '--min-gap', '20',
+                   '--last', '30'], cwd)
+        c.check(r.rc == 0, 'without the journal no database is made', r)
+        shutil.copyfile(journal + '.old', journal)
+        file_before = read(jpath)
+        for args in (['db', 'info', 'd.db'],
+                     ['run', '--sequence', seq, '--database', 'd.db', '--output', 'c2.csv', '--min-gap', '20']):
+            r = c.run(args, cwd, skip_inputs=['d.db-journal'])
+            msg(11, c.name, r)
+            c.check(r.rc != 0 and 'd.db-journal' in r.stderr, '%s: not refused naming the journal' % args[0], r)
+        c.check(read(jpath) == file_before, 'the database was changed')
+        c.check(read(journal) == before, 'the journal was changed')
+    c.done()
+
     # Another database's log beside a file (two killed writers of the same
     # options, other images): it would replay without damage; refused.
     cwd = fresh(os.path.join(root, 'foreign'))

@@ -1,11 +1,13 @@
 // The write-ahead log of a database (include/lsgd/io/database.h): a closed
 // database holds every frame in its file, a crashed writer's log is replayed,
 // a deleted database's log and a newer log beside a backup are refused, as
-// are companions that are not files and hard links; damage that would lose a
-// commit, a lost or cut log, a second writer.
+// are companions that are not files, a rollback journal at the path and
+// hard links; damage that would lose a commit, a lost or cut log, a second
+// writer.
 #include "lsgd/io/database.h"
 
 #include <gtest/gtest.h>
+#include <sqlite3.h>
 #include <sys/stat.h>
 #include <sys/wait.h>
 #include <unistd.h>
@@ -115,6 +117,67 @@ TEST(DatabaseWal, ANewDatabaseRefusesADeletedOnesLog) {
   EXPECT_EQ(db.frames(), 0);
 }
 
+// A hot rollback journal (a transaction of another SQLite database cut off
+// by a kill, its pages spilled): its bytes, taken while the transaction is
+// open.
+std::string hot_rollback_journal(const std::string& path) {
+  for (const char* suffix : {"", "-journal"}) fs::remove(path + suffix);
+  sqlite3* db = nullptr;
+  EXPECT_EQ(sqlite3_open(path.c_str(), &db), SQLITE_OK);
+  const auto exec = [&](const std::string& sql) {
+    EXPECT_EQ(sqlite3_exec(db, sql.c_str(), nullptr, nullptr, nullptr), SQLITE_OK) << sql;
+  };
+  exec("PRAGMA journal_mode=DELETE; CREATE TABLE t(x BLOB);");
+  for (int i = 0; i < 50; ++i) exec("INSERT INTO t VALUES (randomblob(3000))");
+  exec("PRAGMA cache_size=1; BEGIN; UPDATE t SET x = randomblob(3000);");
+  for (int i = 0; i < 50; ++i) exec("INSERT INTO t VALUES (randomblob(3000))");
+  const std::string journal = read_bytes(path + "-journal");
+  exec("ROLLBACK");
+  sqlite3_close(db);
+  for (const char* suffix : {"", "-journal"}) fs::remove(path + suffix);
+  return journal;
+}
+
+// A rollback journal at a database's path is never the database's own (a
+// database here is in WAL mode): SQLite would roll its pages back into the
+// file. A new database beside one left by a deleted database (which took
+// its pages and was then "damaged"), and a database beside one, are
+// refused, saying to move it away, with nothing created or changed.
+TEST(DatabaseWal, ARollbackJournalAtThePathIsRefused) {
+  const std::string path = temp_path("journal_new");
+  const std::string journal = hot_rollback_journal(path);
+  ASSERT_GT(journal.size(), 100000u);
+  write_bytes(path + "-journal", journal);
+  const DetectorOptions o = options(kExhaustiveSearch, "temporal");
+  std::string m = message_of<IoError>([&] { Database::create(path, o); });
+  EXPECT_NE(m.find("'" + path + "-journal' is the rollback journal of a database that was deleted"),
+            std::string::npos) << m;
+  EXPECT_NE(m.find("Move '" + path + "-journal' away"), std::string::npos) << m;
+  EXPECT_FALSE(fs::exists(path));
+  EXPECT_EQ(read_bytes(path + "-journal"), journal);
+  fs::rename(path + "-journal", path + "-journal.old");
+  {
+    Database db = Database::create(path, o);
+    Detector d(o);
+    run(d, 0, 6, &db);
+  }
+  const std::string file = read_bytes(path);
+  write_bytes(path + "-journal", journal);
+  for (const Database::Mode mode : {Database::Mode::kReadOnly, Database::Mode::kReadWrite}) {
+    m = message_of<IoError>([&] { Database::open(path, mode); });
+    EXPECT_NE(m.find("'" + path + "-journal' (" + std::to_string(journal.size()) +
+                     " bytes) is a rollback journal, which a database in WAL mode never has"),
+              std::string::npos) << m;
+    EXPECT_NE(m.find("move '" + path + "-journal' away"), std::string::npos) << m;
+  }
+  EXPECT_EQ(read_bytes(path), file);
+  EXPECT_EQ(read_bytes(path + "-journal"), journal);
+  fs::remove(path + "-journal");
+  Database db = Database::open(path);
+  EXPECT_EQ(db.frames(), 6);
+  EXPECT_NO_THROW(db.verify());
+}
+
 // A file restored from an older backup beside its newer log: refused, on
 // one line, saying to move the log away; moved away, the backup opens.
 TEST(DatabaseWal, ABackupBesideANewerLogSaysToMoveTheLogAway) {
@@ -160,6 +223,7 @@ TEST(DatabaseWal, CompanionsThatAreNotFilesAreRefusedByName) {
       {"-wal", "a FIFO", [](const std::string& p) { ASSERT_EQ(::mkfifo(p.c_str(), 0600), 0); }},
       {"-wal", "a symbolic link", [&](const std::string& p) { fs::create_symlink(other, p); }},
       {"-shm", "a directory", [](const std::string& p) { fs::create_directory(p); }},
+      {"-journal", "a directory", [](const std::string& p) { fs::create_directory(p); }},
   };
   for (const Case& c : cases) {
     SCOPED_TRACE(std::string(c.suffix) + " " + c.kind);

@@ -52,6 +52,7 @@ void check_file(const std::string& path, bool writable) {
   }
   if (!S_ISREG(st.st_mode)) io_error(path, "is not a regular file");
   check_companions(path);
+  check_rollback_journal(path, false);
   // Each name of a file has a log of its own: a writer through one name
   // would leave a log that a later open through the other replays over newer
   // frames (SQLite, "How To Corrupt An SQLite Database File", 2.6).
@@ -229,6 +230,7 @@ Database Database::create(const std::string& path, const DetectorOptions& option
   struct stat st;
   if (::stat(path.c_str(), &st) == 0) io_error(path, "already exists");
   check_companions(path);
+  check_rollback_journal(path, true);
   // A log left by a database deleted at this path (its writer killed, the
   // file removed): SQLite would replay its frames into the new database.
   if (::stat((path + "-wal").c_str(), &st) == 0 && st.st_size > 0) {

@@ -12,6 +12,7 @@
 #include <sqlite3.h>
 
 #include <cctype>
+#include <cstdio>
 #include <cstdlib>
 #include <optional>
 #include <random>
@@ -28,7 +29,7 @@ namespace lsgd::io {
 // Refuses a companion that is not a regular file (a folder, a FIFO, a link
 // elsewhere), naming it.
 void check_companions(const std::string& path) {
-  for (const char* suffix : {"-wal", "-shm"}) {
+  for (const char* suffix : {"-wal", "-shm", "-journal"}) {
     const std::string companion = path + suffix;
     struct stat st;
     if (::lstat(companion.c_str(), &st) != 0) continue;
@@ -38,9 +39,32 @@ void check_companions(const std::string& path) {
                        : S_ISFIFO(st.st_mode) ? "a FIFO"
                                               : "not a regular file";
     io_error(path, "'", companion, "' is ", kind, ", where SQLite keeps the database's ",
-             suffix[1] == 'w' ? "write-ahead log" : "shared index of the log",
+             suffix[1] == 'w' ? "write-ahead log" : suffix[1] == 's' ? "shared index of the log"
+                                                   : "rollback journal",
              ": move it away (nothing was changed)");
   }
+}
+
+void check_rollback_journal(const std::string& path, bool creating) {
+  const std::string journal = path + "-journal";
+  struct stat st;
+  if (::stat(journal.c_str(), &st) != 0 || st.st_size == 0) return;
+  if (creating) {
+    io_error(path, "'", journal, "' is the rollback journal of a database that was deleted at "
+             "this path (", st.st_size, " bytes): SQLite would roll its pages back into the new "
+             "database. Move '", journal, "' away, or give another path (nothing was created)");
+  }
+  // The header's write and read versions (bytes 18, 19): 2 in WAL mode.
+  unsigned char header[20] = {};
+  std::FILE* f = std::fopen(path.c_str(), "rb");
+  if (f == nullptr) return;  // the open names what is wrong with the file
+  const bool read = std::fread(header, 1, sizeof header, f) == sizeof header;
+  std::fclose(f);
+  if (!read || header[18] != 2 || header[19] != 2) return;
+  io_error(path, "'", journal, "' (", st.st_size, " bytes) is a rollback journal, which a database "
+           "in WAL mode never has: it was left by another database at this path, and SQLite "
+           "would roll its pages back into this one. Nothing was changed; move '", journal,
+           "' away to open the database");
 }
 
 bool companions_cannot_be_created(const std::string& path) {

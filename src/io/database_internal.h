@@ -518,9 +518,16 @@ struct Database::Impl {
                     const std::vector<FrameKeys>& rows, const std::string& first_ids);
 };
 
-// Refuses a companion of `path` (FILE-wal, FILE-shm) that is not a regular
-// file (a folder, a FIFO, a link elsewhere), naming it.
+// Refuses a companion of `path` (FILE-wal, FILE-shm, FILE-journal) that is
+// not a regular file (a folder, a FIFO, a link elsewhere), naming it.
 void check_companions(const std::string& path);
+// Refuses a rollback journal (FILE-journal) with any bytes beside `path`
+// when it cannot be the database's own, saying to move it away: SQLite
+// would roll its pages back into the file. `creating`: no database is at
+// `path` (a journal left by one deleted there); else one whose header says
+// WAL mode (which never has a rollback journal; an old file in rollback
+// mode keeps its own).
+void check_rollback_journal(const std::string& path, bool creating);
 // True when FILE-wal and FILE-shm cannot be created beside `path`: a
 // read-only file system, or a folder this user cannot write.
 bool companions_cannot_be_created(const std::string& path);

@@ -200,7 +200,8 @@ struct DecisionQuery {
 // the geometric check with kRankingTrackInliers of the track's average
 // inliers, unless it looks unlike the query (single frame below
 // kRankingTrackMinZ: a scene cut) or crosses a place found (the continuity
-// rule's); the track is the ranking's own, whatever the decision declared. (The constants are the decision's defaults.)
+// rule's); the track is the ranking's own, whatever the decision declared.
+// (The constants are the decision's defaults.)
 struct Ranking {
   Candidate best;          // frame -1: no candidate (or every one gated)
   bool confirmed = false;  // every confirming stage accepts it (true without one)

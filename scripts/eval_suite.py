@@ -188,7 +188,9 @@ for name, parts in maps:
 def evaluate(name, dataset, gt, w):
     os.makedirs(os.path.join(W, 'runs'), exist_ok=True)
     stem = os.path.join(W, 'runs', name)
-    cmd = [args.lsgd, 'eval', '--sequence', dataset, '--gt', gt, '--gt-format', 'pairs', '--min-gap', str(w), '--json',
+    # The dataset's list when it has one: binaries from before dataset folders read it too.
+    listed = os.path.join(dataset, 'sequence.txt')
+    cmd = [args.lsgd, 'eval', '--sequence', listed if os.path.isfile(listed) else dataset, '--gt', gt, '--gt-format', 'pairs', '--min-gap', str(w), '--json',
            stem + '.json', '--output', stem + '.csv'] + [a for o in args.option for a in ('--option', o)]
     r = subprocess.run(cmd, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
     if r.returncode != 0:
@@ -220,6 +222,11 @@ results = {}
 for n in names:
     s = suite[n]
     m, rows = jobs[n].result()
+    if 'declared_loops' not in m:  # a binary from before the loop decision's counts: from its CSV
+        m['declared_loops'] = sum(1 for q, j in rows if j >= 0)
+        m['declared_true'] = true_loops(rows, s['gt'])
+        m['declared_false'] = m['declared_loops'] - m['declared_true']
+        m['recall_at_decision'] = m['declared_true'] / max(1, m['positives'])
     entry = {k: m[k] for k in ('declared_loops', 'declared_true', 'declared_false', 'positives',
                                'recall_at_decision', 'recall_at_100_precision', 'average_precision',
                                'recall_at_1', 'ms_per_frame_median', 'ms_per_frame_p95')}
@@ -234,7 +241,7 @@ for n in names:
         for (first, count), part in zip(spans, s['parts']):
             am, arows = jobs[part].result()
             entry['parts'].append({'part': os.path.basename(part[0]), 'true_in_map': true_loops(rows, s['gt'], first, count),
-                                   'true_alone': am['declared_true']})
+                                   'true_alone': am.get('declared_true', true_loops(arows, part[1]))})
     results[n] = entry
 
 print('| sequence | kind | declared (TP / FP) | recall at decision | R@100P | AP | R@1 | each part: true loops in the map (alone) | ms median / p95 |')

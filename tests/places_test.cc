@@ -317,6 +317,52 @@ TEST(PlacesDetector, FindsThePlacesAndRestoresThem) {
             decode_records(restored.frame_state(0).data(), restored.frame_state(0).size()).size() - 1);
 }
 
+// The street (place A), the turned street (B), then A's last 40 frames and
+// B's first 60 again: a revisit that runs from A into B, across the map's
+// cut at kCut and the query's own at 2 kCut + 40 (the return from B to A is
+// not a place: the place_cut of these frames is not reached there).
+cv::Mat revisit_across_frame(std::int64_t i) {
+  if (i < 2 * kCut) return two_place_frame(i);
+  if (i < 2 * kCut + 40) return test::frame(kCut - 40 + (i - 2 * kCut));
+  return turned(test::frame(i - 2 * kCut - 40));
+}
+
+// A loop is not continued across a place the map has found (decision.h): a
+// continuing loop's run of loops began in the query's place, and its frame
+// j is in the place of the loop it continues, by the places known when the
+// query came; the revisit is found again as a first loop.
+TEST(PlacesDetector, NoLoopIsContinuedAcrossAPlaceFound) {
+  DetectorOptions o = place_options();
+  Detector d(o);
+  const auto place_of = [](const std::vector<std::int64_t>& starts, std::int64_t f) {
+    std::int64_t p = 0;
+    for (const std::int64_t s : starts) p = s <= f ? s : p;
+    return p;
+  };
+  std::int64_t held = -1, held_query = -1, since = -1;
+  int continued = 0, loops_in_b = 0;
+  for (std::int64_t i = 0; i < 2 * kCut + 100; ++i) {
+    const std::vector<std::int64_t> known = d.place_starts();
+    const Result r = d.process(revisit_across_frame(i));
+    if (!r.loop) continue;
+    if (r.evidence.continues) {
+      ++continued;
+      EXPECT_EQ(place_of(known, r.best.frame), place_of(known, held)) << "query " << i << ": " << held << " -> "
+                                                                        << r.best.frame;
+      EXPECT_GE(since, place_of(known, i)) << "query " << i << " continues a run begun at " << since;
+    }
+    since = held >= 0 && i - held_query <= 1 + o.decision.continuity_gap ? since : i;
+    held = r.best.frame, held_query = i;
+    if (i >= 2 * kCut + 40 && r.best.frame >= kCut) ++loops_in_b;
+  }
+  // The map's cut at kCut and the revisit's into the turned street.
+  ASSERT_GE(d.place_starts().size(), 2u) << testing::PrintToString(d.place_starts());
+  EXPECT_NEAR(static_cast<double>(d.place_starts().front()), kCut, 1);
+  EXPECT_NEAR(static_cast<double>(d.place_starts().back()), 2 * kCut + 40, 1);
+  EXPECT_GT(continued, 20) << "the revisits continue their loops within each place";
+  EXPECT_GT(loops_in_b, 20) << "the revisit of the turned street is found again";
+}
+
 // Forgetting frames renumbers the places; a place whose first frame is
 // forgotten is none; the map goes on finding places.
 TEST(PlacesDetector, ForgettingFramesRenumbersThePlaces) {

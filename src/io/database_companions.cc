@@ -17,6 +17,7 @@
 #include <optional>
 #include <random>
 #include <string>
+#include <utility>
 
 #include "io/database_internal.h"
 
@@ -25,11 +26,14 @@
 namespace lsgd::io {
 
 // SQLite keeps a database's write-ahead log and its index beside the name it
-// was opened by (FILE-wal, FILE-shm) and trusts whatever it finds there.
-// Refuses a companion that is not a regular file (a folder, a FIFO, a link
-// elsewhere), naming it.
+// was opened by (FILE-wal, FILE-shm; FILE-journal in rollback mode) and
+// trusts whatever it finds there.
+// Refuses a companion (FILE-wal, FILE-shm, FILE-journal) that is not a
+// regular file (a folder, a FIFO, a link elsewhere), naming it.
 void check_companions(const std::string& path) {
-  for (const char* suffix : {"-wal", "-shm", "-journal"}) {
+  constexpr std::pair<const char*, const char*> kCompanions[] = {
+      {"-wal", "write-ahead log"}, {"-shm", "shared index of the log"}, {"-journal", "rollback journal"}};
+  for (const auto& [suffix, what] : kCompanions) {
     const std::string companion = path + suffix;
     struct stat st;
     if (::lstat(companion.c_str(), &st) != 0) continue;
@@ -38,9 +42,7 @@ void check_companions(const std::string& path) {
                        : S_ISLNK(st.st_mode)  ? "a symbolic link"
                        : S_ISFIFO(st.st_mode) ? "a FIFO"
                                               : "not a regular file";
-    io_error(path, "'", companion, "' is ", kind, ", where SQLite keeps the database's ",
-             suffix[1] == 'w' ? "write-ahead log" : suffix[1] == 's' ? "shared index of the log"
-                                                   : "rollback journal",
+    io_error(path, "'", companion, "' is ", kind, ", where SQLite keeps the database's ", what,
              ": move it away (nothing was changed)");
   }
 }

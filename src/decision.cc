@@ -7,6 +7,7 @@
 
 #include "internal/check.h"
 #include "internal/clock.h"
+#include "lsgd/places.h"
 
 namespace lsgd {
 
@@ -75,25 +76,17 @@ void ContinuityState::hold(std::int64_t q, std::int64_t frame, double frame_inli
 
 namespace {
 
-// The first frame of the place holding `frame` (0: the first place).
-std::int64_t place_start(const std::vector<std::int64_t>* places, std::int64_t frame) {
-  if (places == nullptr) return 0;
-  const auto it = std::upper_bound(places->begin(), places->end(), frame);
-  return it == places->begin() ? 0 : *(it - 1);
-}
-
-// The last frame of the place holding `frame`.
-std::int64_t place_end(const std::vector<std::int64_t>* places, std::int64_t frame) {
-  if (places == nullptr) return std::numeric_limits<std::int64_t>::max();
-  const auto it = std::upper_bound(places->begin(), places->end(), frame);
-  return it == places->end() ? std::numeric_limits<std::int64_t>::max() : *it - 1;
+// The places a query knows (none: one place).
+const std::vector<std::int64_t>& places_of(const std::vector<std::int64_t>* places) {
+  static const std::vector<std::int64_t> kOne;
+  return places != nullptr ? *places : kOne;
 }
 
 // The held loop's run began in the query's place: it may be continued there
 // (within its frame j's place: place_end()).
 bool same_place(const std::vector<std::int64_t>* places, const ContinuityState::Held& held,
                 std::int64_t query) {
-  return held.since >= place_start(places, query);
+  return held.since >= place_start(places_of(places), query);
 }
 
 }  // namespace
@@ -140,7 +133,8 @@ double LoopDecision::rank(const DecisionQuery& q, const Candidate& best,
   out.ranking.best = best;
   out.ranking.confirmed = best.frame >= 0;
   bool tracking = q.continuity && best.frame >= 0 && track_.continues(q.frame, best.frame, q.tolerance, 0) &&
-                  same_place(q.places, track_.held, q.frame) && best.frame <= place_end(q.places, track_.held.loop);
+                  same_place(q.places, track_.held, q.frame) &&
+                  best.frame <= place_end(places_of(q.places), track_.held.loop);
   if (tracking && q.single_frame && !confirms.empty()) {
     tracking = !(q.single_frame(best.frame) < kRankingTrackMinZ);  // a scene cut; NaN: not unlike
   }
@@ -230,7 +224,7 @@ LoopDecision::Window LoopDecision::open_window(const DecisionQuery& q, const Can
            state_.continues(q.frame, w.held, q.tolerance, d.continuity_gap) &&
            same_place(q.places, state_.held, q.frame);
   // Frame j stays in its place.
-  w.end = std::min(state_.window_end(q.frame, q.tolerance), place_end(q.places, w.held));
+  w.end = std::min(state_.window_end(q.frame, q.tolerance), place_end(places_of(q.places), w.held));
   // Over more than one frame without a loop, only the candidate appearance
   // ranks first continues it (a track kept by weaker candidates falls
   // behind the revisit).

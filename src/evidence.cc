@@ -6,6 +6,7 @@
 #include <utility>
 
 #include "internal/check.h"
+#include "lsgd/places.h"
 
 namespace lsgd {
 namespace {
@@ -170,8 +171,7 @@ const ScoreStatistics& AppearanceEvidence::of_place(const std::vector<ScoreStati
 }
 
 std::int64_t AppearanceEvidence::place_start(std::int64_t frame) const {
-  const std::size_t p = place_of(frame);
-  return p == 0 ? 0 : cuts_[p - 1];
+  return lsgd::place_start(cuts_, frame);
 }
 
 double AppearanceEvidence::standardise_min(const ScoreStatistics& all,

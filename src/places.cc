@@ -81,6 +81,16 @@ double signature_similarity(const std::uint8_t* a, const std::uint8_t* b) {
   return 1.0 - 0.5 * distance / (255.0 * kGrid * kGrid);
 }
 
+std::int64_t place_start(const std::vector<std::int64_t>& cuts, std::int64_t frame) {
+  const auto it = std::upper_bound(cuts.begin(), cuts.end(), frame);
+  return it == cuts.begin() ? 0 : *(it - 1);
+}
+
+std::int64_t place_end(const std::vector<std::int64_t>& cuts, std::int64_t frame) {
+  const auto it = std::upper_bound(cuts.begin(), cuts.end(), frame);
+  return it == cuts.end() ? std::numeric_limits<std::int64_t>::max() : *it - 1;
+}
+
 double block_contrast(const std::uint8_t* const* block) {
   for (int k = 0; k < 2 * kPlaceBlock; ++k) {
     if (block[k] == nullptr) return kNone;

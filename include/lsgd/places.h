@@ -52,6 +52,13 @@ double signature_similarity(const std::uint8_t* a, const std::uint8_t* b);
 // frame order); -infinity when one is missing (nullptr).
 double block_contrast(const std::uint8_t* const* block);
 
+// The first frame of the place holding `frame`, given the first frames of
+// the places after the first (`cuts`, ascending: PlaceCuts::cuts()); 0 in
+// the first place.
+std::int64_t place_start(const std::vector<std::int64_t>& cuts, std::int64_t frame);
+// The last frame of the place holding `frame` (INT64_MAX in the last place).
+std::int64_t place_end(const std::vector<std::int64_t>& cuts, std::int64_t frame);
+
 // The places found so far, and every frame's signature (Stateful "places":
 // each frame's record is its signature and the cut found when it was stored,
 // so a restored map has the places it had).

@@ -64,16 +64,40 @@ bool is_matrix_class(matio_classes c) {
   return c == MAT_C_SPARSE || (c >= MAT_C_DOUBLE && c <= MAT_C_UINT64);
 }
 
-bool is_square_matrix(const matvar_t& v) {
-  return v.rank == 2 && v.dims && v.dims[0] == v.dims[1] && is_matrix_class(v.class_type) &&
-         !v.isComplex;
-}
+// A variable as read_mat() sees it: matio's description, but a v4 sparse
+// matrix's size from its last row (matio describes it by its stored
+// triplets, nonzeros + 1 rows by 3 columns).
+struct Variable {
+  std::string text;      // name, size, class: for messages
+  bool square = false;   // a square 2-D real numeric, logical or sparse matrix
+  std::size_t n = 0;     // its size when square
+  const V4Variable* v4_sparse = nullptr;
+};
 
-std::string describe(const matvar_t& v) {
+Variable describe(const matvar_t& v, const Container& c, const std::string& path) {
+  Variable out;
+  std::uint64_t rows = v.rank == 2 && v.dims ? v.dims[0] : 0, cols = v.rank == 2 && v.dims ? v.dims[1] : 0;
+  bool complex = v.isComplex != 0;
+  if (v.class_type == MAT_C_SPARSE && v.name && !c.v4.empty()) {
+    out.v4_sparse = find_v4(c, v.name);
+    if (out.v4_sparse) {
+      const V4Shape shape = v4_sparse_shape(path, *out.v4_sparse);
+      rows = shape.rows;
+      cols = shape.cols;
+      complex = shape.complex;
+    }
+  }
   std::string dims;
-  for (int i = 0; i < v.rank && v.dims; ++i) dims += (i ? "x" : "") + std::to_string(v.dims[i]);
-  return concat(v.name ? v.name : "?", " ", dims, " class ", static_cast<int>(v.class_type),
-                v.isLogical ? " logical" : "", v.isComplex ? " complex" : "");
+  if (out.v4_sparse) {
+    dims = concat(rows, "x", cols);
+  } else {
+    for (int i = 0; i < v.rank && v.dims; ++i) dims += (i ? "x" : "") + std::to_string(v.dims[i]);
+  }
+  out.text = concat(v.name ? v.name : "?", " ", dims, " class ", static_cast<int>(v.class_type),
+                    v.isLogical ? " logical" : "", complex ? " complex" : "");
+  out.square = v.rank == 2 && v.dims && rows == cols && is_matrix_class(v.class_type) && !complex;
+  out.n = static_cast<std::size_t>(rows);
+  return out;
 }
 
 bool looks_like_gt_name(const char* name) {
@@ -84,13 +108,14 @@ bool looks_like_gt_name(const char* name) {
 }
 
 // The name of the variable read_mat() reads (see the header for the rule).
-std::string choose_variable(mat_t* mat, const std::string& path) {
+std::string choose_variable(mat_t* mat, const Container& c, const std::string& path) {
   std::string first, named, seen;
   int count = 0;
   while (MatVar info{Mat_VarReadNextInfo(mat)}) {
     ++count;
-    seen += (seen.empty() ? "" : ", ") + describe(*info);
-    if (!is_square_matrix(*info) || !info->name) continue;
+    const Variable var = describe(*info, c, path);
+    seen += (seen.empty() ? "" : ", ") + var.text;
+    if (!var.square || !info->name) continue;
     if (first.empty()) first = info->name;
     if (named.empty() && looks_like_gt_name(info->name)) named = info->name;
   }
@@ -188,12 +213,13 @@ GroundTruth read_mat(const std::string& path, std::int64_t frames, const std::st
   if (version == MAT_FT_MAT5) check_matrix_headers(path, container);
   std::string name = variable;
   if (name.empty()) {
-    name = choose_variable(mat.get(), path);
+    name = choose_variable(mat.get(), container, path);
   } else {
     MatVar info{Mat_VarReadInfo(mat.get(), name.c_str())};
     if (!info) throw FormatError(concat("'", path, "' has no variable '", name, "'"));
-    if (!is_square_matrix(*info)) {
-      throw FormatError(concat("'", path, "': variable ", describe(*info),
+    const Variable var = describe(*info, container, path);
+    if (!var.square) {
+      throw FormatError(concat("'", path, "': variable ", var.text,
                                " is not a square 2-D real numeric, logical or sparse matrix"));
     }
   }
@@ -202,7 +228,8 @@ GroundTruth read_mat(const std::string& path, std::int64_t frames, const std::st
     throw FormatError(
         concat("cannot read variable '", name, "' from '", path, "'", matio_detail()));
   }
-  const std::size_t n = info->dims[0];
+  const Variable chosen = describe(*info, container, path);
+  const std::size_t n = chosen.n;
   if (frames >= 0 && n != static_cast<std::size_t>(frames)) {
     throw FormatError(concat("'", path, "': matrix '", name, "' is ", n, "x", n,
                              " but the sequence has ", frames, " frames"));
@@ -214,6 +241,10 @@ GroundTruth read_mat(const std::string& path, std::int64_t frames, const std::st
   GroundTruth gt(static_cast<std::int64_t>(n));
   if (version == MAT_FT_MAT5) {
     read_v5(path, container, name, n, gt);  // checks the data against the dimensions
+    return gt;
+  }
+  if (chosen.v4_sparse) {  // matio would allocate the column index the last row claims
+    read_v4_sparse(path, *chosen.v4_sparse, n, gt);
     return gt;
   }
   if (info->class_type != MAT_C_SPARSE &&

@@ -25,15 +25,44 @@ struct V5Element {
   std::uint32_t type, bytes;
 };
 
+// A MAT v4 variable's header (mat_v4.cc).
+struct V4Variable {
+  std::string name;
+  std::uint32_t type = 0;      // MOPT: M * 1000 + O * 100 + P * 10 + T
+  std::uint64_t rows = 0, cols = 0;
+  bool complex = false;        // imagf: the values twice
+  bool swapped = false;        // written with the other byte order
+  std::uint64_t data = 0;      // offset of its first value
+  bool sparse() const { return type % 10 == 2; }
+};
+
 struct Container {
   bool swapped = false;             // v5 written with the other byte order
   std::vector<V5Element> elements;  // v5 top-level elements
+  std::vector<V4Variable> v4;       // v4 variables
+};
+
+// The size a v4 sparse matrix holds in its last row.
+struct V4Shape {
+  std::uint64_t rows = 0, cols = 0;
+  bool complex = false;
 };
 
 // Checks that every top-level element of a v5 file fits in it (matio trusts
 // the byte counts: a truncated file would read as zeros); FormatError naming
 // the file otherwise.
 Container check_container(const std::string& path, mat_ft version);
+// v4 (mat_v4.cc): checks that every variable's header, name and values fit
+// in the file (`size` bytes; matio mallocs what a header claims) and lists
+// the variables in c.v4.
+void check_v4_container(const std::string& path, std::uint64_t size, Container& c);
+// The v4 variable `name`, nullptr when there is none.
+const V4Variable* find_v4(const Container& c, const std::string& name);
+// The size of v4 sparse variable v (matio describes it by its stored triplets,
+// rows x 3); FormatError when its last row is not a size.
+V4Shape v4_sparse_shape(const std::string& path, const V4Variable& v);
+// Reads v4 sparse variable v (n x n) into `gt`, checking every index.
+void read_v4_sparse(const std::string& path, const V4Variable& v, std::size_t n, GroundTruth& gt);
 // Checks the array headers of every top-level matrix of a v5 file.
 void check_matrix_headers(const std::string& path, const Container& c);
 // Reads top-level variable `name` (n x n) of a v5 file into `gt`.

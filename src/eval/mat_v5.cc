@@ -38,8 +38,7 @@ namespace {
 // element: array flags (class in the low byte), dimensions, name, real part.
 // A sub-element whose first word has nonzero upper 16 bits is "small": type
 // in the low 16 bits, byte count in the high 16, data in the next 4 bytes.
-// v4: per variable a 20-byte header (MOPT type, rows, cols, imagf, name
-// length), the name and rows x cols values (twice when complex).
+// v4: mat_v4.cc.
 
 constexpr std::uint32_t kMiMatrix = 14, kMiCompressed = 15;
 
@@ -99,28 +98,7 @@ Container check_container(const std::string& path, mat_ft version) {
       if (e.type != kMiCompressed) pos = std::min(size, (pos + 7) / 8 * 8);
     }
   } else if (version == MAT_FT_MAT4) {
-    for (std::uint64_t pos = 0; pos < size;) {
-      if (size - pos < 20) throw truncated(pos, 20);
-      read_at(pos, b, 20);
-      // matio's rule: a MOPT type outside 0..4052 is read byte-swapped.
-      const bool swap = u32(b, false) > 4052;
-      const std::uint64_t type = u32(b, swap), rows = u32(b + 4, swap), cols = u32(b + 8, swap);
-      const std::uint64_t parts = u32(b + 12, swap) ? 2 : 1, name = u32(b + 16, swap);
-      static constexpr std::uint64_t kElem[] = {8, 4, 4, 2, 2, 1};
-      const std::uint64_t p = (type / 10) % 10;
-      if (name < 1 || name > size - pos - 20) {
-        throw FormatError(concat("'", path, "' is not a readable MAT file: v4 variable name length ",
-                                 name, " at byte ", pos, " does not fit in the file's ", size,
-                                 " bytes"));
-      }
-      if (p > 5 || rows * cols > (std::uint64_t{1} << 50)) {
-        throw FormatError(concat("'", path, "': corrupt MAT v4 header at byte ", pos, " (",
-                                 rows, " x ", cols, " values of type ", type, ")"));
-      }
-      const std::uint64_t need = 20 + name + rows * cols * kElem[p] * parts;
-      if (need > size - pos) throw truncated(pos, need);
-      pos += need;
-    }
+    check_v4_container(path, size, c);
   }
   return c;
 }

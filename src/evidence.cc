@@ -129,24 +129,53 @@ ScoreStatistics AppearanceEvidence::kept_statistics(std::int64_t query,
                                                     const std::vector<double>& values,
                                                     std::vector<ScoreStatistics>& by_place) {
   const auto every = static_cast<std::size_t>(statistics_stride(query) / stride(query));
-  ScoreStatistics all;
-  if (every == 1) {
-    all = statistics(values.data(), values.size());
+  // Each part of the map summarises the values of its own frames, over all
+  // and by place (what a map part answers a query with); the merged summaries
+  // are the map's. With one part and one place, one summary.
+  const std::size_t places = cuts_.empty() ? 0 : cuts_.size() + 1, width = places + 1;
+  part_summaries_.assign((parts_.size() + 1) * width, StatisticsSummary{});
+  const std::int64_t newest = query - min_gap_ - 1, s = stride(query);
+  if (parts_.empty() && places == 0) {
+    for (std::size_t k = 0; k < values.size(); k += every) part_summaries_[0].add(values[k]);
   } else {
-    subset_.clear();
-    for (std::size_t k = 0; k < values.size(); k += every) subset_.push_back(values[k]);
-    all = statistics(subset_.data(), subset_.size());
+    for (std::size_t k = 0; k < values.size(); k += every) {
+      const std::int64_t frame = newest - static_cast<std::int64_t>(k) * s;
+      StatisticsSummary* part = &part_summaries_[part_of(frame) * width];
+      part[0].add(values[k]);
+      if (places > 0) part[1 + place_of(frame)].add(values[k]);
+    }
+  }
+  // Merged last part first: integer sums do not depend on the order.
+  StatisticsSummary all;
+  summaries_.assign(places, StatisticsSummary{});
+  for (std::size_t p = parts_.size() + 1; p-- > 0;) {
+    all.merge(part_summaries_[p * width]);
+    for (std::size_t place = 0; place < places; ++place) {
+      summaries_[place].merge(part_summaries_[p * width + 1 + place]);
+    }
   }
   by_place.clear();
-  if (cuts_.empty()) return all;
-  // Each place's own: the same diagonals, summed by the place of their frame.
-  summaries_.assign(cuts_.size() + 1, StatisticsSummary{});
-  const std::int64_t newest = query - min_gap_ - 1, s = stride(query);
-  for (std::size_t k = 0; k < values.size(); k += every) {
-    summaries_[place_of(newest - static_cast<std::int64_t>(k) * s)].add(values[k]);
-  }
   for (const StatisticsSummary& summary : summaries_) by_place.push_back(summary.statistics());
-  return all;
+  return all.statistics();
+}
+
+void AppearanceEvidence::set_parts(const std::vector<std::int64_t>& firsts) {
+  for (std::size_t k = 0; k < firsts.size(); ++k) {
+    if (firsts[k] <= 0 || (k > 0 && firsts[k] <= firsts[k - 1])) {
+      internal::throw_invalid("AppearanceEvidence::set_parts: part ", k + 1, " begins at frame ",
+                              firsts[k], ", not after the one before");
+    }
+  }
+  parts_ = firsts;
+  // The prior's summaries so far, regrouped: their merged sums are unchanged.
+  StatisticsSummary prior;
+  for (const StatisticsSummary& part : prior_parts_) prior.merge(part);
+  prior_parts_.assign(parts_.size() + 1, StatisticsSummary{});
+  prior_parts_[0] = prior;
+}
+
+std::size_t AppearanceEvidence::part_of(std::int64_t frame) const {
+  return static_cast<std::size_t>(std::upper_bound(parts_.begin(), parts_.end(), frame) - parts_.begin());
 }
 
 void AppearanceEvidence::set_places(const std::vector<std::int64_t>& cuts) {
@@ -207,9 +236,19 @@ bool AppearanceEvidence::young(std::int64_t query) const {
   return offsets(query, min_gap_) < kMinCalibration;
 }
 
-ScoreStatistics AppearanceEvidence::prior(const std::vector<double>& values) {
-  prior_.insert(prior_.end(), values.begin(), values.end());
-  return statistics(prior_.data(), prior_.size());
+void AppearanceEvidence::add_to_prior(std::int64_t query, const std::vector<double>& values) {
+  prior_parts_.resize(parts_.size() + 1);
+  const std::int64_t newest = query - min_gap_ - 1;  // a young query's stride is 1
+  for (std::size_t k = 0; k < values.size(); ++k) {
+    prior_parts_[part_of(newest - static_cast<std::int64_t>(k))].add(values[k]);
+  }
+}
+
+ScoreStatistics AppearanceEvidence::prior(std::int64_t query, const std::vector<double>& values) {
+  add_to_prior(query, values);
+  StatisticsSummary merged;
+  for (std::size_t p = prior_parts_.size(); p-- > 0;) merged.merge(prior_parts_[p]);
+  return merged.statistics();
 }
 
 std::int64_t AppearanceEvidence::diagonals(std::int64_t query) const {
@@ -317,7 +356,7 @@ void AppearanceEvidence::add_query(const FrameStore& store, const DescriptorView
   r.query = query;
   r.stats = kept_statistics(query, scratch_, r.places);
   const ScoreStatistics own = r.stats;
-  level1_ = young(query) ? prior(scratch_) : own;
+  level1_ = young(query) ? prior(query, scratch_) : own;
   level2_ = ScoreStatistics{};
   level2_places_.clear();
   scored_.clear();
@@ -558,11 +597,11 @@ void AppearanceEvidence::rebuild(const FrameStore& store, SimilarityMetric metri
   level2_places_.clear();
   last_query_ = store.size() - 1;
   // The prior, when the next query is young: every young query's similarities.
-  prior_.clear();
+  prior_parts_.assign(parts_.size() + 1, StatisticsSummary{});
   if (young(store.size())) {
     for (std::int64_t q = 0; q < store.size(); ++q) {
       diagonal_similarities(store, store.view(q), q, metric, nullptr, scratch_);
-      prior_.insert(prior_.end(), scratch_.begin(), scratch_.end());
+      add_to_prior(q, scratch_);
     }
   }
   if (!options_.enabled || store.empty()) return;

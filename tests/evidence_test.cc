@@ -5,23 +5,20 @@
 // the store that matches an uninterrupted run bit for bit. This file: the
 // statistics and their summaries, young queries, the definition in every
 // mode, best places, query order; the exact-statistics limit, realignment
-// and rebuilds: evidence_modes_test.cc.
+// and rebuilds: evidence_modes_test.cc; a map split into parts, on real
+// sequences: evidence_parts_test.cc.
 #include "lsgd/evidence.h"
 
 #include <gtest/gtest.h>
 
 #include <algorithm>
 #include <cmath>
-#include <filesystem>
 #include <limits>
-#include <opencv2/core.hpp>
 #include <random>
 #include <set>
 #include <utility>
 
-#include "lsgd/detector.h"
 #include "lsgd/error.h"
-#include "lsgd/io/sequence.h"
 #include "evidence_test_support.h"
 #include "test_util.h"
 
@@ -92,53 +89,8 @@ TEST(StatisticsSummary, AnySplitMergesToTheWholeBitForBit) {
   EXPECT_THROW(big.merge(big), InvalidArgument);
 }
 
-// On real sequences: every query's similarity statistics over the map, from
-// the summaries of the map split into k = 1, 2, 3 parts (frame ranges, as
-// a fleet's shards would hold them), equal the whole map's bit for bit.
-TEST(StatisticsSummary, RealMapsSplitIntoPartsGiveTheSameStatistics) {
-  namespace fs = std::filesystem;
-  const fs::path root = fs::path(LSGD_SHARED_DIR) / "datasets";
-  int sequences = 0;
-  for (const char* name : {"corridor", "lip6-outdoor"}) {
-    if (!fs::is_regular_file(root / name / "sequence.txt")) continue;
-    SCOPED_TRACE(name);
-    ++sequences;
-    const std::int64_t w = 50;
-    DetectorOptions options;
-    options.search.min_gap = w;
-    options.verification.stages = {};  // the statistics only
-    Detector detector(options);
-    const io::Sequence seq = io::open_sequence((root / name / "sequence.txt").string());
-    const std::size_t n = std::min<std::size_t>(seq.images.size(), 300);
-    for (std::size_t i = 0; i < n; ++i) detector.process(io::read_image(seq.images[i]));
-    int queries = 0;
-    for (std::int64_t q = w + 1 + kMinCalibration; q < detector.size(); q += 7) {
-      const std::int64_t candidates = q - w;
-      std::vector<double> row;
-      for (std::int64_t j = 0; j < candidates; ++j) row.push_back(detector.similarity(q, j));
-      const ScoreStatistics whole = statistics(row.data(), row.size());
-      for (const std::int64_t k : {1, 2, 3}) {
-        // Part p holds frames [p * size / k, (p + 1) * size / k) of the map.
-        StatisticsSummary merged;
-        for (std::int64_t p = k - 1; p >= 0; --p) {
-          StatisticsSummary part;
-          const std::int64_t first = p * detector.size() / k, end = (p + 1) * detector.size() / k;
-          for (std::int64_t j = first; j < std::min(end, candidates); ++j) {
-            part.add(row[static_cast<std::size_t>(j)]);
-          }
-          merged.merge(part);
-        }
-        const ScoreStatistics s = merged.statistics();
-        ASSERT_EQ(s.count, whole.count) << q;
-        ASSERT_EQ(s.mean, whole.mean) << q << " k " << k;
-        ASSERT_EQ(s.sd, whole.sd) << q << " k " << k;
-      }
-      ++queries;
-    }
-    EXPECT_GT(queries, 10);
-  }
-  if (sequences == 0) GTEST_SKIP() << "no real sequence under " << root << " (../shared is absent)";
-}
+// On real sequences, the evidence of a map split into 1, 2 or 3 parts:
+// tests/evidence_parts_test.cc.
 
 // A young query (fewer than kMinCalibration candidates) has no statistics of
 // its own and no sequence evidence; its similarities are standardised with

@@ -165,6 +165,17 @@ class AppearanceEvidence {
   // The place of frame j (0 before the first cut).
   std::size_t place_of(std::int64_t frame) const;
 
+  // The map in parts (issue 34's shards): the first frames of the parts
+  // after the first (ascending). Every statistic (both levels, over the map
+  // and by place, and the prior) is then the merge of each part's summary of
+  // its own frames' values, as a map split over k machines computes it; the
+  // scores are those of one part bit for bit (docs/design.md, "Statistics
+  // that merge"). Takes effect from the next query.
+  void set_parts(const std::vector<std::int64_t>& firsts);
+  const std::vector<std::int64_t>& parts() const { return parts_; }
+  // The part of frame j (0 before the second part's first frame).
+  std::size_t part_of(std::int64_t frame) const;
+
   // Statistics of the last added query's similarities (level 1) and, with
   // sequences on, of its sequence scores (level 2), over the whole map.
   const ScoreStatistics& similarity_statistics() const { return level1_; }
@@ -278,8 +289,11 @@ class AppearanceEvidence {
   // out (add_query, with cuts).
   void sums_within_places(std::int64_t query);
   bool young(std::int64_t query) const;
-  // Adds a young query's similarities to the prior and returns its statistics.
-  ScoreStatistics prior(const std::vector<double>& values);
+  // Adds a young query's similarities (slot k: frame query - min_gap - 1 - k)
+  // to the prior, each to its part's summary ...
+  void add_to_prior(std::int64_t query, const std::vector<double>& values);
+  // ... and returns the merged statistics.
+  ScoreStatistics prior(std::int64_t query, const std::vector<double>& values);
   void push_row(Row row);
   // Statistics of `values` (one per kept diagonal of `query`) over the
   // diagonals of statistics_stride(query): of all of them (returned) and,
@@ -340,11 +354,13 @@ class AppearanceEvidence {
   ScoreStatistics level1_, level2_;
   std::vector<ScoreStatistics> level2_places_;  // level 2 by place
   std::vector<std::int64_t> cuts_;              // set_places()
-  std::vector<StatisticsSummary> summaries_;    // kept_statistics()
+  std::vector<std::int64_t> parts_;             // set_parts()
+  std::vector<StatisticsSummary> summaries_;    // kept_statistics(): by place, merged
+  std::vector<StatisticsSummary> part_summaries_;  // ... by part: all, then by place
   std::vector<double> scratch_;
-  std::vector<double> subset_;     // kept_statistics()
-  // The prior: the similarities of every young query so far, pooled.
-  std::vector<double> prior_;
+  // The prior: the similarities of every young query so far, summarised by
+  // the part of their frame.
+  std::vector<StatisticsSummary> prior_parts_;
   Table<double> scored_;  // A of the frames scored for the last query
   // By diagonal (offset query - frame): the carries of the sequences the
   // previous query scored off the kept diagonals (read by this query's

@@ -147,7 +147,8 @@ int main(int argc, char** argv) {
   for (const MatSeed& s : {MatSeed{"v5z.mat", MAT_FT_MAT5, MAT_COMPRESSION_ZLIB, false},
                            MatSeed{"v5.mat", MAT_FT_MAT5, MAT_COMPRESSION_NONE, false},
                            MatSeed{"v5sparse.mat", MAT_FT_MAT5, MAT_COMPRESSION_ZLIB, true},
-                           MatSeed{"v4.mat", MAT_FT_MAT4, MAT_COMPRESSION_NONE, false}}) {
+                           MatSeed{"v4.mat", MAT_FT_MAT4, MAT_COMPRESSION_NONE, false},
+                           MatSeed{"v4sparse.mat", MAT_FT_MAT4, MAT_COMPRESSION_NONE, true}}) {
     const std::string bytes = mat_bytes(scratch, s.version, s.z, s.sparse);
     if (!bytes.empty()) put(out / "gt" / s.name, mat_auto + bytes);
   }

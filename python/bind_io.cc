@@ -76,10 +76,9 @@ void bind_database_contents(DatabaseClass& database) {
            }, py::arg("first_id"), py::arg("last_id"),
            "Forgets the frames whose ids lie in [first_id, last_id], in one transaction (as "
            "Detector.forget); returns how many.")
-      .def("plan_session", [](const PyDatabase& db, lsgd::Detector& d, const py::list& images,
+      .def("plan_session", [](const PyDatabase& db, lsgd::Detector& d, const py::object& images,
                               std::optional<std::int64_t> session) {
-             std::vector<std::string> paths;
-             for (const py::handle& image : images) paths.push_back(path_of(py::reinterpret_borrow<py::object>(image)));
+             const std::vector<std::string> paths = paths_of(images, "plan_session: images");
              const lsgd::io::SessionPlan plan = lsgd::io::plan_session(db.get(), d, paths, session);
              lsgd::io::begin_session(d, plan);
              return plan;
@@ -124,19 +123,18 @@ void bind_database_class(py::module_& m) {
   bind_database_handle(database);
 }
 
-std::int64_t write_results_csv(const std::vector<lsgd::Result>& results, const py::list& images,
+std::int64_t write_results_csv(const std::vector<lsgd::Result>& results, const py::object& images,
                                const py::object& path) {
-  if (images.size() != results.size()) {
-    throw lsgd::InvalidArgument("write_csv: " + std::to_string(images.size()) + " image names for " +
+  const std::vector<std::string> names = paths_of(images, "write_csv: images");
+  if (names.size() != results.size()) {
+    throw lsgd::InvalidArgument("write_csv: " + std::to_string(names.size()) + " image names for " +
                                 std::to_string(results.size()) + " results (one per result)");
   }
   const std::string out = path_of(path);
-  std::vector<std::string> names;
-  for (const py::handle& image : images) {
-    names.push_back(path_of(py::reinterpret_borrow<py::object>(image)));
+  for (const std::string& name : names) {
     std::error_code ec;  // an output never overwrites an input
-    if (std::filesystem::equivalent(out, names.back(), ec)) {
-      throw lsgd::InvalidArgument("write_csv: the output " + out + " is the input image " + names.back());
+    if (std::filesystem::equivalent(out, name, ec)) {
+      throw lsgd::InvalidArgument("write_csv: the output " + out + " is the input image " + name);
     }
   }
   lsgd::eval::CsvWriter csv(out);

@@ -28,6 +28,25 @@ std::string path_of(const py::handle& value, const char* what) {
   return path;
 }
 
+std::vector<std::string> paths_of(const py::handle& values, const char* what) {
+  const py::module_ os = py::module_::import("os");
+  if (py::isinstance<py::str>(values) || py::isinstance<py::bytes>(values) ||
+      py::isinstance(values, os.attr("PathLike"))) {
+    throw lsgd::InvalidArgument(std::string(what) + ": one path (" + path_of(values, what) +
+                                "), where a list of paths is expected");
+  }
+  py::iterator it;
+  try {
+    it = py::iter(values);
+  } catch (const py::error_already_set&) {
+    throw lsgd::InvalidArgument(std::string(what) + ": " + std::string(py::str(py::type::of(values).attr("__name__"))) +
+                                " is not a list of paths");
+  }
+  std::vector<std::string> out;
+  for (; it != py::iterator::sentinel(); ++it) out.push_back(path_of(*it, what));
+  return out;
+}
+
 namespace {
 
 std::string option_value_text(const py::handle& value) {

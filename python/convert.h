@@ -21,6 +21,10 @@ namespace py = pybind11;
 // gives them; bytes as the file system encodes names (os.fsdecode). A NUL
 // inside is refused (the C library would read the name up to it).
 std::string path_of(const py::handle& value, const char* what = "path");
+// The paths of a list, tuple or any other iterable of paths; InvalidArgument
+// naming `what` for one path (a str would iterate its characters) or a value
+// that is not iterable.
+std::vector<std::string> paths_of(const py::handle& values, const char* what);
 
 // ---- options: a dict with the YAML's names, nested ({"search": {"min_gap":
 // 50}}) or dotted ({"search.min_gap": 50}), values as Python numbers or text;

@@ -20,6 +20,8 @@
 #include <vector>
 
 #include "lsgd/error.h"
+#include "lsgd/io/session.h"
+#include "lsgd/limits.h"
 #include "database_test_support.h"
 #include "detector_util.h"
 #include "test_util.h"
@@ -438,6 +440,48 @@ TEST(Database, CallersIdsAndStampsAreKept) {
     EXPECT_EQ(r.id, 2000 + (i - 60));
     EXPECT_TRUE(std::isnan(r.stamp));
   }
+}
+
+// plan_session (io/session.h) refuses, before any frame is processed, what
+// the run would be refused for at its first frame or would store wrongly: a
+// detector that does not hold the database's frames (a fresh one, or one a
+// frame ahead of it), options the database does not take, a session id out
+// of range. The detector restored from the database plans as lsgd run does.
+TEST(DatabaseSession, APlanNeedsTheDatabasesDetectorAndASessionInRange) {
+  const std::string path = temp_path("plan");
+  const DetectorOptions o = options(kExhaustiveSearch, "temporal");
+  Database db = Database::create(path, o);
+  Detector stored(o);
+  run(stored, 0, 6, &db);
+  std::vector<std::string> images;
+  for (int i = 0; i < 6; ++i) images.push_back("frame" + std::to_string(i));
+  Detector fresh(o);
+  std::string e = message_of<InvalidArgument>([&] { plan_session(db, fresh, images, std::nullopt); });
+  EXPECT_NE(e.find("holds 6 frames, the detector 0"), std::string::npos) << e;
+  e = message_of<InvalidArgument>([&] { plan_session(db, fresh, images, std::int64_t{4}); });
+  EXPECT_NE(e.find("the detector 0"), std::string::npos) << e;
+  Detector restored(o);
+  db.restore(restored);
+  for (const std::int64_t bad : {std::int64_t{-1}, kMaxSession + 1}) {
+    e = message_of<InvalidArgument>([&] { plan_session(db, restored, images, bad); });
+    EXPECT_NE(e.find("out of range"), std::string::npos) << e;
+  }
+  DetectorOptions other = o;
+  other.search.min_gap = o.search.min_gap + 1;
+  Database empty = Database::create(temp_path("plan_empty"), o);
+  e = message_of<InvalidArgument>([&] { plan_session(empty, Detector(other), images, std::nullopt); });
+  EXPECT_NE(e.find("search.min_gap"), std::string::npos) << e;
+  EXPECT_EQ(plan_session(empty, Detector(o), images, std::nullopt).session, 0);
+  // The database's own detector: a new session after its frames, and one
+  // frame ahead of the database (processed, not appended) it plans nothing.
+  const SessionPlan plan = plan_session(db, restored, {"other0", "other1"}, std::nullopt);
+  EXPECT_EQ(plan.session, 1);
+  EXPECT_EQ(plan.first_id, 6);
+  EXPECT_FALSE(plan.resume);
+  EXPECT_EQ(plan_session(db, restored, images, kMaxSession).session, kMaxSession);
+  restored.process(frame(6));
+  e = message_of<InvalidArgument>([&] { plan_session(db, restored, images, std::nullopt); });
+  EXPECT_NE(e.find("holds 6 frames, the detector 7"), std::string::npos) << e;
 }
 
 }  // namespace

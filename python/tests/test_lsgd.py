@@ -7,6 +7,7 @@ library's errors as Python exceptions with the same messages.
 import csv
 import json
 import os
+import pathlib
 import subprocess
 import threading
 
@@ -171,6 +172,20 @@ def test_database_resumes_a_session_as_lsgd_run_does(tmp_path):
         assert (other.session, other.first_id, other.first, other.resume) == (1, 80, 0, False)
         r = d.process(lsgd.read_image(others[0]), id=other.first_id)
         assert not r.evidence.continues
+        # d now holds a frame the database does not: it plans nothing, nor does a detector that
+        # is not the database's, nor a session id out of range (all refused before any frame).
+        with pytest.raises(lsgd.InvalidArgument, match="holds 80 frames, the detector 81"):
+            db.plan_session(d, others)
+        with pytest.raises(lsgd.InvalidArgument, match="the detector 0"):
+            db.plan_session(lsgd.Detector(search={"min_gap": 10}), others, session=3)
+        d = db.detector()
+        for bad in (-1, 2**53):
+            with pytest.raises(lsgd.InvalidArgument, match="out of range"):
+                db.plan_session(d, others, session=bad)
+        # Any sequence of paths (a tuple, pathlib paths), never one path.
+        assert db.plan_session(d, tuple(pathlib.Path(o) for o in others)).first_id == 80
+        with pytest.raises(lsgd.InvalidArgument, match="a list of paths is expected"):
+            db.plan_session(d, others[0])
         with pytest.raises(lsgd.InvalidArgument, match="already stored in session 0"):
             db.plan_session(d, images[::2])
         assert db.plan_session(d, images[::2], session=7).session == 7

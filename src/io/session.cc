@@ -147,6 +147,18 @@ SessionPlan plan_session(const Database& db, const Detector& detector,
                          const std::vector<std::string>& images,
                          const std::optional<std::int64_t>& chosen) {
   const auto count = static_cast<std::int64_t>(images.size());
+  // What the run would be refused for at its first frame, refused first.
+  if (chosen && (*chosen < 0 || *chosen > kMaxSession)) {
+    throw InvalidArgument("session " + std::to_string(*chosen) + " for " + db.path() +
+                          " is out of range [0, " + std::to_string(kMaxSession) + "]");
+  }
+  if (detector.size() != db.frames()) {
+    throw InvalidArgument("database " + db.path() + " holds " + std::to_string(db.frames()) +
+                          " frames, the detector " + std::to_string(detector.size()) +
+                          ": plan a session with the detector restored from the database "
+                          "(Database::restore, Database.detector() in Python; lsgd run does)");
+  }
+  db.check_compatible(detector.options());
   if (db.frames() == 0) return new_session(db, chosen.value_or(0), count);
   const std::int64_t last = db.last_session();
   if (chosen && *chosen != last) {

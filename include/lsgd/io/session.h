@@ -45,7 +45,12 @@ struct SessionPlan {
 // --first or --every, an edited list) are refused rather than stored twice.
 // Else a new session: `chosen` when given, else the last + 1 (0 for an empty
 // database). InvalidArgument naming the database, the image and the frame
-// when the images cannot be stored as asked.
+// when the images cannot be stored as asked; and, before anything else, when
+// `detector` does not hold the database's frames (its size differs: a fresh
+// detector, or one that processed a frame not appended), its options are not
+// ones the database takes (Database::check_compatible), or `chosen` is
+// outside [0, kMaxSession]: what the run would be refused for at its first
+// frame, or would store under the wrong ids.
 SessionPlan plan_session(const Database& db, const Detector& detector,
                          const std::vector<std::string>& images,
                          const std::optional<std::int64_t>& chosen = std::nullopt);

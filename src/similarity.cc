@@ -6,6 +6,7 @@
 #include <cstring>
 
 #include "internal/check.h"
+#include "lsgd/limits.h"
 #include "internal/kernels.h"
 
 namespace lsgd {
@@ -219,8 +220,15 @@ void similarities(const DescriptorView& query, const DescriptorView* frames, std
 std::vector<TopMatch> match_top_k(const std::vector<DescriptorView>& reference,
                                   const std::vector<DescriptorView>& queries, int top_k,
                                   SimilarityMetric metric, std::int64_t query_offset) {
-  if (top_k < 1) internal::throw_invalid("match: top_k ", top_k, " must be at least 1");
+  if (top_k < 1 || top_k > kMaxTopK) {
+    internal::throw_invalid("match: top_k ", top_k, " must be in [1, ", kMaxTopK, "]");
+  }
   if (reference.empty()) internal::throw_invalid("match: the reference holds no frame");
+  // Query ids are frame ids: query_offset + the last index stays within them.
+  if (query_offset < 0 || query_offset > kMaxFrameId - static_cast<std::int64_t>(queries.size())) {
+    internal::throw_invalid("match: query_offset ", query_offset, " must be in [0, ", kMaxFrameId,
+                            " - the ", queries.size(), " queries]");
+  }
   const std::size_t k = std::min(static_cast<std::size_t>(top_k), reference.size());
   std::vector<TopMatch> out;
   out.reserve(k * queries.size());

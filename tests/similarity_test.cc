@@ -12,6 +12,7 @@
 
 #include "lsgd/descriptor.h"
 #include "lsgd/error.h"
+#include "lsgd/limits.h"
 #include "lsgd/image.h"
 #include "lsgd/segmentation.h"
 #include "test_util.h"
@@ -369,6 +370,11 @@ TEST(MatchTopK, BestFirstTiesByIndexScoresInSigma) {
   // k beyond the reference: every frame once.
   EXPECT_EQ(match_top_k(r, q, 50, SimilarityMetric::kReference).size(), 2 * r.size());
   EXPECT_THROW(match_top_k(r, q, 0, SimilarityMetric::kReference), InvalidArgument);
+  EXPECT_THROW(match_top_k(r, q, kMaxTopK + 1, SimilarityMetric::kReference), InvalidArgument);
+  EXPECT_THROW(match_top_k(r, q, 1, SimilarityMetric::kReference, -1), InvalidArgument);
+  EXPECT_THROW(match_top_k(r, q, 1, SimilarityMetric::kReference, kMaxFrameId), InvalidArgument);
+  EXPECT_EQ(match_top_k(r, q, 1, SimilarityMetric::kReference,
+                        kMaxFrameId - static_cast<std::int64_t>(q.size())).back().query, kMaxFrameId - 1);
   EXPECT_THROW(match_top_k({}, q, 1, SimilarityMetric::kReference), InvalidArgument);
   const Descriptor other = random_descriptor(4, 9);
   EXPECT_THROW(match_top_k(r, {other.view()}, 1, SimilarityMetric::kReference), InvalidArgument);

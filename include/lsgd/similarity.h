@@ -71,8 +71,10 @@ struct TopMatch {
 // Place recognition between two traverses (lsgd match, Python lsgd.match):
 // the top_k (at most the reference's size) reference frames of every query,
 // best first, equal similarities by lower index; queries in order.
-// InvalidArgument for top_k < 1, an empty reference or descriptors that do
-// not match (grid, storage).
+// InvalidArgument for top_k outside [1, kMaxTopK], a query_offset that is
+// negative or puts a query id beyond kMaxFrameId, an empty reference or
+// descriptors that do not match (grid, storage).
+constexpr int kMaxTopK = 1000;
 std::vector<TopMatch> match_top_k(const std::vector<DescriptorView>& reference,
                                   const std::vector<DescriptorView>& queries, int top_k,
                                   SimilarityMetric metric, std::int64_t query_offset = 0);

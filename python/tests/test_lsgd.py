@@ -556,8 +556,12 @@ def test_match_one_traverse_against_another(tmp_path):
         subprocess.run([CLI, "match", "--reference", str(tmp_path / "r"), "--query", str(tmp_path / "q"),
                         "--top-k", "3", "--output", str(cli)], check=True, capture_output=True)
         assert cli.read_text() == out.read_text()
-    with pytest.raises(lsgd.InvalidArgument, match="top_k 0 must be at least 1"):
+    with pytest.raises(lsgd.InvalidArgument, match="top_k 0 must be in"):
         lsgd.match(refs, queries, top_k=0)
+    # Query ids are frame ids: never negative, never beyond 2^53 - 1 (lsgd match's range).
+    for offset in (-5, 2**53 - 1, 2**62):
+        with pytest.raises(lsgd.InvalidArgument, match="query_offset"):
+            lsgd.match(refs, queries, query_offset=offset)
     with pytest.raises(lsgd.InvalidArgument, match="the reference holds no frame"):
         lsgd.match([], queries)
 

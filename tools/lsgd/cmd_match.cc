@@ -153,7 +153,7 @@ void register_match(CLI::App& app) {
       ->check(kNonEmptyPath);
   cmd->add_option("--query", args->query, "the query traverse, the same way")->required()->check(kNonEmptyPath);
   cmd->add_option("--top-k", args->top_k, "reference images written per query image")
-      ->check(CLI::Range(1, 1000))
+      ->check(CLI::Range(1, kMaxTopK))
       ->capture_default_str();
   cmd->add_option("--query-offset", args->query_offset,
                   "id of the first query image (default: the number of reference images, so one "

@@ -419,6 +419,14 @@ TEST(Database, CallersIdsAndStampsAreKept) {
     EXPECT_NE(message_of<InvalidArgument>([&] { db.append(writer, other, 0, "frame", 2001); })
                   .find("frame id 2001 is not the detector's id 2000"),
               std::string::npos);
+    // Names no image has: a NUL inside, longer than a list line.
+    EXPECT_NE(message_of<InvalidArgument>([&] { db.append(writer, other, 0, std::string("a\0b", 3)); })
+                  .find("NUL character"),
+              std::string::npos);
+    EXPECT_NE(message_of<InvalidArgument>([&] { db.append(writer, other, 0, std::string(65537, 'x')); })
+                  .find("more than 65536"),
+              std::string::npos);
+    EXPECT_EQ(db.frames(), 60);
     for (std::int64_t i = 61; i < 90; ++i) expected.push_back(writer.process(frame(i)));
   }
   const Database db = Database::open(path, Database::Mode::kReadOnly);

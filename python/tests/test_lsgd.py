@@ -439,6 +439,12 @@ def test_paths_shapes_and_options_a_hostile_user_tries(tmp_path):
     r = d.process(frames[0])
     with pytest.raises(lsgd.InvalidArgument, match="frame id -5 is negative"):
         db.append(d, r, session=0, frame=-5)
+    # A name no image has (a NUL inside) or longer than a list line is refused, nothing stored.
+    with pytest.raises(lsgd.InvalidArgument, match="NUL character"):
+        db.append(d, r, 0, "a\0b")
+    with pytest.raises(lsgd.InvalidArgument, match="more than 65536"):
+        db.append(d, r, 0, "x" * 65537)
+    assert db.frames == 0
     db.append(d, r, session=0)
     assert db.frames == 1
 

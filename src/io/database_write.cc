@@ -101,6 +101,16 @@ void Database::append(const Detector& detector, const Result& /*result*/, std::i
   Impl& m = *impl_;
   m.check_writable();
   m.check_session(session);
+  // The image's name (a path, as lsgd run stores it): no NUL, which no path
+  // holds, and not longer than a line of a list file.
+  if (name.find('\0') != std::string::npos) {
+    internal::throw_invalid("database ", m.path, ": the frame's name '", name.substr(0, name.find('\0')),
+                            "\\0...' has a NUL character inside: no image has such a name");
+  }
+  if (static_cast<std::int64_t>(name.size()) > kMaxLineBytes) {
+    internal::throw_invalid("database ", m.path, ": the frame's name is ", name.size(),
+                            " bytes, more than ", kMaxLineBytes, " ('", name.substr(0, 40), "...')");
+  }
   if (detector.size() != m.frames + 1) {
     internal::throw_invalid("database ", m.path, ": append from a detector holding ",
                             detector.size(), " frames, but the database holds ", m.frames,

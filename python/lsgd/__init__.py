@@ -80,8 +80,15 @@ def sweep(datasets, sets=(), options=None, jobs=1, strict=False, client=None):
 def run(detector, images):
     """Processes every image (paths or arrays) in order; returns the Results.
 
-    A path that cannot be read raises lsgd.Error naming it.
+    A path that cannot be read raises lsgd.Error naming it; one path or one
+    array where a sequence of them is expected raises lsgd.InvalidArgument.
     """
+    if isinstance(images, (str, bytes, os.PathLike)):
+        raise InvalidArgument("run: images: one path (%s), where a sequence of paths or arrays "
+                              "is expected" % os.fsdecode(images))
+    if getattr(images, "ndim", 0) == 2 or (getattr(images, "ndim", 0) == 3 and images.shape[-1] in (3, 4)):
+        raise InvalidArgument("run: images: one image array (shape %s), where a sequence of "
+                              "paths or arrays is expected" % (images.shape,))
     return [detector.process(read_image(i) if isinstance(i, (str, bytes, os.PathLike)) else i)
             for i in images]
 

@@ -105,6 +105,12 @@ def test_results_match_lsgd_run_frame_for_frame(tmp_path):
                    check=True, capture_output=True)
     rows = list(csv.DictReader(open(out)))
     d = lsgd.Detector(search={"min_gap": 10})
+    # One path or one image where a sequence is expected: refused, nothing processed (a str
+    # would have been read character by character).
+    for one in (str(folder / "000.pgm"), folder / "000.pgm", frames[0]):
+        with pytest.raises(lsgd.InvalidArgument, match="where a sequence of paths or arrays"):
+            lsgd.run(d, one)
+    assert len(d) == 0
     results = lsgd.run(d, [str(folder / ("%03d.pgm" % i)) for i in range(len(frames))])
     assert len(rows) == len(results)
     loops = 0

@@ -69,8 +69,11 @@ def sweep(datasets, sets=(), options=None, jobs=1, strict=False, client=None):
     its run and its evaluation, is a task on the cluster's workers, and the
     rows are the same (times aside); the workers must read the datasets at
     the same paths and import the same lsgd build (docs/evaluation.md,
-    "Sweeps on a Dask cluster").
+    "Sweeps on a Dask cluster"). One dataset or one set may be given as a
+    string rather than a list of one.
     """
+    datasets = [datasets] if isinstance(datasets, str) else list(datasets)
+    sets = [sets] if isinstance(sets, str) else list(sets)
     if client is None:
         return _lsgd.sweep(list(datasets), list(sets), options, jobs, strict)
     from . import _dask

@@ -69,6 +69,10 @@ def test_rows_equal_lsgd_sweep(route, tmp_path):
     rows = lsgd.sweep(["route=%s,10" % route], ["search.mode=exhaustive,nodes"],
                       options={"verification.stages": "none"})
     assert len(rows) == len(table) == 2
+    # One dataset and one set as strings: the same grid (a str was iterated character by character).
+    one = lsgd.sweep("route=%s,10" % route, "search.mode=exhaustive,nodes",
+                     options={"verification.stages": "none"})
+    assert [r["metrics"].declared_loops for r in one] == [r["metrics"].declared_loops for r in rows]
     for row, line in zip(rows, table):
         assert row["values"]["search.mode"] == line["search.mode"]
         assert row["metrics"].declared_loops == int(line["declared_loops"])

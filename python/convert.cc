@@ -64,14 +64,24 @@ std::string option_value_text(const py::handle& value) {
   return py::str(value).cast<std::string>();
 }
 
+// Option keys are a few names deep ("verification.temporal.place_cut"): a
+// dict nested deeper is not options (and one that holds itself would recurse
+// until the stack ends).
+constexpr int kMaxOptionDepth = 16;
+
 // `given`: the keys set so far from this dict, with their values: a key
 // given twice ({"search": {"min_gap": 5}, "search.min_gap": 7}) is refused.
 void set_options(lsgd::DetectorOptions& options, const py::dict& values, const std::string& prefix,
-                 std::map<std::string, std::string>& given) {
+                 std::map<std::string, std::string>& given, int depth) {
   for (const auto& [k, v] : values) {
     const std::string key = prefix + py::str(k).cast<std::string>();
     if (py::isinstance<py::dict>(v)) {
-      set_options(options, v.cast<py::dict>(), key + ".", given);
+      if (depth + 1 >= kMaxOptionDepth) {
+        throw lsgd::InvalidArgument("options nested more than " + std::to_string(kMaxOptionDepth) +
+                                    " dicts deep (at '" + key.substr(0, 200) +
+                                    "'): option keys are a few names long");
+      }
+      set_options(options, v.cast<py::dict>(), key + ".", given, depth + 1);
       continue;
     }
     const std::string text = option_value_text(v);
@@ -86,7 +96,7 @@ void set_options(lsgd::DetectorOptions& options, const py::dict& values, const s
 
 void set_options(lsgd::DetectorOptions& options, const py::dict& values) {
   std::map<std::string, std::string> given;
-  set_options(options, values, "", given);
+  set_options(options, values, "", given, 0);
 }
 
 }  // namespace

@@ -439,6 +439,13 @@ def test_paths_shapes_and_options_a_hostile_user_tries(tmp_path):
     # An option given twice, nested and dotted, is refused.
     with pytest.raises(lsgd.InvalidArgument, match="option search.min_gap is given twice"):
         lsgd.Detector({"search": {"min_gap": 5}, "search.min_gap": 7})
+    # Options that hold themselves (the process died of a stack overflow) or nest without end.
+    looped = {}
+    looped["search"] = looped
+    with pytest.raises(lsgd.InvalidArgument, match="nested more than 16 dicts deep"):
+        lsgd.Detector(looped)
+    with pytest.raises(lsgd.InvalidArgument, match="nested more than 16 dicts deep"):
+        lsgd.Detector(search=looped)
     # A negative frame id other than -1 is refused by Database.append.
     db = lsgd.Database.create(tmp_path / "q.db")
     d = lsgd.Detector(db.options)

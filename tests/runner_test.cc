@@ -2,13 +2,20 @@
 #include "lsgd/eval/runner.h"
 
 #include <gtest/gtest.h>
+#include <sys/resource.h>
+#include <sys/wait.h>
+#include <unistd.h>
 
+#include <cstdio>
+#include <functional>
 #include <opencv2/core.hpp>
+#include <opencv2/imgcodecs.hpp>
 #include <set>
 #include <string>
 #include <vector>
 
 #include "lsgd/error.h"
+#include "lsgd/io/sequence.h"
 #include "test_util.h"
 
 namespace lsgd::eval {
@@ -92,6 +99,65 @@ TEST(RunDetector, SkipsBadFramesAndKeepsSourceIndices) {
   // Frame 49, pattern 0: frames 0, 40, 43 and 46 (detector ids 0, 39, 42, 44).
   EXPECT_EQ(identical(kBase + 9), (std::set<std::int64_t>{0, kBase, kBase + 3, kBase + 6}));
 }
+
+// Out of memory (a memory limit, a frame too large for the machine): the run
+// stops at the frame, naming it, instead of ending in std::bad_alloc or
+// OpenCV's bare "Failed to allocate"; an image that cannot be decoded for
+// want of memory is a skip naming the file. Run in a child process under
+// RLIMIT_AS (not under the sanitizers, which reserve terabytes of address
+// space).
+#if !defined(__SANITIZE_ADDRESS__) && !defined(__SANITIZE_THREAD__)
+// The child's exit code: 0 when `f` throws an Error whose message holds `expected`.
+int in_limited_child(const std::function<void()>& f, const std::string& expected) {
+  const pid_t pid = fork();
+  if (pid == 0) {
+    cv::setNumThreads(0);
+    long pages = 0;
+    std::FILE* statm = std::fopen("/proc/self/statm", "r");
+    if (statm == nullptr || std::fscanf(statm, "%ld", &pages) != 1) _exit(3);
+    std::fclose(statm);
+    const rlim_t limit = static_cast<rlim_t>(pages) * static_cast<rlim_t>(sysconf(_SC_PAGESIZE)) + (120u << 20);
+    const rlimit r{limit, limit};
+    if (setrlimit(RLIMIT_AS, &r) != 0) _exit(3);
+    try {
+      f();
+    } catch (const Error& e) {
+      _exit(std::string(e.what()).find(expected) != std::string::npos ? 0 : 1);
+    } catch (...) {
+      _exit(4);
+    }
+    _exit(2);
+  }
+  int status = 0;
+  waitpid(pid, &status, 0);
+  return WIFEXITED(status) ? WEXITSTATUS(status) : 100 + WTERMSIG(status);
+}
+
+TEST(Runner, OutOfMemoryNamesTheFrameOrTheImage) {
+  // An 8192 x 6144 frame (the most pixels lsgd reads): 50 MB to hold, far
+  // more to segment and describe than 120 MB above what the process uses.
+  FrameSource source;
+  source.frames = 1;
+  source.load = [](std::int64_t) { return cv::Mat(6144, 8192, CV_8UC1, cv::Scalar(9)); };
+  source.name = [](std::int64_t i) { return "frame-" + std::to_string(i) + ".png"; };
+  EXPECT_EQ(in_limited_child(
+                [&] {
+                  Detector detector;
+                  RunOptions options;
+                  options.skip_bad_frames = true;
+                  run_detector(detector, source, nullptr, options);
+                },
+                "frame 0 (frame-0.png): out of memory while processing it"),
+            0);
+  // Decoding: a 146 KB PNG of 8192 x 6144 BGR pixels (150 MB decoded).
+  const std::string png = std::string(LSGD_TEST_TMP) + "/runner_big_" + std::to_string(getpid()) + ".png";
+  ASSERT_TRUE(cv::imwrite(png, cv::Mat(6144, 8192, CV_8UC3, cv::Scalar(1, 2, 3))));
+  EXPECT_EQ(in_limited_child([&] { io::read_image(png); },
+                             "out of memory while decoding image '" + png + "' (8192 x 6144 pixels declared)"),
+            0);
+  std::remove(png.c_str());
+}
+#endif
 
 }  // namespace
 }  // namespace lsgd::eval

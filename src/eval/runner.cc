@@ -5,6 +5,7 @@
 #include <ctime>
 #include <cmath>
 #include <memory>
+#include <new>
 
 #include <opencv2/core.hpp>
 
@@ -92,6 +93,16 @@ void skip_frame(const Error& e, const FrameSource& source, std::int64_t i, std::
     skipped.skipped = true;
     records.push_back(skipped);
   }
+}
+
+// The detector ran out of memory on frame `id` (a memory limit, a frame too
+// large for it): the run stops there, naming the frame, rather than in
+// std::bad_alloc or OpenCV's bare message. Not a skip: the detector may be
+// part way through the frame. Frames given to the callback before it stay.
+[[noreturn]] void out_of_memory(const FrameSource& source, std::int64_t i, std::int64_t id) {
+  const std::string name = source.name ? source.name(i) : std::to_string(i);
+  throw Error(internal::concat("frame ", id, " (", name, "): out of memory while processing it; "
+                               "the frames before it are done"));
 }
 
 // Renames the detector's dense frame numbers in `result` to the run's ids.
@@ -197,6 +208,11 @@ std::vector<FrameRecord> run_detector(Detector& detector, const FrameSource& sou
     } catch (const Error& e) {
       skip_frame(e, source, i, id, times, options, on_skip, records);
       continue;
+    } catch (const std::bad_alloc&) {
+      out_of_memory(source, i, id);
+    } catch (const cv::Exception& e) {
+      if (e.code != cv::Error::StsNoMem) throw;
+      out_of_memory(source, i, id);
     }
     ids.push_back(id);
     result.frame = id;

@@ -14,6 +14,7 @@
 #include <filesystem>
 #include <fstream>
 #include <iterator>
+#include <new>
 #include <opencv2/core.hpp>
 #include <opencv2/imgcodecs.hpp>
 
@@ -410,6 +411,36 @@ Sequence open_sequence(const std::string& path) {
   return sequence;
 }
 
+namespace {
+
+// The pixels of an image file whose header was checked: libjpeg for a JPEG
+// (one pass that also sees its warnings, which OpenCV drops), OpenCV for the
+// rest. FormatError for a damaged file.
+cv::Mat decode(const std::vector<unsigned char>& bytes, bool jpeg, const std::string& path) {
+  cv::Mat image;
+  // One decoding pass that also sees libjpeg's warnings (OpenCV drops them).
+  if (jpeg) {
+    std::string refused;
+    if (const std::string damage = decode_jpeg(bytes, image, refused); !damage.empty()) {
+      throw FormatError(concat("image '", path, "' is a damaged JPEG: ", damage));
+    }
+    if (!refused.empty()) throw FormatError(concat("image '", path, "': ", refused));
+  }
+  if (image.empty()) {  // not a JPEG, or one libjpeg only checked (CMYK)
+    // IMREAD_UNCHANGED keeps gray/BGR/BGRA and the stored depth; it does not
+    // apply EXIF orientation, so frames are used exactly as stored.
+    image = cv::imdecode(bytes, cv::IMREAD_UNCHANGED);
+  }
+  if (image.empty()) {
+    throw FormatError(concat("'", path,
+                             "' is not a decodable image (corrupt, truncated or unsupported "
+                             "format)"));
+  }
+  return image;
+}
+
+}  // namespace
+
 cv::Mat read_image(const std::string& path) {
   const std::vector<unsigned char> bytes = read_bytes(path);
   if (bytes.empty()) throw FormatError(concat("image '", path, "' is an empty file (0 bytes)"));
@@ -434,33 +465,25 @@ cv::Mat read_image(const std::string& path) {
                              " pixels, more than lsgd reads (sides up to ", kMaxImageSide, ", ",
                              kMaxImagePixels, " pixels in all); nothing was decoded"));
   }
+  // A decoder's allocation failing (a memory limit) says so, naming the file,
+  // rather than ending the run in std::bad_alloc or OpenCV's bare message.
+  const auto out_of_memory = [&] {
+    return Error(concat("out of memory while decoding image '", path, "' (", declared.width, " x ",
+                        declared.height, " pixels declared)"));
+  };
   cv::Mat image;
-  // One decoding pass that also sees libjpeg's warnings (OpenCV drops them).
-  if (jpeg) {
-    std::string refused;
-    if (const std::string damage = decode_jpeg(bytes, image, refused); !damage.empty()) {
-      throw FormatError(concat("image '", path, "' is a damaged JPEG: ", damage));
+  try {
+    image = decode(bytes, jpeg, path);
+    check_decoded(image, path);
+    // A PNM's samples go from 0 to its maxval: OpenCV keeps them as stored.
+    if (declared.pnm_maxval > 0 && declared.pnm_maxval < 255) {
+      image.convertTo(image, CV_8U, 255.0 / declared.pnm_maxval);
     }
-    if (!refused.empty()) throw FormatError(concat("image '", path, "': ", refused));
-  }
-  if (image.empty()) {  // not a JPEG, or one libjpeg only checked (CMYK)
-    try {
-      // IMREAD_UNCHANGED keeps gray/BGR/BGRA and the stored depth; it does not
-      // apply EXIF orientation, so frames are used exactly as stored.
-      image = cv::imdecode(bytes, cv::IMREAD_UNCHANGED);
-    } catch (const cv::Exception& e) {
-      throw FormatError(concat("'", path, "' is not a decodable image: ", e.what()));
-    }
-  }
-  if (image.empty()) {
-    throw FormatError(concat("'", path,
-                             "' is not a decodable image (corrupt, truncated or unsupported "
-                             "format)"));
-  }
-  check_decoded(image, path);
-  // A PNM's samples go from 0 to its maxval: OpenCV keeps them as stored.
-  if (declared.pnm_maxval > 0 && declared.pnm_maxval < 255) {
-    image.convertTo(image, CV_8U, 255.0 / declared.pnm_maxval);
+  } catch (const std::bad_alloc&) {
+    throw out_of_memory();
+  } catch (const cv::Exception& e) {
+    if (e.code == cv::Error::StsNoMem) throw out_of_memory();
+    throw FormatError(concat("'", path, "' is not a decodable image: ", e.what()));
   }
   return image;
 }

@@ -9,6 +9,7 @@
 #include <cstdlib>
 #include <exception>
 #include <iostream>
+#include <new>
 #include <string>
 #include <vector>
 
@@ -166,6 +167,13 @@ int main(int argc, char** argv) {
   } catch (const CLI::ParseError& e) {
     // Usage errors exit 1 like every other error (README, "Command line").
     std::cerr << "lsgd: error: " << usage_message(app, e, argc, argv) << std::endl;
+    return 1;
+  } catch (const std::bad_alloc&) {
+    // Where no command named the file or frame (the frame loops do): still
+    // not the bare "std::bad_alloc".
+    std::cerr << "lsgd: error: out of memory (an allocation failed: a memory limit, or inputs too "
+                 "large for this machine)"
+              << std::endl;
     return 1;
   } catch (const std::exception& e) {
     std::cerr << "lsgd: error: " << e.what() << std::endl;

@@ -33,7 +33,6 @@ struct V4Variable {
   bool complex = false;        // imagf: the values twice
   bool swapped = false;        // written with the other byte order
   std::uint64_t data = 0;      // offset of its first value
-  bool sparse() const { return type % 10 == 2; }
 };
 
 struct Container {
@@ -71,6 +70,13 @@ void read_v5(const std::string& path, const Container& c, const std::string& nam
 
 // The value readers: each .cc file that reads values has its own copies.
 namespace {
+
+// A 32-bit word of a file's bytes, in the other byte order when `swap`.
+inline std::uint32_t u32(const unsigned char* p, bool swap) {
+  std::uint32_t v;
+  std::memcpy(&v, p, 4);
+  return swap ? __builtin_bswap32(v) : v;
+}
 
 // Calls f(T{}) with the C++ type of a MAT numeric data type; false for others.
 template <typename F>

@@ -29,12 +29,6 @@ namespace {
 
 constexpr std::uint64_t kElem[] = {8, 4, 4, 2, 2, 1};  // bytes of a value, by P
 
-std::uint32_t u32(const unsigned char* p, bool swap) {
-  std::uint32_t v;
-  std::memcpy(&v, p, 4);
-  return swap ? __builtin_bswap32(v) : v;
-}
-
 // Value k of a column read from the file (type P, byte order swapped or not).
 double value_at(const unsigned char* p, std::uint32_t precision, bool swap) {
   unsigned char b[8];

@@ -42,12 +42,6 @@ namespace {
 
 constexpr std::uint32_t kMiMatrix = 14, kMiCompressed = 15;
 
-std::uint32_t u32(const unsigned char* p, bool swap) {
-  std::uint32_t v;
-  std::memcpy(&v, p, 4);
-  return swap ? __builtin_bswap32(v) : v;
-}
-
 }  // namespace
 
 // matio trusts the byte counts in a file: a truncated file reads as zeros

@@ -210,15 +210,17 @@ void segment_and_describe(Segmenter& segmenter, const GrayImage& image, Segmenta
 
 void segment_and_describe(Segmenter& segmenter, const GrayImage& image, Segmentation& segmentation,
                           Descriptor& out, DescribeScratch& scratch) {
+  // At the working size (segmentation.working_side): the image itself by default.
+  const GrayImage& work = segmenter.working(image);
   HistogramRows rows(segmentation, out, scratch);
-  segmenter.segment(image, segmentation, rows);
+  segmenter.segment(work, segmentation, rows);
   rows.finish();
   out.storage = HistogramStorage::kExact;
   out.compact.clear();
   out.cell_pixels = 0;
   for (int k = 0; k < out.grid.cells(); ++k) {
     if (out.pixels[k] > kBinMax) {
-      recount_saturated(image, segmentation, k, &out.hist[static_cast<std::size_t>(k) * kBins]);
+      recount_saturated(work, segmentation, k, &out.hist[static_cast<std::size_t>(k) * kBins]);
     }
   }
 }

@@ -240,7 +240,7 @@ void Detector::check_description(const FrameDescription& frame) const {
   }
   check_size(frame.width, frame.height);
   const Descriptor& x = frame.descriptor;
-  const GridSize grid = grid_size(frame.width, frame.height, options_.segmentation.superpixel_size);
+  const GridSize grid = frame_grid(frame.width, frame.height, options_.segmentation);
   if (x.storage != options_.descriptor.storage || x.grid.rows != grid.rows || x.grid.cols != grid.cols) {
     internal::throw_invalid("the described frame's descriptor (", x.grid.rows, " x ", x.grid.cols,
                             " cells, ", to_string(x.storage), ") is not the ", grid.rows, " x ",

@@ -167,7 +167,7 @@ void Detector::restore_frame(int width, int height, const Descriptor& descriptor
     internal::throw_invalid("restore_frame: frame ", frame, " is ", width, "x", height,
                             " but the detector holds ", width_, "x", height_, " frames");
   }
-  const GridSize expected = grid_size(width, height, options_.segmentation.superpixel_size);
+  const GridSize expected = frame_grid(width, height, options_.segmentation);
   if (descriptor.grid != expected) {
     internal::throw_invalid("restore_frame: frame ", frame, " has a ", descriptor.grid.rows, "x",
                             descriptor.grid.cols, " grid, but ", width, "x", height,
@@ -179,12 +179,15 @@ void Detector::restore_frame(int width, int height, const Descriptor& descriptor
                             to_string(options_.descriptor.storage));
   }
   descriptor.check_consistent("restore_frame");
+  // A compact descriptor's cells hold the pixels of the frame as described
+  // (its working size).
+  const FrameSize work = working_size(width, height, options_.segmentation);
+  const double pixels = static_cast<double>(work.width) * work.height;
   if (descriptor.storage == HistogramStorage::kCompact &&
-      std::fabs(descriptor.cell_pixels * expected.cells() - static_cast<double>(width) * height) >
-          0.5) {
+      std::fabs(descriptor.cell_pixels * expected.cells() - pixels) > 0.5) {
     internal::throw_invalid("restore_frame: frame ", frame, " has ", descriptor.cell_pixels,
                             " pixels per cell, but ", width, "x", height, " frames have ",
-                            static_cast<double>(width) * height / expected.cells());
+                            pixels / expected.cells());
   }
   std::vector<StateRecord> records;
   try {

@@ -5,6 +5,9 @@
 #include <cstdint>
 #include <limits>
 
+#include <opencv2/core.hpp>
+#include <opencv2/imgproc.hpp>
+
 #include "internal/check.h"
 #include "internal/kernels.h"
 
@@ -22,11 +25,37 @@ const OptionTable<SegmentationOptions>& SegmentationOptions::fields() {
                   "divides the squared intensity difference in the fuse distance"),
       real_option("distance_scale", &S::distance_scale, 0.0, 1e6, true, "",
                   "divides the squared pixel distance (pixels^2) in the fuse distance"),
+      integer_option("working_side", &S::working_side, 0, kMaxImageSide, "pixels",
+                     "a frame whose shorter side is longer is scaled down to it before it is "
+                     "segmented and described (0: its own size, the paper's; else >= 16)"),
   };
   return table;
 }
 
-void SegmentationOptions::check() const { check_options(fields(), *this, "segmentation"); }
+void SegmentationOptions::check() const {
+  check_options(fields(), *this, "segmentation");
+  if (working_side > 0 && working_side < kMinWorkingSide) {
+    internal::throw_invalid("segmentation.working_side = ", working_side, " must be 0 (off) or at least ",
+                            kMinWorkingSide, " pixels");
+  }
+}
+
+FrameSize working_size(int width, int height, const SegmentationOptions& options) {
+  const int side = options.working_side;
+  const int shorter = std::min(width, height);
+  if (side <= 0 || shorter <= side) return {width, height};
+  // The longer side in proportion, rounded to nearest, in 64-bit integers.
+  const auto scaled = [&](int longer) {
+    const std::int64_t v = (static_cast<std::int64_t>(longer) * side + shorter / 2) / shorter;
+    return static_cast<int>(std::max<std::int64_t>(1, v));
+  };
+  return width <= height ? FrameSize{side, scaled(height)} : FrameSize{scaled(width), side};
+}
+
+GridSize frame_grid(int width, int height, const SegmentationOptions& options) {
+  const FrameSize s = working_size(width, height, options);
+  return grid_size(s.width, s.height, options.superpixel_size);
+}
 
 GridSize grid_size(int width, int height, int superpixel_size) {
   if (width <= 0 || height <= 0) {
@@ -50,6 +79,22 @@ Segmenter::Segmenter(const SegmentationOptions& options)
 Segmenter::~Segmenter() = default;
 Segmenter::Segmenter(Segmenter&&) noexcept = default;
 Segmenter& Segmenter::operator=(Segmenter&&) noexcept = default;
+
+const GrayImage& Segmenter::working(const GrayImage& image) {
+  const FrameSize s = working_size(image.width, image.height, options_);
+  if (s.width == image.width && s.height == image.height) return image;
+  if (image.pixels.size() != static_cast<std::size_t>(image.width) * image.height) {
+    internal::throw_invalid("segment: image ", image.width, "x", image.height,
+                            " is inconsistent with its pixel buffer");
+  }
+  scaled_.width = s.width;
+  scaled_.height = s.height;
+  scaled_.pixels.resize(static_cast<std::size_t>(s.width) * s.height);
+  const cv::Mat from(image.height, image.width, CV_8UC1, const_cast<std::uint8_t*>(image.pixels.data()));
+  cv::Mat to(s.height, s.width, CV_8UC1, scaled_.pixels.data());
+  cv::resize(from, to, to.size(), 0, 0, cv::INTER_AREA);
+  return scaled_;
+}
 
 Segmentation Segmenter::segment(const GrayImage& image) {
   Segmentation out;

@@ -206,9 +206,14 @@ TEST(CompactDetector, TenKilobytesPerKittiFrameAndResultsCloseToExact) {
   DetectorOptions ko;
   ko.segmentation.superpixel_size = 40;
   ko.descriptor.storage = HistogramStorage::kCompact;
+  ko.segmentation.working_side = 0;  // the paper's size
   Detector kitti(ko);
   kitti.process(cv::Mat(376, 1241, CV_8UC1, cv::Scalar(90)));
   EXPECT_EQ(kitti.bytes_per_frame(), 10240u);  // 80 cells x 128 bytes
+  ko.segmentation.working_side = 240;  // the default: segmented at 792 x 240
+  Detector scaled(ko);
+  scaled.process(cv::Mat(376, 1241, CV_8UC1, cv::Scalar(90)));
+  EXPECT_EQ(scaled.bytes_per_frame(), 5120u);  // 4 x 10 cells x 128 bytes
 
   // The street's first revisit (frames ~300 on): both storages find loops
   // there, mostly to the same frames.

@@ -42,12 +42,14 @@ void erase(std::string& text, const std::string& what) {
 
 // Keys added after a file was written take the value of the version that
 // wrote it: no `descriptor` section means exact storage, no
-// verification.temporal.long_frames means the single 16-frame sequence.
+// verification.temporal.long_frames means the single 16-frame sequence, no
+// segmentation.working_side frames segmented at their own size.
 TEST(Database, OptionsOfAnOlderVersionKeepTheirBehaviour) {
   const std::string path = temp_path("older");
   fs::copy_file(small_database(), path);
   rewrite_options(path, [](std::string& yaml) {
     erase(yaml, "    long_frames: 48  # frames\n");
+    erase(yaml, "  working_side: 240  # pixels\n");
     const auto from = yaml.find("descriptor:\n");
     ASSERT_NE(from, std::string::npos);
     yaml.erase(from, yaml.find("similarity:") - from);
@@ -57,6 +59,7 @@ TEST(Database, OptionsOfAnOlderVersionKeepTheirBehaviour) {
   const Database db = Database::open(path, Database::Mode::kReadOnly);
   EXPECT_EQ(db.options().verification.temporal_options.long_frames, 0);
   EXPECT_EQ(db.options().descriptor.storage, HistogramStorage::kExact);
+  EXPECT_EQ(db.options().segmentation.working_side, 0);  // frames segmented at their own size
   // Today's defaults differ from such a file: resuming says which option.
   DetectorOptions today = db.options();
   today.verification.temporal_options.long_frames = 48;

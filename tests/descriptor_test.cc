@@ -201,6 +201,7 @@ SegmentationOptions fused_options(int superpixel_size, int iterations,
   o.superpixel_size = superpixel_size;
   o.iterations = iterations;
   o.intensity_scale = intensity_scale;
+  o.working_side = 0;  // at the image's own size (the working size: working_side_test.cc)
   return o;
 }
 

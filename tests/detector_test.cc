@@ -367,12 +367,17 @@ TEST(Detector, MemoryPerFrame) {
   // 16-bit bins and a 32-bit pixel count per cell.
   EXPECT_EQ(det.bytes_per_frame(), static_cast<std::size_t>(g.cells()) * (256 * 2 + 4));
   EXPECT_EQ(det.bytes_per_frame(), 12u * 516u);
-  // KITTI-sized frames at S_p = 40: 80 cells.
+  // KITTI-sized frames at S_p = 40: 80 cells at their own size, 40 at the
+  // default working size (792 x 240).
   DetectorOptions ko;
   ko.segmentation.superpixel_size = 40;
+  ko.segmentation.working_side = 0;
   Detector kitti(ko);
   kitti.process(cv::Mat(376, 1241, CV_8UC1, cv::Scalar(90)));
   EXPECT_EQ(kitti.bytes_per_frame(), 80u * 516u);  // 41,280 bytes
+  Detector scaled{DetectorOptions{}};
+  scaled.process(cv::Mat(376, 1241, CV_8UC1, cv::Scalar(90)));
+  EXPECT_EQ(scaled.bytes_per_frame(), 40u * 516u);
 }
 
 TEST(Detector, SimilarityAccessor) {

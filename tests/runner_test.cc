@@ -135,14 +135,17 @@ int in_limited_child(const std::function<void()>& f, const std::string& expected
 
 TEST(Runner, OutOfMemoryNamesTheFrameOrTheImage) {
   // An 8192 x 6144 frame (the most pixels lsgd reads): 50 MB to hold, far
-  // more to segment and describe than 120 MB above what the process uses.
+  // more to segment and describe at its own size (working_side 0) than
+  // 120 MB above what the process uses.
   FrameSource source;
   source.frames = 1;
   source.load = [](std::int64_t) { return cv::Mat(6144, 8192, CV_8UC1, cv::Scalar(9)); };
   source.name = [](std::int64_t i) { return "frame-" + std::to_string(i) + ".png"; };
   EXPECT_EQ(in_limited_child(
                 [&] {
-                  Detector detector;
+                  DetectorOptions own;
+                  own.segmentation.working_side = 0;
+                  Detector detector(own);
                   RunOptions options;
                   options.skip_bad_frames = true;
                   run_detector(detector, source, nullptr, options);

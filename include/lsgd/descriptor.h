@@ -88,7 +88,9 @@ void describe(const GrayImage& image, const Segmentation& segmentation, Descript
 Descriptor describe(const GrayImage& image, const Segmentation& segmentation);
 
 // segmenter.segment(image, segmentation) then describe(image, segmentation,
-// out), with bit-identical results, in one pass: the histograms are counted
+// out), of the image at its working size (Segmenter::working(); the image
+// itself unless segmentation.working_side scales it down), with
+// bit-identical results, in one pass: the histograms are counted
 // row by row during the segmentation's last iteration, while each row is in
 // cache, instead of in a second pass over the label image (what the detector
 // runs; describe() stays the reference). Throws what segment() throws.

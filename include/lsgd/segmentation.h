@@ -13,6 +13,9 @@
 
 namespace lsgd {
 
+// The shortest working_side (segmentation.working_side) other than 0.
+constexpr int kMinWorkingSide = 16;
+
 struct SegmentationOptions {
   // S_p, the segmentation scale in pixels, in [2, 4096]. The grid has
   // H / (2 S_p) + 1 rows and W / (2 S_p) + 1 columns (see grid_size()).
@@ -26,6 +29,15 @@ struct SegmentationOptions {
   double intensity_scale = 20.0;
   // Divides the squared pixel distance (pixels^2) in the fuse distance; in (0, 1e6].
   double distance_scale = 1.0;
+  // Beyond the paper: a frame whose shorter side is longer than this is
+  // scaled down (area averaging) until it is this long before it is
+  // segmented and described, so a camera's resolution does not change the
+  // grid: the paper's fixed S_p gives a 640x480 frame 63 cells where its
+  // 240x192 frames had 12, each cell's histogram a smaller piece of the
+  // scene. Pixels, 0 (the frame's own size: the paper) or [16, 16384].
+  // The other stages see the frame itself. docs/results.md has the
+  // leave-one-sequence-out choice.
+  int working_side = 240;
 
   // Throws InvalidArgument naming the first invalid field.
   void check() const;
@@ -47,6 +59,17 @@ struct GridSize {
 // never fewer than one. KITTI 1241x376 with S_p = 40 gives 5 x 16 = 80 cells.
 // Throws InvalidArgument for non-positive sizes or S_p.
 GridSize grid_size(int width, int height, int superpixel_size);
+
+struct FrameSize {
+  int width = 0;
+  int height = 0;
+};
+// The size a width x height frame is segmented at (working_side): the
+// shorter side scaled to working_side when it is longer, the longer side in
+// proportion (rounded, at least 1); the frame's own size otherwise.
+FrameSize working_size(int width, int height, const SegmentationOptions& options);
+// The grid of a width x height frame: grid_size() of its working size.
+GridSize frame_grid(int width, int height, const SegmentationOptions& options);
 
 // One superpixel centre: mean position (pixels) and mean intensity of its
 // pixels, and how many pixels it holds.
@@ -91,6 +114,11 @@ class Segmenter {
 
   const SegmentationOptions& options() const { return options_; }
 
+  // `image` at its working size (working_size()): `image` itself, or a copy
+  // scaled down with cv::INTER_AREA, kept until the next call. What
+  // segment_and_describe() segments; segment() takes its image as it is.
+  const GrayImage& working(const GrayImage& image);
+
   // Segments `image` into `out`, reusing out's storage. Every pixel gets a
   // label: each iteration resets the distances, centres are updated to the
   // mean position and intensity of their pixels, an empty cluster keeps its
@@ -121,6 +149,7 @@ class Segmenter {
   std::vector<std::int64_t> row_start_;  // centres covering row y: row_items_[row_start_[y] ..)
   std::vector<std::int64_t> row_fill_;
   std::vector<std::int32_t> row_items_;
+  GrayImage scaled_;                     // working(): the last frame scaled down
   struct Rows;                  // the assignment's row segments (segmentation.cc)
   std::unique_ptr<Rows> rows_;
 };

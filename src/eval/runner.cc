@@ -152,14 +152,19 @@ std::vector<std::string> setup_warnings(const Detector& detector, const GroundTr
   const int w = detector.width(), h = detector.height();
   if (w > 0 && h > 0) {
     const int sp = o.segmentation.superpixel_size;
-    const GridSize grid = grid_size(w, h, sp);
+    const FrameSize work = working_size(w, h, o.segmentation);
+    const GridSize grid = grid_size(work.width, work.height, sp);
     if (grid.cells() < 4) {
       out.push_back(internal::concat(
-          "frames of ", w, "x", h, " give a ", grid.rows, "x", grid.cols,
-          " grid at segmentation.superpixel_size ", sp, " (", grid.cells(),
-          " cell", grid.cells() == 1 ? "" : "s", ", fewer than 4): the descriptor is almost a "
-          "whole-image histogram and cannot tell places apart; use superpixel_size <= ",
-          std::max(2, std::min(w, h) / 2)));
+          "frames of ", w, "x", h,
+          work.width != w || work.height != h
+              ? internal::concat(" (segmented at ", work.width, "x", work.height, ")")
+              : std::string(),
+          " give a ", grid.rows, "x", grid.cols, " grid at segmentation.superpixel_size ", sp, " (",
+          grid.cells(), " cell", grid.cells() == 1 ? "" : "s",
+          ", fewer than 4): the descriptor is almost a whole-image histogram and cannot tell places "
+          "apart; use superpixel_size <= ",
+          std::max(2, std::min(work.width, work.height) / 2)));
     }
     if (o.verification.has(kGeometricStage) && std::min(w, h) < 100) {
       out.push_back(internal::concat(

@@ -134,6 +134,7 @@ void Database::Impl::read_options() {
     DetectorOptions before;
     before.verification.temporal_options.long_frames = 0;
     before.verification.geometric_options.max_side = 0;  // came with format 2
+    before.segmentation.working_side = 0;  // frames were segmented at their own size
     options = parse_config(meta["options"], "database " + path + " meta options", before);
     // Format 1 decision thresholds were raw similarities: this version's
     // decision (in sigma) replaces them.
@@ -156,7 +157,7 @@ void Database::Impl::read_frame_size() {
   grid.cols = integer("grid_cols", 0, kMaxImageSide);
   const bool sized = width > 0 && height > 0;
   if ((width > 0) != (height > 0) ||
-      (sized && grid != grid_size(width, height, options.segmentation.superpixel_size)) ||
+      (sized && grid != frame_grid(width, height, options.segmentation)) ||
       (!sized && (grid.rows != 0 || grid.cols != 0))) {
     format_error(path, "meta frame size ", width, "x", height, " and grid ", grid.rows, "x",
                  grid.cols, " do not match segmentation.superpixel_size ",

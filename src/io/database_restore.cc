@@ -279,7 +279,8 @@ void Database::restore(Detector& detector, IndexUse index) const {
 std::pair<std::int64_t, std::int64_t> Database::Impl::restore_frames(Detector& detector) const {
   const DetectorOptions& o = detector.options();
   const bool nodes_mode = detector.search().has_groups();  // dynamic nodes
-  RowDescriptor layout(grid, width, height, o.descriptor.storage);
+  const FrameSize work = working_size(width, height, o.segmentation);  // what was described
+  RowDescriptor layout(grid, work.width, work.height, o.descriptor.storage);
   std::vector<std::uint8_t> state;
   Statement stmt(db, path, select_frames(format).c_str());
   RowReader rows(stmt.get(), path, o.search.mode, nodes_mode);

@@ -130,7 +130,7 @@ void run(const bench::Setup& a, const DetectorOptions& options, bench::RunData& 
   const eval::SyntheticWorld world(world_options);
   Detector detector(options);
   StandaloneLsgd ours(options.segmentation);
-  d.grid = grid_size(a.width, a.height, options.segmentation.superpixel_size);
+  d.grid = frame_grid(a.width, a.height, options.segmentation);
   plan_slic(a, options, d);
   d.peak_rss_before_bytes = bench::peak_rss_bytes();
 
@@ -214,7 +214,7 @@ void distractors_command(const BenchArgs& args) {
 // their vectors grow) would not fit in the memory this process can take,
 // instead of the run being killed hours in (bench::require_memory).
 void check_memory(const bench::Setup& a, const DetectorOptions& options) {
-  const int cells = grid_size(a.width, a.height, options.segmentation.superpixel_size).cells();
+  const int cells = frame_grid(a.width, a.height, options.segmentation).cells();
   const std::int64_t samples = 2 * 10 * static_cast<std::int64_t>(sizeof(double));
   const std::int64_t need = bench::map_bytes(options.search.mode, a.frames, cells, options) + a.frames * samples;
   bench::require_memory("--frames " + std::to_string(a.frames), a.frames, cells, options, need,

@@ -179,14 +179,37 @@ TEST_F(Files, UnwritableOutputsStopTheCommandFirst) {
   // A stream the user chose is fine.
   r = lsgd(eval + " --json /dev/null");
   EXPECT_EQ(r.code, 0) << r.err;
-  if (::geteuid() != 0) {  // root may write read-only files
-    const fs::path ro = kTmp / "ro.json";
-    std::ofstream(ro) << "{}";
-    fs::permissions(ro, fs::perms::owner_read);
-    r = lsgd(eval + " --json " + q(ro));
-    EXPECT_NE(r.code, 0);
-    EXPECT_NE(r.err.find("read-only"), std::string::npos) << r.err;
-  }
+  // A read-only file or folder is refused by its mode, also for root (whom
+  // access() lets write anything): lsgd run as root replaced them.
+  const fs::path ro = kTmp / "ro.json";
+  std::ofstream(ro) << "{}";
+  fs::permissions(ro, fs::perms::owner_read | fs::perms::group_read | fs::perms::others_read);
+  r = lsgd(eval + " --json " + q(ro));
+  EXPECT_NE(r.code, 0);
+  EXPECT_NE(r.err.find("read-only"), std::string::npos) << r.err;
+  r = lsgd("run --sequence " + q(dir_ / "sequence.txt") + " --output " + q(ro));
+  EXPECT_NE(r.code, 0);
+  EXPECT_NE(r.err.find("read-only"), std::string::npos) << r.err;
+  EXPECT_EQ(slurp(ro), "{}");
+  const fs::path locked = kTmp / "locked";
+  fs::create_directories(locked);
+  fs::permissions(locked, fs::perms::owner_read | fs::perms::owner_exec);
+  r = lsgd(eval + " --json " + q(locked / "j.json"));
+  EXPECT_NE(r.code, 0);
+  EXPECT_NE(r.err.find("read-only"), std::string::npos) << r.err;
+  EXPECT_FALSE(fs::exists(locked / "j.json"));
+  fs::permissions(locked, fs::perms::owner_all);
+  // A database file without a write bit is not appended to.
+  const fs::path db = kTmp / "ro.db";
+  r = lsgd("run --sequence " + q(dir_ / "sequence.txt") + " --output /dev/null --database " + q(db));
+  ASSERT_EQ(r.code, 0) << r.err;
+  const std::string before = slurp(db);
+  fs::permissions(db, fs::perms::owner_read | fs::perms::group_read | fs::perms::others_read);
+  r = lsgd("run --sequence " + q(dir_ / "sequence.txt") + " --output /dev/null --database " + q(db));
+  EXPECT_NE(r.code, 0);
+  EXPECT_NE(r.err.find("read-only"), std::string::npos) << r.err;
+  EXPECT_EQ(slurp(db), before);
+  fs::permissions(db, fs::perms::owner_read | fs::perms::owner_write);
 }
 
 // A result that cannot be written whole is an error (exit 1 naming the file),

@@ -583,6 +583,20 @@ def test_match_one_traverse_against_another(tmp_path):
             lsgd.match(refs, queries, query_offset=offset)
     with pytest.raises(lsgd.InvalidArgument, match="the reference holds no frame"):
         lsgd.match([], queries)
+    # A read-only file (or folder) is never replaced, also when run as root.
+    ro = tmp_path / "ro.csv"
+    ro.write_text("keep\n")
+    ro.chmod(0o444)
+    with pytest.raises(lsgd.IoError, match="read-only"):
+        lsgd.match(refs, queries, output=str(ro))
+    assert ro.read_text() == "keep\n"
+    locked = tmp_path / "locked"
+    locked.mkdir()
+    locked.chmod(0o555)
+    with pytest.raises(lsgd.IoError, match="read-only"):
+        lsgd.match(refs, queries, output=str(locked / "m.csv"))
+    assert not (locked / "m.csv").exists()
+    locked.chmod(0o755)
 
 
 def test_describe_to_numpy_and_back():

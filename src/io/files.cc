@@ -162,6 +162,22 @@ void write_output_file(const std::string& path, const std::string& content,
                        const std::string& what) {
   struct stat st {};
   const bool stream = ::stat(path.c_str(), &st) == 0 && !S_ISREG(st.st_mode);
+  // A file nobody may write is not replaced, not even by root (for whom
+  // access() grants everything) nor by a rename, which never asks the file.
+  if (!stream && ::stat(path.c_str(), &st) == 0 &&
+      (::access(path.c_str(), W_OK) != 0 || (st.st_mode & (S_IWUSR | S_IWGRP | S_IWOTH)) == 0)) {
+    throw IoError(concat("cannot write ", what, " '", path, "': it is read-only (make it writable "
+                         "or give another file)"));
+  }
+  if (!stream) {
+    const std::size_t slash = path.rfind('/');
+    const std::string folder = slash == std::string::npos ? "." : slash == 0 ? "/" : path.substr(0, slash);
+    struct stat fst {};
+    if (::stat(folder.c_str(), &fst) == 0 && (fst.st_mode & (S_IWUSR | S_IWGRP | S_IWOTH)) == 0) {
+      throw IoError(concat("cannot write ", what, " '", path, "': its folder '", folder,
+                           "' is read-only"));
+    }
+  }
   if (stream) {  // a device or pipe: written in place, never replaced
     const int fd = ::open(path.c_str(), O_WRONLY | O_CLOEXEC);
     if (fd < 0) throw IoError(concat("cannot write ", what, " '", path, "': ", std::strerror(errno)));

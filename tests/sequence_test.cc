@@ -344,6 +344,15 @@ TEST_F(SequenceTest, OverlongLineInAListIsFormatErrorNamingIt) {
   EXPECT_EQ(read_image_list(ok).size(), 2u);
 }
 
+// A NUL inside a line (a UTF-16 list, a binary file) names the line: a path
+// cut at it was read as another file, and messages were cut there.
+TEST_F(SequenceTest, ANulByteInAListIsFormatErrorNamingTheLine) {
+  const std::string list = write("nul.txt", std::string("a.png\nb.png\0garbage\nc.png\n", 26));
+  expect_error<FormatError>([&] { read_image_list(list); }, {list, "line 2", "NUL byte"});
+  const std::string utf16 = write("utf16.txt", std::string("\xff\xfe" "a\0.\0p\0n\0g\0\n\0", 14));
+  expect_error<FormatError>([&] { read_image_list(utf16); }, {utf16, "line 1", "UTF-16"});
+}
+
 // read_image decodes JPEGs with libjpeg itself (to see its warnings in the
 // same pass): the pixels must be exactly cv::imdecode's, for colour and gray,
 // optimised, progressive and restart-interval files.
@@ -489,6 +498,34 @@ TEST_F(SequenceTest, ImagesDeclaringTooManyPixelsAreRefusedFromTheHeader) {
   // Not one of the formats lsgd reads (a GIF): refused, naming them.
   const std::string gif = write("a.gif", std::string("GIF89a\x10\x00\x10\x00", 10) + std::string(40, '\0'));
   expect_error<FormatError>([&] { read_image(gif); }, {gif, "not a decodable image", "JPEG, PNG"});
+}
+
+// A PNG's chunks are walked before libpng sees them (issue 35): a chunk
+// longer than the file (a 141-byte file whose tEXt claimed 2 GB cost 2 GB
+// and 8 s) and more compressed pixel data than the declared pixels can need
+// (1 MB of IDAT holding 960 MB of zeros took 3 s and was kept as a frame)
+// are refused without inflating anything; a real PNG is read as before.
+TEST_F(SequenceTest, PngChunksLongerThanTheFileOrThePixelsAreRefused) {
+  std::vector<uchar> b;
+  ASSERT_TRUE(cv::imencode(".png", random_image(CV_8UC1), b));  // 23 x 17 gray, incompressible
+  const std::string png(b.begin(), b.end());
+  ASSERT_EQ(png.substr(12, 4), "IHDR");
+  const std::string head = png.substr(0, 33);  // signature and IHDR
+  const auto chunk = [](std::uint32_t length, const std::string& type, const std::string& data) {
+    std::string c;
+    for (int k = 0; k < 4; ++k) c += static_cast<char>(length >> (24 - 8 * k));
+    return c + type + data + std::string(4, '\0');  // the CRC is never read
+  };
+  const std::string text = write("text.png", head + chunk(0x7ffffff0u, "tEXt", std::string(100, 'a')).substr(0, 108));
+  expect_error<FormatError>([&] { read_image(text); },
+                            {text, "damaged PNG", "chunk 'tEXt' at byte 33 claims 2147483632 bytes"});
+  const std::string idat =
+      write("idat.png", head + chunk(30000, "IDAT", std::string(30000, 'x')) + chunk(0, "IEND", ""));
+  expect_error<FormatError>([&] { read_image(idat); },
+                            {idat, "damaged PNG", "IDAT) holds 30000 compressed bytes", "23 x 17"});
+  const std::string cut = write("cut.png", png.substr(0, png.size() / 2));
+  expect_error<FormatError>([&] { read_image(cut); }, {cut, "damaged PNG", "truncated or damaged"});
+  EXPECT_EQ(read_image(write("whole.png", png)).cols, 23);
 }
 
 // A progressive JPEG keeps every coefficient until its last scan: one that

@@ -55,6 +55,45 @@ void read_jpeg(const Bytes& b, ImageHeader& h) {
   }
 }
 
+// PNG: IHDR's size, then a walk over the chunks' lengths alone (nothing is
+// inflated). libpng allocates a chunk's claimed length before it reads it
+// (a 141-byte file whose tEXt claims 2 GB cost 2 GB and 8 s), and inflates
+// every byte of IDAT even beyond the image's rows (1 MB of IDAT holding
+// 960 MB of zeros: 3 s, then the frame was kept). A chunk must lie inside
+// the file, and IDAT may hold no more than the declared rows could take
+// stored uncompressed (deflate's stored blocks add 5 bytes per 65,535).
+void read_png(const Bytes& b, ImageHeader& h) {
+  if (!starts_with(b, "IHDR", 4, 12)) return;
+  h.width = be(b, 16, 4), h.height = be(b, 20, 4);
+  const std::int64_t depth = be(b, 24, 1), colour = be(b, 25, 1), interlace = be(b, 28, 1);
+  const int channels = colour == 0 || colour == 3 ? 1 : colour == 2 ? 3 : colour == 4 ? 2 : colour == 6 ? 4 : 0;
+  std::int64_t idat = 0;
+  std::size_t at = 8;
+  while (at + 8 <= b.size()) {
+    const std::int64_t length = be(b, at, 4);
+    const std::string type(reinterpret_cast<const char*>(b.data() + at + 4), 4);
+    if (length > (std::int64_t{1} << 31) - 1 ||
+        static_cast<std::int64_t>(at) + 12 + length > static_cast<std::int64_t>(b.size())) {
+      h.damage = "chunk '" + type + "' at byte " + std::to_string(at) + " claims " + std::to_string(length) +
+                 " bytes, beyond the file's " + std::to_string(b.size()) + " (truncated or damaged)";
+      return;
+    }
+    if (type == "IDAT") idat += length;
+    if (type == "IEND") break;
+    at += 12 + static_cast<std::size_t>(length);
+  }
+  if (channels == 0 || depth <= 0 || depth > 16 || h.width <= 0 || h.height <= 0) return;
+  const std::int64_t row = (h.width * channels * depth + 7) / 8 + 1;  // and its filter byte
+  // Adam7 passes each start their rows with a filter byte and round up.
+  const std::int64_t raw = h.height * row + (interlace == 1 ? 15 * (h.height + 8) : 0);
+  const std::int64_t most = raw + (raw / 65535 + 1) * 5 + 64;
+  if (idat > most) {
+    h.damage = "its pixel data (IDAT) holds " + std::to_string(idat) + " compressed bytes, more than the " +
+               std::to_string(most) + " its " + std::to_string(h.width) + " x " + std::to_string(h.height) +
+               " pixels can need: not inflated";
+  }
+}
+
 // PNM: "P1" .. "P6" then width, height (and maxval but for bitmaps), separated
 // by white space and '#' comments; "P7" (PAM): WIDTH, HEIGHT, MAXVAL lines.
 void read_pnm(const Bytes& b, ImageHeader& h) {
@@ -150,7 +189,7 @@ ImageHeader read_header(const Bytes& b) {
     read_jpeg(b, h);
   } else if (starts_with(b, "\x89PNG\r\n\x1a\n", 8)) {
     h.format = "PNG";
-    if (starts_with(b, "IHDR", 4, 12)) h.width = be(b, 16, 4), h.height = be(b, 20, 4);
+    read_png(b, h);
   } else if (starts_with(b, "BM", 2)) {
     h.format = "BMP";
     const std::int64_t size = le(b, 14, 4);

@@ -16,6 +16,10 @@ struct ImageHeader {
   std::int64_t width = -1;   // -1: the header does not say (a damaged header)
   std::int64_t height = -1;
   int pnm_maxval = 0;  // PNM (P2, P3, P5, P6, P7): its maxval; 0 otherwise
+  // Why the file is refused before any decoding, when its structure alone
+  // shows it (a PNG chunk longer than the file, more compressed pixel data
+  // than the declared pixels can need); empty otherwise.
+  std::string damage;
 };
 
 // The format the bytes start with and the size their header declares.

@@ -161,6 +161,12 @@ std::vector<std::string> read_image_list(const std::string& path) {
     first_line = false;
     const std::string entry = trim(line);
     if (entry.empty() || entry[0] == '#') continue;
+    // No file name holds a NUL: the line is damaged (a UTF-16 list, a binary
+    // file), and a path cut at it would name another file.
+    if (entry.find('\0') != std::string::npos) {
+      throw FormatError(concat("list file '", path, "' line ", number, " holds a NUL byte (a UTF-16 "
+                               "or binary file?): list one UTF-8 path per line"));
+    }
     const fs::path image(entry);
     images.push_back(image.is_absolute() ? image.string() : (folder / image).string());
     if (static_cast<std::int64_t>(images.size()) > kMaxFrames) {
@@ -454,6 +460,9 @@ cv::Mat read_image(const std::string& path) {
   if (jpeg && !jpeg_reaches_eoi(bytes)) {
     throw FormatError(concat("image '", path, "' is a truncated or damaged JPEG: its ",
                              bytes.size(), " bytes end before the end-of-image marker"));
+  }
+  if (!declared.damage.empty()) {
+    throw FormatError(concat("image '", path, "' is a damaged ", declared.format, ": ", declared.damage));
   }
   if (declared.width <= 0 || declared.height <= 0) {
     throw FormatError(concat("image '", path, "' is a damaged ", declared.format,

@@ -4,6 +4,7 @@
 #include <opencv2/imgproc.hpp>
 
 #include "internal/check.h"
+#include "lsgd/limits.h"
 
 namespace lsgd {
 namespace {
@@ -26,6 +27,12 @@ void check_view(const ImageView& view) {
   if (view.width > kMaxImageSide || view.height > kMaxImageSide) {
     internal::throw_invalid("image size ", view.width, "x", view.height,
                             " exceeds the largest supported side of ", kMaxImageSide, " pixels");
+  }
+  // The image files' bound (lsgd/limits.h), for frames given in memory too
+  // (a Python array broadcast to 16384 x 16384 cost 2.2 GB and 8 s).
+  if (static_cast<std::int64_t>(view.width) * view.height > kMaxImagePixels) {
+    internal::throw_invalid("image size ", view.width, "x", view.height, " exceeds the largest supported ",
+                            kMaxImagePixels, " pixels (8192 x 6144)");
   }
   const std::ptrdiff_t row_bytes =
       static_cast<std::ptrdiff_t>(view.width) * channels_of(view.format);

@@ -14,6 +14,7 @@
 #include <opencv2/imgproc.hpp>
 
 #include "lsgd/error.h"
+#include "lsgd/limits.h"
 #include "test_util.h"
 
 namespace lsgd {
@@ -294,6 +295,19 @@ TEST(ImageReject, SideAboveMax) {
                InvalidArgument);
   EXPECT_THROW(to_gray(ImageView{buf.data(), 1, kMaxImageSide + 1, 1, PixelFormat::kGray8}),
                InvalidArgument);
+}
+
+// The image files' pixel bound holds for frames in memory: refused before
+// any pixel is read (the view's rows lie beyond its one row of data).
+TEST(ImageReject, MorePixelsThanAnImageFileMayDeclare) {
+  std::vector<std::uint8_t> row(kMaxImageSide, 7);
+  try {
+    to_gray(ImageView{row.data(), kMaxImageSide, kMaxImageSide, kMaxImageSide, PixelFormat::kGray8});
+    ADD_FAILURE() << "a 16384 x 16384 frame was accepted";
+  } catch (const InvalidArgument& e) {
+    EXPECT_NE(std::string(e.what()).find("16384x16384 exceeds the largest supported"), std::string::npos)
+        << e.what();
+  }
 }
 
 TEST(ImageReject, UnknownPixelFormat) {

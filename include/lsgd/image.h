@@ -41,7 +41,8 @@ constexpr int kMaxImageSide = 16384;
 
 // Converts to gray with OpenCV's BGR2GRAY weights (0.299 R + 0.587 G + 0.114 B),
 // as the reference implementation does. Throws InvalidArgument for a null or
-// zero-size image, a side above kMaxImageSide or a stride shorter than a row.
+// zero-size image, a side above kMaxImageSide, more than kMaxImagePixels
+// pixels (lsgd/limits.h) or a stride shorter than a row.
 void to_gray(const ImageView& view, GrayImage& out);
 GrayImage to_gray(const ImageView& view);
 

@@ -14,6 +14,7 @@
 #include <opencv2/core.hpp>
 #include <opencv2/imgcodecs.hpp>
 #include <sstream>
+#include <set>
 #include <string>
 
 #include "cli_util.h"
@@ -144,13 +145,49 @@ TEST_F(ShortStreet, MatchOneTraverseAgainstAnother) {
     EXPECT_EQ(ignored.code, 1) << flag;
     EXPECT_NE(ignored.err.find("has no effect on lsgd match"), std::string::npos) << ignored.err;
   }
-  // A query traverse of another size is refused, naming the image.
+  // An image of another size, or one that cannot be read, is skipped and
+  // reported, as lsgd run does; --strict stops there, naming it.
   const fs::path small = kTmp / "small";
   fs::create_directories(small);
   write_image(small / "a.png", 1);
-  const CmdResult other = lsgd("match --reference " + q(kTmp / "ref.txt") + " --query " + q(small));
-  EXPECT_EQ(other.code, 1);
-  EXPECT_NE(other.err.find("is 64x48, the first reference image 160x120"), std::string::npos) << other.err;
+  const std::string against_small = "match --reference " + q(kTmp / "ref.txt") + " --query " + q(small);
+  const CmdResult other = lsgd(against_small);
+  EXPECT_EQ(other.code, 0) << other.err;
+  EXPECT_NE(other.err.find("skipping --query image 0: ("), std::string::npos) << other.err;
+  EXPECT_NE(other.err.find("is 64x48, the first image 160x120"), std::string::npos) << other.err;
+  EXPECT_NE(other.err.find("skipped 0 reference and 1 query images"), std::string::npos) << other.err;
+  EXPECT_EQ(other.out, "query,match,score,similarity,rank\n");
+  const CmdResult strict = lsgd(against_small + " --strict");
+  EXPECT_EQ(strict.code, 1);
+  EXPECT_NE(strict.err.find("--query image 0: ("), std::string::npos) << strict.err;
+  EXPECT_EQ(strict.err.find("skipping"), std::string::npos) << strict.err;
+  // A reference that cannot be read keeps every other image's number.
+  {
+    std::ifstream in(kTmp / "ref.txt");
+    std::ofstream out(kTmp / "ref-missing.txt");
+    for (int i = 0; std::getline(in, line); ++i) out << (i == 3 ? (kTmp / "missing.png").string() : line) << "\n";
+  }
+  const CmdResult missing = lsgd("match --reference " + q(kTmp / "ref-missing.txt") + " --query " +
+                                 q(kTmp / "query.txt") + " --top-k 90 --output " + q(kTmp / "m2.csv"));
+  ASSERT_EQ(missing.code, 0) << missing.err;
+  EXPECT_NE(missing.err.find("skipping --reference image 3:"), std::string::npos) << missing.err;
+  std::ifstream m2(kTmp / "m2.csv");
+  std::getline(m2, line);
+  std::int64_t rows_read = 0;
+  std::set<std::int64_t> matched, queried;
+  for (; std::getline(m2, line); ++rows_read) {
+    std::istringstream fields(line);
+    std::string query_id, match_id;
+    std::getline(fields, query_id, ',');
+    std::getline(fields, match_id, ',');
+    queried.insert(std::stoll(query_id));
+    matched.insert(std::stoll(match_id));
+  }
+  EXPECT_EQ(rows_read, 89 * (frames_ - 90));  // every reference read, for every query
+  EXPECT_EQ(matched.count(3), 0u);
+  EXPECT_EQ(matched.size(), 89u);
+  EXPECT_EQ(*matched.rbegin(), 89);
+  EXPECT_EQ(*queried.begin(), 90);
 }
 
 TEST_F(ShortStreet, RunCsvScoredAsDetectionsMatchesEval) {

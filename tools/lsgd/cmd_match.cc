@@ -47,29 +47,43 @@ struct MatchArgs {
   SequenceFlags layout;
 };
 
-// Every image's descriptor; an image that cannot be read, or has another
-// size than the first, is an error naming it (a traverse is one camera).
-std::vector<Descriptor> describe_all(Detector& detector, const io::Sequence& sequence,
-                                     const char* flag, int& width, int& height) {
-  std::vector<Descriptor> out;
-  out.reserve(sequence.images.size());
+// Every image's descriptor and its index in the traverse. An image that
+// cannot be read, or has another size than the first, is skipped and
+// reported (its index keeps its number: no match names it, no row is
+// written for it), or with --strict an error naming it.
+struct Described {
+  std::vector<Descriptor> descriptors;
+  std::vector<std::int64_t> index;  // of each descriptor in the traverse
+  std::int64_t skipped = 0;
+};
+
+Described describe_all(Detector& detector, const io::Sequence& sequence, const char* flag, bool strict,
+                       int& width, int& height) {
+  Described out;
   const eval::FrameSource source = eval::sequence_source(sequence);
+  const auto skip = [&](std::int64_t i, const std::string& why) {
+    const std::string message = std::string(flag) + " image " + std::to_string(i) + ": " + why;
+    if (strict) throw InvalidArgument(message);
+    std::cerr << "lsgd match: skipping " << message << " (--strict stops here instead)\n";
+    ++out.skipped;
+  };
   for (std::int64_t i = 0; i < source.frames; ++i) {
     cv::Mat image;
     try {
       image = source.load(i);
     } catch (const Error& e) {
-      throw InvalidArgument(std::string(flag) + " image " + std::to_string(i) + ": " + e.what());
+      skip(i, e.what());
+      continue;
     }
     if (width == 0) width = image.cols, height = image.rows;
     if (image.cols != width || image.rows != height) {
-      throw InvalidArgument(std::string(flag) + " image " + std::to_string(i) + " (" + source.name(i) +
-                            ") is " + std::to_string(image.cols) + "x" + std::to_string(image.rows) +
-                            ", the first reference image " + std::to_string(width) + "x" +
-                            std::to_string(height) + ": the traverses must have one frame size "
-                            "(the descriptor's grid follows it)");
+      skip(i, "(" + source.name(i) + ") is " + std::to_string(image.cols) + "x" + std::to_string(image.rows) +
+                  ", the first image " + std::to_string(width) + "x" + std::to_string(height) +
+                  ": the traverses must have one frame size (the descriptor's grid follows it)");
+      continue;
     }
-    out.push_back(detector.describe(image));
+    out.descriptors.push_back(detector.describe(image));
+    out.index.push_back(i);
   }
   return out;
 }
@@ -117,10 +131,14 @@ void match(const MatchArgs& args) {
   const auto start = std::chrono::steady_clock::now();
   Detector detector(options);
   int width = 0, height = 0;
-  const std::vector<Descriptor> refs = describe_all(detector, reference, "--reference", width, height);
-  const std::vector<Descriptor> queries = describe_all(detector, query, "--query", width, height);
+  const bool strict = args.layout.strict;
+  const Described refs = describe_all(detector, reference, "--reference", strict, width, height);
+  const Described queries = describe_all(detector, query, "--query", strict, width, height);
+  if (refs.descriptors.empty()) {
+    throw InvalidArgument("--reference " + args.reference + ": no image could be read (see above)");
+  }
   std::vector<DescriptorView> views;
-  for (const Descriptor& d : refs) views.push_back(d.view());
+  for (const Descriptor& d : refs.descriptors) views.push_back(d.view());
 
   std::unique_ptr<std::ofstream> file;
   std::ostream* out = &std::cout;
@@ -129,16 +147,28 @@ void match(const MatchArgs& args) {
     if (!*file) throw_cannot_write(args.output);
     out = file.get();
   }
-  const auto k = static_cast<std::size_t>(std::min<std::int64_t>(args.top_k, references));
+  const auto k = static_cast<std::size_t>(
+      std::min<std::int64_t>(args.top_k, static_cast<std::int64_t>(refs.descriptors.size())));
   std::vector<DescriptorView> query_views;
-  for (const Descriptor& d : queries) query_views.push_back(d.view());
-  *out << eval::match_csv(match_top_k(views, query_views, args.top_k, options.similarity.metric, offset));
+  for (const Descriptor& d : queries.descriptors) query_views.push_back(d.view());
+  std::vector<TopMatch> rows =
+      query_views.empty() ? std::vector<TopMatch>{}
+                          : match_top_k(views, query_views, args.top_k, options.similarity.metric, 0);
+  for (TopMatch& m : rows) {  // positions among the images read -> the traverses' own numbers
+    m.query = offset + queries.index[static_cast<std::size_t>(m.query)];
+    m.match = refs.index[static_cast<std::size_t>(m.match)];
+  }
+  *out << eval::match_csv(rows);
   out->flush();
   if (!*out) throw IoError("error while writing " + (args.output.empty() ? std::string("standard output") : "'" + args.output + "'"));
-  std::cerr << "matched " << queries.size() << " query images against " << references
+  std::cerr << "matched " << queries.descriptors.size() << " query images against " << refs.descriptors.size()
             << " reference images (" << width << "x" << height << "), top " << k << " each, in "
             << std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count() << " s"
             << (args.output.empty() ? "" : "; rows in " + args.output) << "; query ids from " << offset
+            << (refs.skipped + queries.skipped > 0
+                    ? "; skipped " + std::to_string(refs.skipped) + " reference and " +
+                          std::to_string(queries.skipped) + " query images"
+                    : std::string())
             << "\n";
 }
 

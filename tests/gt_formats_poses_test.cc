@@ -103,6 +103,26 @@ TEST(GroundTruthFromPoses, BoundsAreStrict) {
   EXPECT_THROW(lsgd::eval::groundtruth_from_poses({{1e300, 0, 0}}, 1.0, 0), lsgd::InvalidArgument);
 }
 
+// Poses of a robot standing still give every pair of frames: refused while
+// they are added (10,000 poses were 49 M pairs, 1.3 GB), the file named;
+// a coordinate beyond the range names the file too.
+TEST(GroundTruthFromPoses, ABombOfPairsIsRefusedNamingTheFile) {
+  std::string text;
+  for (int i = 0; i < 3000; ++i) text += pose_line(1, 2, 3, false);  // 4.5 M pairs
+  const fs::path p = write_file("still.txt", text);
+  lsgd::eval::GtOptions o;
+  o.format = lsgd::eval::kKittiPosesGtFormat;
+  o.poses_min_gap = 0;
+  const std::string e = message_of<lsgd::FormatError>([&] { lsgd::eval::load_groundtruth(p.string(), o); });
+  EXPECT_TRUE(contains(e, p.string())) << e;
+  EXPECT_TRUE(contains(e, "more than 4194304 pairs")) << e;
+  o.poses_min_gap = 200;  // 3.9 M pairs: held
+  EXPECT_EQ(lsgd::eval::load_groundtruth(p.string(), o).pairs(), 2799 * 2800 / 2);
+  const fs::path far = write_file("far.txt", "1 0 0 1e308 0 1 0 0 0 0 1 0\n");
+  const std::string f = message_of<lsgd::FormatError>([&] { lsgd::eval::load_groundtruth(far.string(), o); });
+  EXPECT_TRUE(contains(f, far.string()) && contains(f, "not finite or too large")) << f;
+}
+
 // ---- loopinf -------------------------------------------------------------------------
 
 TEST(ReadLoopinf, ReadsLoopsBothWays) {

@@ -11,6 +11,11 @@ namespace lsgd {
 // Frames of one sequence, ground truth, detections file or database: 10
 // million (four days at 30 frames per second; KITTI-00 has 4,541).
 constexpr std::int64_t kMaxFrames = 10'000'000;
+// Pairs of one ground truth: 4,194,304 (about 40 MB held; the published
+// ground truths have up to a few hundred thousand). A denser one (poses of
+// a robot standing still, a MAT matrix of ones) is refused while it is
+// read, not after gigabytes and seconds.
+constexpr std::int64_t kMaxGroundTruthPairs = std::int64_t{1} << 22;
 // Frame ids and database session ids: 2^53 - 1, so that every id is exact
 // in JSON numbers (doubles) and in Python and JavaScript readers of them.
 constexpr std::int64_t kMaxFrameId = (std::int64_t{1} << 53) - 1;

@@ -6,6 +6,7 @@
 #include <sstream>
 
 #include "internal/check.h"
+#include "lsgd/limits.h"
 #include "lsgd/error.h"
 #include "lsgd/io/sequence.h"
 
@@ -29,6 +30,11 @@ void GroundTruth::add(std::int64_t a, std::int64_t b) {
   auto& list = matches_[q];
   auto it = std::lower_bound(list.begin(), list.end(), m);
   if (it != list.end() && *it == m) return;
+  if (pairs_ >= kMaxGroundTruthPairs) {
+    internal::throw_invalid("the ground truth has more than ", kMaxGroundTruthPairs,
+                            " pairs, the most lsgd holds (nearly every frame a loop of every other: "
+                            "a poses ground truth needs a shorter distance)");
+  }
   list.insert(it, m);
   ++pairs_;
 }

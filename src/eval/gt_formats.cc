@@ -177,7 +177,11 @@ GroundTruth open_kitti_poses(const std::string& path, const GtOptions& options) 
     throw FormatError(concat("'", path, "' has ", n, " poses but the sequence has ",
                              options.frames, " frames"));
   }
-  return groundtruth_from_poses(poses, options.poses_distance, options.poses_min_gap);
+  try {
+    return groundtruth_from_poses(poses, options.poses_distance, options.poses_min_gap);
+  } catch (const InvalidArgument& e) {  // a coordinate or the pairs: the file's
+    throw FormatError(concat("KITTI poses '", path, "': ", e.what()));
+  }
 }
 
 // The formats, built-in ones first (register_gt_format()).

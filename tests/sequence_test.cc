@@ -528,6 +528,19 @@ TEST_F(SequenceTest, PngChunksLongerThanTheFileOrThePixelsAreRefused) {
   EXPECT_EQ(read_image(write("whole.png", png)).cols, 23);
 }
 
+// A frame that must have the stored frames' size is refused from its header
+// when it declares another (an 8192 x 6144 PNG in a 160 x 120 run was
+// decoded first: 313 MB, 1.5 s); the run's skip names it.
+TEST_F(SequenceTest, AFrameOfAnotherSizeIsRefusedFromItsHeader) {
+  std::vector<uchar> b;
+  ASSERT_TRUE(cv::imencode(".png", random_image(CV_8UC3), b));  // 23 x 17
+  const std::string p = write("other.png", std::string(b.begin(), b.end()));
+  expect_error<InvalidArgument>([&] { read_image(p, 40, 30); },
+                                {p, "the frame is 23x17 but the stored frames are 40x30", "nothing was decoded"});
+  EXPECT_EQ(read_image(p, 23, 17).cols, 23);
+  EXPECT_EQ(read_image(p, 0, 0).cols, 23);  // no size to keep
+}
+
 // A progressive JPEG keeps every coefficient until its last scan: one that
 // would need more than kMaxJpegCoefficientBytes is refused from its header.
 TEST_F(SequenceTest, AProgressiveJpegNeedingTooMuchMemoryIsRefused) {

@@ -70,7 +70,9 @@ void check_run(const Detector& detector, const FrameSource& source, const RunOpt
 Result load_and_process(Detector& detector, const FrameSource& source, std::int64_t i,
                         std::int64_t id, FrameTimes& times) {
   const auto start = std::chrono::steady_clock::now();
-  const cv::Mat image = source.load(i);
+  const cv::Mat image = source.load_sized && detector.size() > 0
+                            ? source.load_sized(i, detector.width(), detector.height())
+                            : source.load(i);
   times.load_ms =
       std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
   const double cpu_start = thread_cpu_ms();
@@ -137,6 +139,9 @@ FrameSource sequence_source(const io::Sequence& sequence) {
   source.frames = static_cast<std::int64_t>(sequence.images.size());
   const auto images = std::make_shared<std::vector<std::string>>(sequence.images);
   source.load = [images](std::int64_t i) { return io::read_image(images->at(i)); };
+  source.load_sized = [images](std::int64_t i, int width, int height) {
+    return io::read_image(images->at(i), width, height);
+  };
   source.name = [images](std::int64_t i) { return images->at(i); };
   if (!sequence.stamps.empty()) {
     const auto stamps = std::make_shared<std::vector<double>>(sequence.stamps);

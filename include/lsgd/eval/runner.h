@@ -24,6 +24,9 @@ struct FrameSource {
   std::function<cv::Mat(std::int64_t)> load;        // throws lsgd::Error on bad input
   std::function<std::string(std::int64_t)> name;    // e.g. the image path, for messages and CSV
   std::function<double(std::int64_t)> stamp;         // its time stamp (empty: none; KITTI's times.txt)
+  // Optional: load(i) for a frame that must be width x height (the detector's
+  // frames), refusing another size before decoding it (io::read_image).
+  std::function<cv::Mat(std::int64_t, int width, int height)> load_sized;
 };
 
 // What the evaluation keeps of a processed frame's result (its report, loop,

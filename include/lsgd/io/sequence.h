@@ -73,5 +73,9 @@ bool natural_less(const std::string& a, const std::string& b);
 // decodable image (zero-byte, truncated, corrupt) or has an unsupported depth
 // (16-bit, float: convert to 8-bit first).
 cv::Mat read_image(const std::string& path);
+// The same for a frame that must be width x height (the frames already
+// stored): one whose header declares another size is refused from the header
+// (InvalidArgument, the detector's message), before any pixel is decoded.
+cv::Mat read_image(const std::string& path, int width, int height);
 
 }  // namespace lsgd::io

@@ -3,6 +3,7 @@
 // exceptions into them.
 #include <pybind11/pybind11.h>
 
+#include <cstring>
 #include <exception>
 
 #include "bindings.h"
@@ -23,17 +24,30 @@ void bind_errors(py::module_& m) {
   m.attr("InvalidArgument") = invalid;
   m.attr("IoError") = io_error;
   m.attr("FormatError") = format_error;
+  // A message is UTF-8 but for the bytes of a file name that is not: those
+  // are kept as surrogate escapes (as os.fsdecode gives names), where
+  // PyErr_SetString would leave the message empty.
+  static const auto set = [](const py::handle& type, const char* what) {
+    PyObject* text = PyUnicode_DecodeUTF8(what, static_cast<Py_ssize_t>(std::strlen(what)), "surrogateescape");
+    if (text == nullptr) {
+      PyErr_Clear();
+      PyErr_SetString(type.ptr(), "(a message that could not be decoded)");
+      return;
+    }
+    PyErr_SetObject(type.ptr(), text);
+    Py_DECREF(text);
+  };
   py::register_exception_translator([](std::exception_ptr p) {
     try {
       if (p) std::rethrow_exception(p);
     } catch (const lsgd::InvalidArgument& e) {
-      PyErr_SetString(invalid.ptr(), e.what());
+      set(invalid, e.what());
     } catch (const lsgd::IoError& e) {
-      PyErr_SetString(io_error.ptr(), e.what());
+      set(io_error, e.what());
     } catch (const lsgd::FormatError& e) {
-      PyErr_SetString(format_error.ptr(), e.what());
+      set(format_error, e.what());
     } catch (const lsgd::Error& e) {
-      PyErr_SetString(error.ptr(), e.what());
+      set(error, e.what());
     }
   });
 }

@@ -158,14 +158,14 @@ void bind_sessions(py::module_& m) {
   m.def("write_csv", &write_results_csv, py::arg("results"), py::arg("images"), py::arg("path"),
         "Writes the results as `lsgd run`'s CSV (the same code, one row per result, `images` its image "
         "column); returns the loops written. Replaces the file.");
-  m.def("stored_image_name", [](const py::object& path) { return lsgd::io::stored_image_name(path_of(path)); },
+  m.def("stored_image_name", [](const py::object& path) { return fs_str(lsgd::io::stored_image_name(path_of(path))); },
         py::arg("path"), "The name a database keeps for an image (its absolute, normal path), as lsgd run stores it.");
 }
 
 void bind_images(py::module_& m) {
   m.def("read_image", [](const py::object& path) { return mat_to_array(lsgd::io::read_image(path_of(path))); },
         py::arg("path"), "Reads an image file as a uint8 array (gray or BGR); lsgd.Error on a bad file.");
-  m.def("open_sequence", [](const py::object& path) { return lsgd::io::open_sequence(path_of(path)).images; },
+  m.def("open_sequence", [](const py::object& path) { return fs_strs(lsgd::io::open_sequence(path_of(path)).images); },
         py::arg("path"), "The image paths of a folder (natural order) or an image list file.");
 }
 

@@ -15,7 +15,10 @@ std::string path_of(const py::handle& value, const char* what) {
   const py::module_ os = py::module_::import("os");
   py::object text;
   try {
-    text = os.attr("fsdecode")(os.attr("fspath")(value));
+    // The file system's bytes (os.fsencode): a name that is not UTF-8 (a
+    // bytes path, a str with surrogate escapes) is the file it names, not
+    // pybind11's bare "Unable to cast" on its way to a std::string.
+    text = os.attr("fsencode")(os.attr("fspath")(value));
   } catch (const py::error_already_set&) {
     throw lsgd::InvalidArgument(std::string(what) + ": " + std::string(py::str(py::type::of(value).attr("__name__"))) +
                                 " is not a path (str, bytes or os.PathLike such as pathlib.Path)");
@@ -26,6 +29,16 @@ std::string path_of(const py::handle& value, const char* what) {
                                 "\\0...' has a NUL character inside: no file has such a name");
   }
   return path;
+}
+
+py::str fs_str(const std::string& path) {
+  return py::module_::import("os").attr("fsdecode")(py::bytes(path));
+}
+
+py::list fs_strs(const std::vector<std::string>& paths) {
+  py::list out;
+  for (const std::string& p : paths) out.append(fs_str(p));
+  return out;
 }
 
 std::vector<std::string> paths_of(const py::handle& values, const char* what) {

@@ -18,13 +18,17 @@ namespace lsgd::python {
 namespace py = pybind11;
 
 // ---- paths: str, bytes or any os.PathLike (pathlib.Path), as os.fspath
-// gives them; bytes as the file system encodes names (os.fsdecode). A NUL
+// gives them, taken as the file system's bytes (os.fsencode). A NUL
 // inside is refused (the C library would read the name up to it).
 std::string path_of(const py::handle& value, const char* what = "path");
 // The paths of a list, tuple or any other iterable of paths; InvalidArgument
 // naming `what` for one path (a str would iterate its characters) or a value
 // that is not iterable.
 std::vector<std::string> paths_of(const py::handle& values, const char* what);
+// A path for Python: str as os.fsdecode gives it (a name that is not UTF-8
+// keeps its bytes as surrogate escapes, so it opens the same file).
+py::str fs_str(const std::string& path);
+py::list fs_strs(const std::vector<std::string>& paths);
 
 // ---- options: a dict with the YAML's names, nested ({"search": {"min_gap":
 // 50}}) or dotted ({"search.min_gap": 50}), values as Python numbers or text;

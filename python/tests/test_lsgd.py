@@ -92,6 +92,21 @@ def test_bad_images_are_errors_and_change_nothing():
         lsgd.open_sequence("no-such-folder")
 
 
+def test_paths_that_are_not_utf8_name_their_files(tmp_path):
+    # bytes, or a str with surrogate escapes (os.fsdecode): the file itself,
+    # not pybind11's bare "Unable to cast Python instance to C++ type".
+    folder = os.fsencode(tmp_path) + b"/\xff-frames"
+    os.mkdir(folder)
+    for i in range(3):
+        write_pgm(folder + b"/%d.pgm" % i, place(i))
+    image = folder + b"/0.pgm"
+    assert lsgd.read_image(image).shape == (120, 160)
+    assert lsgd.read_image(os.fsdecode(image)).shape == (120, 160)
+    assert len(lsgd.open_sequence(folder)) == 3
+    with pytest.raises(lsgd.IoError, match="no-such"):
+        lsgd.read_image(folder + b"/no-such.png")
+
+
 def test_results_match_lsgd_run_frame_for_frame(tmp_path):
     if not CLI:
         pytest.skip("LSGD_CLI (the lsgd tool) not given: run through ctest")

@@ -82,7 +82,12 @@ void read_png(const Bytes& b, ImageHeader& h) {
     if (type == "IEND") break;
     at += 12 + static_cast<std::size_t>(length);
   }
-  if (channels == 0 || depth <= 0 || depth > 16 || h.width <= 0 || h.height <= 0) return;
+  // A size beyond what lsgd reads is refused by read_image anyway (and the
+  // bound below would overflow for sides near 2^32).
+  if (channels == 0 || depth <= 0 || depth > 16 || h.width <= 0 || h.height <= 0 || h.width > 65535 ||
+      h.height > 65535) {
+    return;
+  }
   const std::int64_t row = (h.width * channels * depth + 7) / 8 + 1;  // and its filter byte
   // Adam7 passes each start their rows with a filter byte and round up.
   const std::int64_t raw = h.height * row + (interlace == 1 ? 15 * (h.height + 8) : 0);

@@ -49,6 +49,10 @@ std::int64_t Detector::forget(std::int64_t first_id, std::int64_t last_id) {
     internal::throw_invalid("Detector::forget: the first id ", first_id, " is above the last ",
                             last_id);
   }
+  if (first_id < 0 || last_id > kMaxFrameId) {
+    internal::throw_invalid("Detector::forget: ids ", first_id, " .. ", last_id,
+                            " are outside the frame ids 0 .. ", kMaxFrameId);
+  }
   for (const Stateful* c : stateful()) {
     if (!c->forgets()) {
       internal::throw_invalid("Detector::forget: ", c->name(), " keeps per-frame state and cannot "

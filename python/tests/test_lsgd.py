@@ -333,6 +333,12 @@ def test_forget_a_session_and_frames(tmp_path):
         db.forget_session(2)
     with pytest.raises(lsgd.InvalidArgument, match="the first id 9 is above the last 1"):
         d.forget(9, 1)
+    # Negative ids name no frame: refused as lsgd db forget --frames refuses them.
+    with pytest.raises(lsgd.InvalidArgument, match="outside the frame ids"):
+        d.forget(-5, -1)
+    with pytest.raises(lsgd.InvalidArgument, match="outside the frame ids"):
+        db.forget(-5, 3)
+    assert db.frames == 35
 
 
 def test_index_mode_graph_saved_and_restored(tmp_path):

@@ -250,6 +250,10 @@ std::int64_t Database::forget(std::int64_t first_id, std::int64_t last_id) {
     internal::throw_invalid("database ", m.path, ": forget: the first id ", first_id,
                             " is above the last ", last_id);
   }
+  if (first_id < 0 || last_id > kMaxFrameId) {  // as lsgd db forget --frames refuses them
+    internal::throw_invalid("database ", m.path, ": forget: ids ", first_id, " .. ", last_id,
+                            " are outside the frame ids 0 .. ", kMaxFrameId);
+  }
   std::vector<FrameKeys> rows = m.read_keys();
   const auto from = std::find_if(rows.begin(), rows.end(), [&](const FrameKeys& r) { return r.id >= first_id; });
   const auto to = std::find_if(from, rows.end(), [&](const FrameKeys& r) { return r.id > last_id; });

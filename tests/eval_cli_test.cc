@@ -291,6 +291,12 @@ TEST_F(ShortStreet, CompareScoresAnotherSystemWithTheSameEvaluator) {
                                  q(kTmp / "no-such.csv"));
   EXPECT_EQ(missing.code, 1);
   EXPECT_NE(missing.err.find("no-such.csv"), std::string::npos) << missing.err;
+  // Two systems of one name: refused before the run, naming both.
+  const CmdResult twice = lsgd("eval --sequence " + q(dir_) + common(json) + " --compare 'x=" +
+                               (dir_ / "run.csv").string() + "' --compare 'x=" + (dir_ / "run.csv").string() + "'");
+  EXPECT_EQ(twice.code, 1);
+  EXPECT_NE(twice.err.find("are both named 'x'"), std::string::npos) << twice.err;
+  EXPECT_EQ(twice.out, "");
 }
 
 // A setup the method cannot work in is said on stderr and in the JSON: frames

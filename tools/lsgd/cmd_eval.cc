@@ -8,6 +8,7 @@
 #include <filesystem>
 #include <iostream>
 #include <limits>
+#include <map>
 #include <memory>
 #include <optional>
 #include <sstream>
@@ -135,10 +136,20 @@ std::vector<eval::ComparedSystem> compared_systems(const EvalArgs& args, const e
   return out;
 }
 
-// The file of each --compare.
+// The file of each --compare; two systems of one name (the legend and the
+// JSON's rows could not tell them apart) are refused before any work.
 std::vector<std::string> compared_files(const EvalArgs& args) {
   std::vector<std::string> files;
-  for (const std::string& spec : args.compare) files.push_back(parse_compare(spec).file);
+  std::map<std::string, std::string> names;  // name -> its spec
+  for (const std::string& spec : args.compare) {
+    const CompareSpec c = parse_compare(spec);
+    const auto [it, fresh] = names.emplace(c.name, spec);
+    if (!fresh) {
+      throw InvalidArgument("--compare " + spec + " and --compare " + it->second + " are both named '" + c.name +
+                            "': give each its own NAME= (nothing was run)");
+    }
+    files.push_back(c.file);
+  }
   return files;
 }
 

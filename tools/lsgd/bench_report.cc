@@ -191,12 +191,17 @@ nlohmann::json to_json(const Setup& setup, const DetectorOptions& o, const RunDa
 void print_report(const Setup& setup, const DetectorOptions& o, const RunData& d,
                   std::ostream& out) {
   const Samples& s = d.samples;
+  const FrameSize work = working_size(setup.width, setup.height, o.segmentation);
+  const std::string scaled = work.width != setup.width || work.height != setup.height
+                                 ? " (segmented at " + std::to_string(work.width) + "x" +
+                                       std::to_string(work.height) + ", segmentation.working_side)"
+                                 : std::string();
   out << "lsgd bench: " << setup.frames << " frames " << setup.width << "x" << setup.height
       << " (synthetic street, seed " << setup.seed << "; frame i renders route frame i % 1090)\n"
       << "  detector  " << o.search.mode << " search, verify "
       << verification_stages(o.verification) << ", S_p " << o.segmentation.superpixel_size
-      << " -> grid " << d.grid.rows << "x" << d.grid.cols << " = " << d.grid.cells() << " cells, "
-      << o.segmentation.iterations << " iterations\n"
+      << " -> grid " << d.grid.rows << "x" << d.grid.cols << " = " << d.grid.cells() << " cells" << scaled
+      << ", " << o.segmentation.iterations << " iterations\n"
       << "  machine   " << summary(d.machine) << "\n"
       << "  threads   OpenCV sequential (cv::setNumThreads(0)), detector on the calling thread\n"
       << "  load      " << loads(d.load_start) << " at start, " << loads(d.load_end)

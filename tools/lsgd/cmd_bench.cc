@@ -71,9 +71,13 @@ class StandaloneLsgd {
   void time(const cv::Mat& gray, bench::SlicSamples& s) {
     to_gray(gray, gray_);
     Elapsed segment, both;
+    // The segmentation alone at the size the detector segments (the working
+    // size, scaled before the clock as SLIC's frame is); segment_and_describe
+    // scales it itself, as the detector does.
+    const GrayImage& work = segmenter_.working(gray_);
     const auto time_segment = [&] {
       const Stopwatch watch;
-      segmenter_.segment(gray_, segmentation_);
+      segmenter_.segment(work, segmentation_);
       segment = watch.elapsed();
     };
     const auto time_both = [&] {
@@ -109,7 +113,8 @@ void plan_slic(const bench::Setup& a, const DetectorOptions& options, bench::Run
   } else if (!bench::OpenCvSlic::available()) {
     s.reason = bench::OpenCvSlic::unavailable_reason();
   } else {
-    s.slic = std::make_unique<bench::OpenCvSlic>(a.width, a.height, d.grid.cells(),
+    const FrameSize work = working_size(a.width, a.height, options.segmentation);
+    s.slic = std::make_unique<bench::OpenCvSlic>(work.width, work.height, d.grid.cells(),
                                                  options.segmentation.iterations);
     s.every = std::max<std::int64_t>(1, (a.frames - a.warmup) / a.opencv_frames);
   }
@@ -160,11 +165,18 @@ void run(const bench::Setup& a, const DetectorOptions& options, bench::RunData& 
                const std::int64_t i = r.frame;
                const cv::Mat& gray = loaded->gray;
                bench::SlicSamples& s = d.slic;
-               if (s.slic && i == 0) s.slic->time(gray);  // untimed warm-up call
+               // SLIC segments the frame at the detector's working size too.
+               const FrameSize work = working_size(gray.cols, gray.rows, options.segmentation);
+               cv::Mat slic_gray = gray;
+               if (s.slic && (work.width != gray.cols || work.height != gray.rows) &&
+                   (i == 0 || slic_frame(a, s, i))) {
+                 cv::resize(gray, slic_gray, cv::Size(work.width, work.height), 0, 0, cv::INTER_AREA);
+               }
+               if (s.slic && i == 0) s.slic->time(slic_gray);  // untimed warm-up call
                if (slic_frame(a, s, i)) {
                  const bool ours_first = s.ms.size() % 2 == 0;
                  if (ours_first) ours.time(gray, s);
-                 const Elapsed e = s.slic->time(gray);
+                 const Elapsed e = s.slic->time(slic_gray);
                  s.ms.push_back(e.wall_ms);
                  s.cpu_ms.push_back(e.cpu_ms);
                  if (!ours_first) ours.time(gray, s);

@@ -148,6 +148,20 @@ TEST(GtCli, BadInputExitsNonZeroNamingTheFile) {
   EXPECT_EQ(r.code, 1);
   EXPECT_TRUE(contains(r.err, "'xml'")) << r.err;
   EXPECT_NE(lsgd("gt").code, 0);  // a subcommand is required
+  // A frame count or window out of range is said in words (no -1 sentinel,
+  // no 309-digit bound), for gt and eval alike.
+  for (const std::string& bad : {"-5", "0", "1e3"}) {
+    r = lsgd("gt stats '" + pairs.string() + "' --frames " + bad);
+    EXPECT_EQ(r.code, 1);
+    EXPECT_TRUE(contains(r.err, "'" + bad + "' is not a frame count from 1 to 10000000")) << r.err;
+    r = lsgd("eval --detections '" + pairs.string() + "' --gt '" + pairs.string() +
+             "' --min-gap 0 --json /dev/null --frames " + bad);
+    EXPECT_EQ(r.code, 1);
+    EXPECT_TRUE(contains(r.err, "is not a frame count")) << r.err;
+  }
+  r = lsgd("gt stats '" + pairs.string() + "' --min-gap -1");
+  EXPECT_EQ(r.code, 1);
+  EXPECT_TRUE(contains(r.err, "--min-gap: Value -1 not in range 0 to 1000000000")) << r.err;
 }
 
 TEST(GtCli, Kitti00PosesGiveTheDocumentedCount) {

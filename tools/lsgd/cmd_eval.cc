@@ -380,7 +380,7 @@ void register_eval(CLI::App& app) {
   cmd->add_option("--frames", args->frames,
                   "with --detections: frames of the full sequence (ground-truth rows; default: "
                   "from the ground truth)")
-      ->check(CLI::PositiveNumber);
+      ->check(kFrameCount);
   cmd->add_option("--protocol", args->protocol,
                   "strict (default) or lsgddn-reference: the LSGDDN authors' lenient evaluator, "
                   "only to compare with their paper")

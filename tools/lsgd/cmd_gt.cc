@@ -10,6 +10,7 @@
 #include "files.h"
 #include "lsgd/error.h"
 #include "lsgd/eval/gt_formats.h"
+#include "lsgd/limits.h"
 
 namespace lsgd::cli {
 namespace {
@@ -36,8 +37,9 @@ void add_source_options(CLI::App& cmd, GtArgs& a) {
        return help;
      }());
   cmd.add_option(
-      "--frames", a.frames,
-      "expected frame count; a file that disagrees is an error (default: from the file)");
+         "--frames", a.frames,
+         "expected frame count; a file that disagrees is an error (default: from the file)")
+      ->check(kFrameCount);
   cmd.add_option(
       "--distance", a.distance,
       "kitti-poses: a loop when camera centres are closer than this, metres (default 10)");
@@ -136,7 +138,8 @@ void register_gt(CLI::App& app) {
   c->add_option("--output", conv->output, "pairs text file to write ('q m' per line)")->required()
       ->check(kNonEmptyPath);
   c->add_option("--min-gap", conv->min_gap,
-                "kitti-poses: loops are more than this many frames apart (default 100)");
+                "kitti-poses: loops are more than this many frames apart (default 100)")
+      ->check(CLI::Range(std::int64_t{0}, kMaxWindowFrames));
   c->callback([conv] { convert(*conv); });
 
   auto st = std::make_shared<GtArgs>();
@@ -145,7 +148,8 @@ void register_gt(CLI::App& app) {
   add_source_options(*s, *st);
   s->add_option("--min-gap", st->min_gap,
                 "temporal window W: also count positives with a match older than W frames "
-                "(kitti-poses: also the derivation gap, default 100)");
+                "(kitti-poses: also the derivation gap, default 100)")
+      ->check(CLI::Range(std::int64_t{0}, kMaxWindowFrames));
   s->add_option("--json", st->json, "also write the statistics here as JSON")
       ->check(kNonEmptyPath);
   s->callback([st] { stats(*st); });

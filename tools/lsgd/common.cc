@@ -173,6 +173,22 @@ const CLI::Validator kNonEmptyPath(
     [](std::string& value) { return value.empty() ? std::string("an empty file name") : ""; },
     "");  // no name in the help: ExistingFile already says FILE where it applies
 
+const CLI::Validator kFrameCount(
+    [](std::string& value) {
+      std::int64_t n = 0;
+      std::size_t used = 0;
+      try {
+        n = std::stoll(value, &used);
+      } catch (const std::exception&) {
+        used = 0;
+      }
+      if (used == 0 || used != value.size() || n < 1 || n > kMaxFrames) {
+        return "'" + value + "' is not a frame count from 1 to " + std::to_string(kMaxFrames);
+      }
+      return std::string();
+    },
+    "");
+
 std::vector<std::string> search_mode_list() {
   std::vector<std::string> names;
   for (const SearchMode& m : search_modes()) names.emplace_back(m.name);

@@ -84,6 +84,9 @@ using eval::CsvWriter;
 // A CLI11 check for file arguments: an empty name ('') is an error, not
 // "no file".
 extern const CLI::Validator kNonEmptyPath;
+// A CLI11 check for --frames N: a frame count in [1, kMaxFrames], said in
+// those words (CLI::PositiveNumber printed its bound as 309 digits).
+extern const CLI::Validator kFrameCount;
 
 // The registered search modes' names (lsgd::search_modes()), for --mode.
 std::vector<std::string> search_mode_list();

@@ -182,6 +182,13 @@ TEST_F(SequenceTest, ListFileWithAByteOrderMark) {
   EXPECT_EQ(none.get(), 'a');
 }
 
+// Lists joined with cat keep each file's BOM: one in the middle is dropped too.
+TEST_F(SequenceTest, ListFilesJoinedWithTheirByteOrderMarks) {
+  const std::string list = write("bom2.txt", "\xEF\xBB\xBF" "10.png\n\xEF\xBB\xBF" "2.png\n");
+  const std::vector<std::string> expected = {path("10.png"), path("2.png")};
+  EXPECT_EQ(open_sequence(list).images, expected);
+}
+
 TEST_F(SequenceTest, ListFileKeepsItsOrderAndDoesNotCheckFiles) {
   const std::string list = write("seq.txt", "10.png\n2.png\nmissing.png\n");
   const Sequence seq = open_sequence(list);

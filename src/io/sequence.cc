@@ -155,10 +155,10 @@ std::vector<std::string> read_image_list(const std::string& path) {
   const fs::path folder = fs::path(path).parent_path();
   std::vector<std::string> images;
   std::string line;
-  bool first_line = true;
   for (std::int64_t number = 1; read_line(in, line, path, number); ++number) {
-    if (first_line && line.rfind("\xEF\xBB\xBF", 0) == 0) line.erase(0, 3);  // UTF-8 BOM
-    first_line = false;
+    // A UTF-8 BOM at the start of any line: lists joined with cat keep each
+    // file's own (no file name starts with U+FEFF).
+    if (line.rfind("\xEF\xBB\xBF", 0) == 0) line.erase(0, 3);
     const std::string entry = trim(line);
     if (entry.empty() || entry[0] == '#') continue;
     // No file name holds a NUL: the line is damaged (a UTF-16 list, a binary

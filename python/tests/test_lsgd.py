@@ -276,6 +276,9 @@ def test_database_resumes_where_it_stopped(tmp_path):
     assert lsgd.Database.open(path, writable=False).frames == 60
     with pytest.raises(lsgd.IoError, match="already exists"):
         lsgd.Database.create(path)
+    for call in (lambda: lsgd.Database.create(""), lambda: lsgd.Database.open("")):
+        with pytest.raises(lsgd.InvalidArgument, match="the database path is empty"):
+            call()
 
 
 def test_query_answers_as_process_and_stores_nothing(tmp_path):

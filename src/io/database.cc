@@ -232,6 +232,7 @@ void Database::Impl::start_writing() {
 
 Database Database::create(const std::string& path, const DetectorOptions& options) {
   options.check();
+  if (path.empty()) throw InvalidArgument("the database path is empty: give a file name");
   struct stat st;
   if (::stat(path.c_str(), &st) == 0) io_error(path, "already exists");
   check_companions(path);

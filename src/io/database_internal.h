@@ -82,6 +82,8 @@ inline std::string sqlite_message(sqlite3* db) {
 // stale errno. `name` is the file SQLite is given for `path`.
 inline constexpr std::size_t kSqliteMaxPathBytes = 512 - 8;
 inline void check_path_length(const std::string& path, const std::string& name) {
+  // An empty name is SQLite's private temporary database, never a file.
+  if (path.empty()) throw InvalidArgument("the database path is empty: give a file name");
   std::error_code ec;
   const std::string full = std::filesystem::absolute(name, ec).string();
   const std::size_t length = ec ? name.size() : full.size();

@@ -375,6 +375,19 @@ TEST(Database, OptionsMustMatchExceptThreshold) {
             std::string::npos);
 }
 
+// A frame appended twice (or a detector with nothing new) says so, rather
+// than "a detector holding 1 frames, but the database holds 1".
+TEST(Database, AFrameIsAppendedOnce) {
+  const std::string path = temp_path("once");
+  const DetectorOptions o = options(kExhaustiveSearch, "temporal");
+  Database db = Database::create(path, o);
+  Detector d(o);
+  const Result r = d.process(frame(0));
+  db.append(d, r, 0);
+  EXPECT_NE(message_of<InvalidArgument>([&] { db.append(d, r, 0); }).find("is stored already"), std::string::npos);
+  EXPECT_EQ(db.frames(), 1);
+}
+
 TEST(Database, CreateIsAtomicAndNeverOverwrites) {
   const std::string path = temp_path("create");
   const DetectorOptions o = options(kExhaustiveSearch, "temporal");
@@ -425,6 +438,15 @@ TEST(Database, CallersIdsAndStampsAreKept) {
               std::string::npos);
     EXPECT_NE(message_of<InvalidArgument>([&] { db.append(writer, other, 0, std::string(65537, 'x')); })
                   .find("more than 65536"),
+              std::string::npos);
+    // A Result of another detector (or a query's) names another frame: refused.
+    Detector stranger(o);
+    const Result foreign = stranger.process(frame(60));
+    EXPECT_NE(message_of<InvalidArgument>([&] { db.append(writer, foreign, 0, "frame"); })
+                  .find("the Result is of frame id 0, not of the detector's last frame (id 2000)"),
+              std::string::npos);
+    EXPECT_NE(message_of<InvalidArgument>([&] { db.append(writer, writer.query(frame(61)), 0, "frame"); })
+                  .find("the Result is of frame id 2001"),
               std::string::npos);
     EXPECT_EQ(db.frames(), 60);
     for (std::int64_t i = 61; i < 90; ++i) expected.push_back(writer.process(frame(i)));

@@ -96,7 +96,7 @@ void Database::Impl::check_session(std::int64_t session) const {
   }
 }
 
-void Database::append(const Detector& detector, const Result& /*result*/, std::int64_t session,
+void Database::append(const Detector& detector, const Result& result, std::int64_t session,
                       const std::string& name, std::int64_t frame) {
   Impl& m = *impl_;
   m.check_writable();
@@ -111,6 +111,10 @@ void Database::append(const Detector& detector, const Result& /*result*/, std::i
     internal::throw_invalid("database ", m.path, ": the frame's name is ", name.size(),
                             " bytes, more than ", kMaxLineBytes, " ('", name.substr(0, 40), "...')");
   }
+  if (detector.size() == m.frames) {
+    internal::throw_invalid("database ", m.path, ": every frame of the detector (", m.frames,
+                            ") is stored already: append each frame once, right after process()");
+  }
   if (detector.size() != m.frames + 1) {
     internal::throw_invalid("database ", m.path, ": append from a detector holding ",
                             detector.size(), " frames, but the database holds ", m.frames,
@@ -119,6 +123,14 @@ void Database::append(const Detector& detector, const Result& /*result*/, std::i
   // The frame's id is the detector's (Detector::process(frame, id)): a
   // different one would be refused when the frame is restored.
   const std::int64_t own = detector.id_of(detector.size() - 1);
+  // The Result must be the one process() returned for that frame: its id
+  // (Result::frame may be a run's number, eval::run_detector) is the
+  // detector's last; another detector's or a query's names another frame.
+  if (result.id != own) {
+    internal::throw_invalid("database ", m.path, ": the Result is of frame id ", result.id,
+                            ", not of the detector's last frame (id ", own,
+                            "): append the Result this detector's process() just returned");
+  }
   if (frame < -1) {
     internal::throw_invalid("database ", m.path, ": frame id ", frame, " is negative (-1: the "
                             "detector's id of its last frame)");

@@ -221,8 +221,8 @@ class Database {
 
   // Appends the detector's last frame, just processed (the detector must
   // hold frames() + 1 frames; `result` is what process() returned for it,
-  // kept in the signature for callers: everything stored is read from the
-  // detector, Detector::frame_state()), in one transaction. `session`: 0 .. kMaxSession, either the last
+  // checked by its id against the detector's last: everything stored is
+  // read from the detector, Detector::frame_state()), in one transaction. `session`: 0 .. kMaxSession, either the last
   // session or one without frames (a session's frames stay together).
   // `name` is free text (the image path). The frame's id is the detector's
   // (Detector::process(frame, id), id_of()), above every stored one; `frame`,

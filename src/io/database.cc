@@ -1,6 +1,7 @@
 #include "lsgd/io/database.h"
 
 #include "io/database_internal.h"
+#include "internal/file_mode.h"
 
 
 #include <errno.h>
@@ -65,8 +66,7 @@ void check_file(const std::string& path, bool writable) {
     io_error(path, "cannot be ", writable ? "read and written" : "read", " (",
              std::strerror(errno), ")");
   }
-  // root passes access(): a file without any write bit is read-only by its mode.
-  if (writable && (st.st_mode & (S_IWUSR | S_IWGRP | S_IWOTH)) == 0) {
+  if (writable && !internal::mode_allows_writing(st.st_mode)) {
     io_error(path, "is read-only (no write permission at all): open it for reading, or make it "
              "writable to append to it");
   }

@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "internal/check.h"
+#include "internal/file_mode.h"
 #include "lsgd/error.h"
 #include "lsgd/limits.h"
 
@@ -161,21 +162,20 @@ void remove_temporary_files_on_signal() {
 void write_output_file(const std::string& path, const std::string& content,
                        const std::string& what) {
   struct stat st {};
-  const bool stream = ::stat(path.c_str(), &st) == 0 && !S_ISREG(st.st_mode);
-  // A file nobody may write is not replaced, not even by root (for whom
-  // access() grants everything) nor by a rename, which never asks the file.
-  if (!stream && ::stat(path.c_str(), &st) == 0 &&
-      (::access(path.c_str(), W_OK) != 0 || (st.st_mode & (S_IWUSR | S_IWGRP | S_IWOTH)) == 0)) {
-    throw IoError(concat("cannot write ", what, " '", path, "': it is read-only (make it writable "
-                         "or give another file)"));
-  }
+  const bool exists = ::stat(path.c_str(), &st) == 0;
+  const bool stream = exists && !S_ISREG(st.st_mode);
   if (!stream) {
+    // A read-only file, or one in a read-only folder, is not replaced: not
+    // even by root (internal/file_mode.h), nor by the rename below.
+    if (exists && (::access(path.c_str(), W_OK) != 0 || !internal::mode_allows_writing(st.st_mode))) {
+      throw IoError(concat("cannot write ", what, " '", path, "': it is read-only (make it writable "
+                           "or give another file)"));
+    }
     const std::size_t slash = path.rfind('/');
     const std::string folder = slash == std::string::npos ? "." : slash == 0 ? "/" : path.substr(0, slash);
-    struct stat fst {};
-    if (::stat(folder.c_str(), &fst) == 0 && (fst.st_mode & (S_IWUSR | S_IWGRP | S_IWOTH)) == 0) {
-      throw IoError(concat("cannot write ", what, " '", path, "': its folder '", folder,
-                           "' is read-only"));
+    struct stat in {};
+    if (::stat(folder.c_str(), &in) == 0 && !internal::mode_allows_writing(in.st_mode)) {
+      throw IoError(concat("cannot write ", what, " '", path, "': its folder '", folder, "' is read-only"));
     }
   }
   if (stream) {  // a device or pipe: written in place, never replaced

@@ -11,6 +11,7 @@
 #include <utility>
 
 #include "internal/check.h"
+#include "internal/file_mode.h"
 #include "lsgd/error.h"
 
 namespace lsgd::cli {
@@ -55,10 +56,6 @@ std::string folder_of(const std::string& path) {
   return parent.empty() ? std::string(".") : parent.string();
 }
 
-// Whether anyone may write the file or folder: root passes every access()
-// check, so a file or folder without a write bit is read-only by its mode.
-bool has_write_bit(const struct stat& st) { return (st.st_mode & (S_IWUSR | S_IWGRP | S_IWOTH)) != 0; }
-
 [[noreturn]] void unwritable(const std::string& flag, const std::string& path,
                              const std::string& why) {
   throw IoError(concat("cannot write ", flag, " '", path, "': ", why, " (nothing was run)"));
@@ -74,7 +71,7 @@ void check_folder(const std::string& flag, const std::string& path, const std::s
   if (::access(folder.c_str(), W_OK | X_OK) != 0) {
     unwritable(flag, path, concat("folder '", folder, "' is not writable (", std::strerror(errno), ")"));
   }
-  if (!has_write_bit(st)) {
+  if (!internal::mode_allows_writing(st.st_mode)) {
     unwritable(flag, path, concat("folder '", folder, "' is read-only (no write permission at all)"));
   }
 }
@@ -110,7 +107,7 @@ void check_output_folder(const std::string& flag, const std::string& path,
   if (::access(path.c_str(), W_OK | X_OK) != 0) {
     unwritable(flag, path, concat("the folder is not writable (", std::strerror(errno), ")"));
   }
-  if (!has_write_bit(st)) unwritable(flag, path, "the folder is read-only (no write permission at all)");
+  if (!internal::mode_allows_writing(st.st_mode)) unwritable(flag, path, "the folder is read-only (no write permission at all)");
 }
 
 // An output already checked: the flag that names it and its path.
@@ -146,7 +143,7 @@ void check_output(const std::string& flag, const std::string& path, Outputs& out
     if (::access(path.c_str(), W_OK) != 0) {
       unwritable(flag, path, concat("it is read-only (", std::strerror(errno), ")"));
     }
-    if (!has_write_bit(st)) unwritable(flag, path, "it is read-only (no write permission at all)");
+    if (!internal::mode_allows_writing(st.st_mode)) unwritable(flag, path, "it is read-only (no write permission at all)");
     const auto [it, fresh] = outputs.existing.emplace(id, Written{flag, path});
     if (!fresh && it->second.flag != flag) same_file(flag, path, it->second);
   } else {

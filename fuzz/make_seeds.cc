@@ -85,6 +85,33 @@ std::string mat_bytes(const fs::path& scratch, mat_ft version, matio_compression
   return std::string(std::istreambuf_iterator<char>(in), {});
 }
 
+// A little-endian v5 file by hand: a cell of `cells` elements (one stored)
+// named "c", then a 4x4 double "GT" with GT(3, 0) = 1. matio's
+// Mat_VarReadNextInfo callocs `cells` pointers for the cell before reading
+// it: a CI run found 0x30000004 (6 GB) this way; read_mat() now lists v5
+// variables itself.
+std::string v5_with_cell(std::uint32_t cells) {
+  auto word = [](std::uint32_t v) { return std::string(reinterpret_cast<const char*>(&v), 4); };
+  auto element = [&](std::uint32_t type, const std::string& bytes) {
+    return word(type) + word(static_cast<std::uint32_t>(bytes.size())) + bytes +
+           std::string((8 - bytes.size() % 8) % 8, '\0');
+  };
+  auto matrix = [&](std::uint32_t cls, std::uint32_t rows, std::uint32_t cols,
+                    const std::string& name, const std::string& data) {
+    const std::string body = element(6, word(cls) + word(0)) + element(5, word(rows) + word(cols)) +
+                             element(1, name) + data;
+    return word(14) + word(static_cast<std::uint32_t>(body.size())) + body;
+  };
+  std::string header = "MATLAB 5.0 MAT-file";
+  header.resize(116, ' ');
+  header += std::string(8, '\0') + std::string("\x00\x01IM", 4);
+  std::vector<double> gt(16, 0.0);
+  gt[3] = 1;
+  const std::string values(reinterpret_cast<const char*>(gt.data()), gt.size() * 8);
+  return header + matrix(1, cells, 1, "c", matrix(6, 0, 0, "", "")) +
+         matrix(6, 4, 4, "GT", element(9, values));
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -153,5 +180,8 @@ int main(int argc, char** argv) {
     if (!bytes.empty()) put(out / "gt" / s.name, mat_auto + bytes);
   }
   fs::remove(scratch);
+  const std::string mat4(1, static_cast<char>(4 << 1 | 1));
+  put(out / "gt" / "v5cell.mat", mat4 + v5_with_cell(1));
+  put(out / "gt" / "v5cell-claims-6GB.mat", mat4 + v5_with_cell(0x30000004));
   return 0;
 }

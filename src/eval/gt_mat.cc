@@ -60,74 +60,102 @@ struct VarFreer {
 using MatFile = std::unique_ptr<mat_t, MatCloser>;
 using MatVar = std::unique_ptr<matvar_t, VarFreer>;
 
-bool is_matrix_class(matio_classes c) {
+// `c` as a file holds it: any byte, not only a matio_classes value.
+bool is_matrix_class(int c) {
   return c == MAT_C_SPARSE || (c >= MAT_C_DOUBLE && c <= MAT_C_UINT64);
 }
 
-// A variable as read_mat() sees it: matio's description, but a v4 sparse
-// matrix's size from its last row (matio describes it by its stored
-// triplets, nonzeros + 1 rows by 3 columns).
+// A variable as read_mat() sees it: matio's description (v4, v7.3) or lsgd's
+// (v5, mat_v5.cc), with a v4 sparse matrix's size from its last row (matio
+// describes it by its stored triplets, nonzeros + 1 rows by 3 columns).
 struct Variable {
+  std::string name;
   std::string text;      // name, size, class: for messages
   bool square = false;   // a square 2-D real numeric, logical or sparse matrix
   std::size_t n = 0;     // its size when square
+  int cls = 0;           // matio_classes
   const V4Variable* v4_sparse = nullptr;
 };
 
-Variable describe(const matvar_t& v, const Container& c, const std::string& path) {
+Variable make_variable(const char* name, const std::vector<std::uint64_t>& dims, int cls,
+                       bool logical, bool complex) {
   Variable out;
-  std::uint64_t rows = v.rank == 2 && v.dims ? v.dims[0] : 0, cols = v.rank == 2 && v.dims ? v.dims[1] : 0;
-  bool complex = v.isComplex != 0;
-  if (v.class_type == MAT_C_SPARSE && v.name && !c.v4.empty()) {
-    out.v4_sparse = find_v4(c, v.name);
-    if (out.v4_sparse) {
-      const V4Shape shape = v4_sparse_shape(path, *out.v4_sparse);
-      rows = shape.rows;
-      cols = shape.cols;
-      complex = shape.complex;
-    }
-  }
-  std::string dims;
-  if (out.v4_sparse) {
-    dims = concat(rows, "x", cols);
-  } else {
-    for (int i = 0; i < v.rank && v.dims; ++i) dims += (i ? "x" : "") + std::to_string(v.dims[i]);
-  }
-  out.text = concat(v.name ? v.name : "?", " ", dims, " class ", static_cast<int>(v.class_type),
-                    v.isLogical ? " logical" : "", complex ? " complex" : "");
-  out.square = v.rank == 2 && v.dims && rows == cols && is_matrix_class(v.class_type) && !complex;
-  out.n = static_cast<std::size_t>(rows);
+  out.name = name ? name : "";
+  std::string shape;
+  for (std::size_t i = 0; i < dims.size(); ++i) shape += (i ? "x" : "") + std::to_string(dims[i]);
+  out.text = concat(name ? name : "?", " ", shape, " class ", cls, logical ? " logical" : "",
+                    complex ? " complex" : "");
+  out.square = dims.size() == 2 && dims[0] == dims[1] &&
+               is_matrix_class(cls) && !complex;
+  out.n = dims.size() == 2 ? static_cast<std::size_t>(dims[0]) : 0;
+  out.cls = cls;
   return out;
 }
 
-bool looks_like_gt_name(const char* name) {
-  std::string lower = name ? name : "";
+Variable describe(const matvar_t& v, const Container& c, const std::string& path) {
+  std::vector<std::uint64_t> dims;
+  for (int i = 0; i < v.rank && v.dims; ++i) dims.push_back(v.dims[i]);
+  bool complex = v.isComplex != 0;
+  const V4Variable* v4_sparse = nullptr;
+  if (v.class_type == MAT_C_SPARSE && v.name && !c.v4.empty()) {
+    v4_sparse = find_v4(c, v.name);
+    if (v4_sparse) {
+      const V4Shape shape = v4_sparse_shape(path, *v4_sparse);
+      dims = {shape.rows, shape.cols};
+      complex = shape.complex;
+    }
+  }
+  Variable out = make_variable(v.name, dims, v.class_type, v.isLogical != 0, complex);
+  out.v4_sparse = v4_sparse;
+  return out;
+}
+
+Variable describe(const V5Header& h) {
+  return make_variable(h.name.c_str(), {h.dims.begin(), h.dims.end()},
+                       static_cast<int>(h.flags & 0xFF), (h.flags & kClassFlagsLogical) != 0,
+                       (h.flags & kClassFlagsComplex) != 0);
+}
+
+// Every variable of the file, in order: from lsgd's own header reader for v5
+// (matio's would allocate what a cell or struct claims), from matio for the
+// others (v4's headers are checked before Mat_Open).
+std::vector<Variable> list_variables(mat_t* mat, mat_ft version, const Container& c,
+                                     const std::string& path) {
+  std::vector<Variable> out;
+  if (version == MAT_FT_MAT5) {
+    for (const V5Header& h : matrix_headers(path, c)) out.push_back(describe(h));
+    return out;
+  }
+  while (MatVar info{Mat_VarReadNextInfo(mat)}) out.push_back(describe(*info, c, path));
+  return out;
+}
+
+bool looks_like_gt_name(const std::string& name) {
+  std::string lower = name;
   std::transform(lower.begin(), lower.end(), lower.begin(),
                  [](unsigned char c) { return std::tolower(c); });
   return lower.find("gt") != std::string::npos || lower.find("truth") != std::string::npos;
 }
 
-// The name of the variable read_mat() reads (see the header for the rule).
-std::string choose_variable(mat_t* mat, const Container& c, const std::string& path) {
-  std::string first, named, seen;
-  int count = 0;
-  while (MatVar info{Mat_VarReadNextInfo(mat)}) {
-    ++count;
-    const Variable var = describe(*info, c, path);
+// The variable read_mat() reads (see the header for the rule).
+Variable choose_variable(const std::vector<Variable>& vars, const std::string& path) {
+  const Variable *first = nullptr, *named = nullptr;
+  std::string seen;
+  for (const Variable& var : vars) {
     seen += (seen.empty() ? "" : ", ") + var.text;
-    if (!var.square || !info->name) continue;
-    if (first.empty()) first = info->name;
-    if (named.empty() && looks_like_gt_name(info->name)) named = info->name;
+    if (!var.square || var.name.empty()) continue;
+    if (!first) first = &var;
+    if (!named && looks_like_gt_name(var.name)) named = &var;
   }
-  if (count == 0) {
+  if (vars.empty()) {
     throw FormatError(concat("'", path, "' holds no readable MAT variable (truncated or corrupt?)",
                              matio_detail()));
   }
-  if (first.empty()) {
+  if (!first) {
     throw FormatError(concat("'", path, "' has no square 2-D real numeric, logical or sparse ",
                              "matrix (variables: ", seen, ")"));
   }
-  return named.empty() ? first : named;
+  return named ? *named : *first;
 }
 
 // Sparse (compressed column): rows ir[jc[c] .. jc[c+1]) of column c, with
@@ -210,25 +238,21 @@ GroundTruth read_mat(const std::string& path, std::int64_t frames, const std::st
   }
   const mat_ft version = Mat_GetVersion(mat.get());
   const Container container = check_container(path, version);
-  if (version == MAT_FT_MAT5) check_matrix_headers(path, container);
-  std::string name = variable;
-  if (name.empty()) {
-    name = choose_variable(mat.get(), container, path);
+  const std::vector<Variable> vars = list_variables(mat.get(), version, container, path);
+  Variable chosen;
+  if (variable.empty()) {
+    chosen = choose_variable(vars, path);
   } else {
-    MatVar info{Mat_VarReadInfo(mat.get(), name.c_str())};
-    if (!info) throw FormatError(concat("'", path, "' has no variable '", name, "'"));
-    const Variable var = describe(*info, container, path);
-    if (!var.square) {
-      throw FormatError(concat("'", path, "': variable ", var.text,
+    const auto it = std::find_if(vars.begin(), vars.end(),
+                                 [&](const Variable& v) { return v.name == variable; });
+    if (it == vars.end()) throw FormatError(concat("'", path, "' has no variable '", variable, "'"));
+    if (!it->square) {
+      throw FormatError(concat("'", path, "': variable ", it->text,
                                " is not a square 2-D real numeric, logical or sparse matrix"));
     }
+    chosen = *it;
   }
-  MatVar info{Mat_VarReadInfo(mat.get(), name.c_str())};
-  if (!info) {
-    throw FormatError(
-        concat("cannot read variable '", name, "' from '", path, "'", matio_detail()));
-  }
-  const Variable chosen = describe(*info, container, path);
+  const std::string& name = chosen.name;
   const std::size_t n = chosen.n;
   if (frames >= 0 && n != static_cast<std::size_t>(frames)) {
     throw FormatError(concat("'", path, "': matrix '", name, "' is ", n, "x", n,
@@ -247,8 +271,8 @@ GroundTruth read_mat(const std::string& path, std::int64_t frames, const std::st
     read_v4_sparse(path, *chosen.v4_sparse, n, gt);
     return gt;
   }
-  if (info->class_type != MAT_C_SPARSE &&
-      static_cast<double>(n) * n * Mat_SizeOfClass(info->class_type) > 16e9) {
+  if (chosen.cls != MAT_C_SPARSE &&
+      static_cast<double>(n) * n * Mat_SizeOfClass(static_cast<matio_classes>(chosen.cls)) > 16e9) {
     throw FormatError(concat("'", path, "': matrix '", name, "' is ", n, "x", n,
                              ": too large to read densely (limit 16 GB)"));
   }

@@ -184,7 +184,6 @@ std::string compressed_bytes(const std::string& path, const V5Element& e) {
 // held: matio holds it all (693 MB for Bicocca's 26335^2 uint8).
 
 constexpr std::uint32_t kMiInt32 = 5, kMiUint32 = 6;
-constexpr std::uint32_t kClassFlagsComplex = 0x800;
 // More nonzero entries than any ground truth has (KITTI-00's full matrix has
 // ~1e5): a sparse matrix claiming more is refused before its index is held.
 constexpr std::uint64_t kMaxSparseEntries = 100'000'000;
@@ -444,12 +443,6 @@ void read_v5_dense(V5Source& src, const std::string& name, std::size_t n, Ground
   });
 }
 
-struct V5Header {
-  std::uint32_t flags = 0;  // class in the low byte
-  std::vector<std::uint32_t> dims;
-  std::string name;
-};
-
 // Reads a matrix element's array flags, dimensions and name. A header claiming
 // more than MATLAB writes (names have at most 63 characters, ground truth 2
 // dimensions) is corrupt: matio would allocate what it claims (fuzzing found
@@ -503,14 +496,16 @@ std::unique_ptr<V5Source> open_v5_matrix(const std::string& path, const Containe
   return src;
 }
 
-// matio sizes its allocations from a variable's header (array flags,
-// dimensions, name) before it looks at the data, compressed or not (array
+// Every matrix's header, read by lsgd (read_v5_header): matio sizes its
+// allocations from them before it looks at the data, compressed or not (array
 // flags of 9 bytes made it read the rank from the wrong place and ask for
-// 8 GB): every matrix's header is read here first (read_v5_header).
-void check_matrix_headers(const std::string& path, const Container& c) {
+// 8 GB; a cell's element count, 6 GB).
+std::vector<V5Header> matrix_headers(const std::string& path, const Container& c) {
+  std::vector<V5Header> out;
   for (const V5Element& e : c.elements) {
-    if (const auto src = open_v5_matrix(path, c, e)) read_v5_header(*src);
+    if (const auto src = open_v5_matrix(path, c, e)) out.push_back(read_v5_header(*src));
   }
+  return out;
 }
 
 // Reads the variable of `src` when it is called `name`: true when it was.

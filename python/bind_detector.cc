@@ -60,7 +60,12 @@ void bind_frame_description(py::module_& m) {
       .def("to_bytes", &description_bytes, "The description as bytes (versioned, little-endian).")
       .def_static("from_bytes", &description_of_bytes, py::arg("data"),
                   "A description back from to_bytes(); lsgd.FormatError for bytes that are not one.")
-      .def(py::pickle(&description_bytes, &description_of_bytes));
+      .def("__reduce__", [](const lsgd::FrameDescription& d) {
+             return py::make_tuple(py::module_::import("lsgd._restore").attr("frame_description"),
+                                   py::make_tuple(description_bytes(d)));
+           });
+  // pickle rebuilds through lsgd._restore, never through __new__ (lsgd_module.cc).
+  m.def("_restore_frame_description", &description_of_bytes, py::arg("data"));
 }
 
 // Construction from options, and the frames going in: process, query, forget, cut.

@@ -140,7 +140,9 @@ void bind_metrics(py::module_& m) {
       .def_readonly("precision", &lsgd::eval::PrPoint::precision)
       .def_readonly("recall", &lsgd::eval::PrPoint::recall)
       .def_readonly("confirmed", &lsgd::eval::PrPoint::confirmed)
-      .def(py::pickle(&point_state, &point_of_state));
+      .def("__reduce__", [](const PrPoint& p) {
+             return py::make_tuple(py::module_::import("lsgd._restore").attr("pr_point"), py::make_tuple(point_state(p)));
+           });
   py::class_<lsgd::eval::Metrics>(m, "Metrics")
       .def_readonly("protocol", &lsgd::eval::Metrics::protocol)
       .def_readonly("frames", &lsgd::eval::Metrics::frames)
@@ -165,7 +167,12 @@ void bind_metrics(py::module_& m) {
       .def_readonly("recall_at_10", &lsgd::eval::Metrics::recall_at_10)
       .def_readonly("ms_per_frame_median", &lsgd::eval::Metrics::ms_per_frame_median)
       .def_readonly("curve", &lsgd::eval::Metrics::curve)
-      .def(py::pickle(&metrics_state, &metrics_of_state));
+      .def("__reduce__", [](const Metrics& metrics) {
+             return py::make_tuple(py::module_::import("lsgd._restore").attr("metrics"), py::make_tuple(metrics_state(metrics)));
+           });
+  // pickle rebuilds through lsgd._restore, never through __new__ (lsgd_module.cc).
+  m.def("_restore_pr_point", &point_of_state, py::arg("state"));
+  m.def("_restore_metrics", &metrics_of_state, py::arg("state"));
 }
 
 // lsgd sweep's grid, opened and checked: the datasets read, every point and

@@ -104,6 +104,10 @@ void bind_status(py::module_& m) {
   // Replaces enum_'s own __str__ (a def() would only add an overload after it).
   status.attr("__str__") = py::cpp_function(
       [](lsgd::LoopStatus s) { return std::string(lsgd::to_string(s)); }, py::is_method(status));
+  // pickle rebuilds a value by its number, never through __new__ (lsgd_module.cc).
+  status.attr("__reduce__") = py::cpp_function(
+      [status](lsgd::LoopStatus s) { return py::make_tuple(status, py::make_tuple(static_cast<int>(s))); },
+      py::is_method(status));
 }
 
 }  // namespace

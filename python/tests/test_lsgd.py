@@ -641,3 +641,47 @@ def test_describe_to_numpy_and_back():
         lsgd.Descriptor.from_arrays(x.histograms[:-1], x.pixels, grid=x.grid)
     with pytest.raises(lsgd.InvalidArgument, match="differ in grid or storage"):
         lsgd.similarity(x, c)
+
+
+def test_bare_new_is_refused_and_values_pickle_by_reduce():
+    # Issue 35: lsgd.X.__new__(lsgd.X) (or object.__new__) without __init__
+    # gave an instance with no C++ object, whose methods read garbage or
+    # crashed the interpreter (Detector.nodes, Database.__repr__,
+    # GroundTruth.queries, Result.geometry). Every lsgd class refuses it.
+    import copy
+    import pickle
+    classes = [c for c in vars(lsgd._lsgd).values()
+               if isinstance(c, type) and not issubclass(c, BaseException)]
+    assert {"Detector", "Database", "GroundTruth", "Result", "LoopStatus"} <= {c.__name__ for c in classes}
+    for cls in classes:
+        for new in (cls.__new__, object.__new__):
+            with pytest.raises(TypeError, match="is not safe"):
+                new(cls)
+
+    # Python subclasses still work, and must still call __init__.
+    class Mine(lsgd.Detector):
+        def __init__(self):
+            super().__init__(search={"min_gap": 5})
+            self.tag = "mine"
+    mine = Mine()
+    assert mine.size == 0 and mine.tag == "mine"
+    with pytest.raises(TypeError, match="is not safe"):
+        Mine.__new__(Mine)
+
+    class Forgot(lsgd.Detector):
+        def __init__(self):
+            pass
+    with pytest.raises(TypeError, match="__init__"):
+        Forgot()
+
+    # What pickles (and copies) rebuilds from its state, not through __new__.
+    rng = np.random.default_rng(3)
+    described = lsgd.Detector().describe_frame(rng.integers(0, 255, (96, 128), dtype=np.uint8))
+    for back in (pickle.loads(pickle.dumps(described)), copy.deepcopy(described), copy.copy(described)):
+        assert back.to_bytes() == described.to_bytes()
+    for status in lsgd.LoopStatus.__members__.values():
+        assert pickle.loads(pickle.dumps(status)) == status and copy.copy(status) == status
+    # Values without a state to pickle are refused clearly, never half-made.
+    result = lsgd.Detector().process(rng.integers(0, 255, (96, 128), dtype=np.uint8))
+    with pytest.raises(TypeError, match="cannot pickle"):
+        copy.copy(result)

@@ -543,7 +543,7 @@ TEST_F(SequenceTest, AFrameOfAnotherSizeIsRefusedFromItsHeader) {
   ASSERT_TRUE(cv::imencode(".png", random_image(CV_8UC3), b));  // 23 x 17
   const std::string p = write("other.png", std::string(b.begin(), b.end()));
   expect_error<InvalidArgument>([&] { read_image(p, 40, 30); },
-                                {p, "the frame is 23x17 but the stored frames are 40x30", "nothing was decoded"});
+                                {p, "the frame is 23x17, not 40x30 as the frames before it", "nothing was decoded"});
   EXPECT_EQ(read_image(p, 23, 17).cols, 23);
   EXPECT_EQ(read_image(p, 0, 0).cols, 23);  // no size to keep
 }

@@ -479,8 +479,8 @@ cv::Mat read_image(const std::string& path, int width, int height) {
   // Another size than the stored frames': refused before decoding (an
   // 8192 x 6144 PNG in a 160 x 120 run cost 313 MB and 1.5 s first).
   if (width > 0 && height > 0 && (declared.width != width || declared.height != height)) {
-    throw InvalidArgument(concat("the frame is ", declared.width, "x", declared.height,
-                                 " but the stored frames are ", width, "x", height,
+    throw InvalidArgument(concat("the frame is ", declared.width, "x", declared.height, ", not ",
+                                 width, "x", height, " as the frames before it",
                                  ": every frame must have the same size (image '", path,
                                  "', its header; nothing was decoded)"));
   }

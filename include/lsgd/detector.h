@@ -226,7 +226,11 @@ class Detector {
   //  - the appearance statistics are computed again from the kept frames at
   //    the next frame, index mode's graph at the next query;
   //  - forgetting the last frames gives the detector as it was before it
-  //    processed them.
+  //    processed them, its next id included: process() without an id gives
+  //    the frame after the last kept one the id after that frame's, so the
+  //    ids of forgotten last frames are given again (a forgotten tail
+  //    re-run gives the same ids and Results). A caller whose records must
+  //    never see an id twice passes its own ids (above the last kept one).
   // Costs a copy of the kept frames (and index mode's graph rebuilt).
   // Throws InvalidArgument, detector unchanged, for first_id > last_id or a
   // component that cannot forget (Stateful::forgets()).

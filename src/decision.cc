@@ -35,6 +35,9 @@ const OptionTable<DecisionOptions>& DecisionOptions::fields() {
         real_option("track_bonus", &S::track_bonus, 0.0, 1000.0, false, "sigma",
                     "added to the best-ranked candidate, confirmed as a first loop, when it tracks "
                     "the ranking's confirmed candidate of the previous frame (0: off)"),
+        integer_option("strong_track", &S::strong_track, 0, 1000, "frames",
+                       "a first loop tracking the ranking's confirmed candidates this many frames in a row "
+                       "gets strong_bonus as if it had strong_inliers (0: off)"),
         integer_option("continuity_gap", &S::continuity_gap, 0, 100, "frames",
                        "a loop is continued after at most this many frames that declared none (after more "
                        "than one, by the candidate ranked first only)"),
@@ -323,6 +326,23 @@ bool LoopDecision::first_loop(const DecisionQuery& q, const Window& w, const Can
   return w.first != nullptr && c.frame == w.first->frame && !continues(q, w, c);
 }
 
+// Whether the candidate ranked first continues a track of the ranking's
+// confirmed candidates strong_track frames long (this frame included), each
+// within 1 + tolerance frames after the one of the frame before.
+bool LoopDecision::long_track(const DecisionQuery& q) const {
+  const int needed = options_.strong_track;
+  if (needed <= 0 || !first_tracks_ || q.frame < 1 || history_.size() < static_cast<std::size_t>(q.frame)) {
+    return false;
+  }
+  int run = 2;  // the previous frame's confirmed candidate, and this one tracking it
+  for (std::int64_t f = q.frame - 2; f >= 0 && run < needed; --f, ++run) {
+    const std::int64_t at = history_[static_cast<std::size_t>(f)].track;
+    const std::int64_t next = history_[static_cast<std::size_t>(f + 1)].track;
+    if (at < 0 || next < at || next > at + 1 + q.tolerance) break;
+  }
+  return run >= needed;
+}
+
 // The most a candidate can score once confirmed. track_bonus is for the
 // first loop strong_bonus is for, when it tracks the ranking's candidate of
 // the last frame (its own check must accept it: a first loop has no relaxed bar).
@@ -392,7 +412,8 @@ void LoopDecision::examine(const DecisionQuery& q, const std::vector<Verificatio
     if (is_first) verdict = {confirmed.support, !confirmed.accepted};
     if (!confirmed.accepted) continue;
     // What it scores with its support: strong_bonus needs strong_inliers.
-    const double scored = confirmed.support >= d.strong_inliers ? score : score - strong(q, w, c);
+    const bool strong_enough = confirmed.support >= d.strong_inliers || long_track(q);
+    const double scored = strong_enough ? score : score - strong(q, w, c);
     if (out.best.frame < 0 || scored >= d.threshold) {
       out.best = {c.frame, scored};
       out.evidence = {c.score, static_cast<int>(confirmed.support), true, continuing};

@@ -345,6 +345,38 @@ TEST(LoopDecision, TheRankingsTrackLowersAFirstLoopsBar) {
   }
 }
 
+// decision.strong_track: geometry that holds on the candidate ranked first
+// frame after frame along the revisit is as strong as strong_inliers in one
+// frame. 2 sigma with 25 inliers scores 2 + 3.5 + 0.25 (tracked) = 5.75
+// below 7; the fourth frame of a track of 4 adds strong_bonus (7.25).
+// Variants: 0 a track of 4, 1 strong_track 0 (off), 2 the track broken at
+// frame 52 (its candidate elsewhere), 3 frame 51's candidate not confirmed.
+TEST(LoopDecision, ALongTrackOfConfirmedCandidatesIsStrongGeometry) {
+  for (const int variant : {0, 1, 2, 3}) {
+    SCOPED_TRACE(testing::Message() << "variant " << variant);
+    DecisionOptions d;
+    d.strong_track = variant == 1 ? 0 : 4;
+    LoopDecision decision(d);
+    FixedSupport stage(std::map<std::int64_t, int>{
+        {10, 25}, {11, variant == 3 ? 0 : 25}, {12, 25}, {13, 25}, {30, 25}, {31, 25}});
+    DecisionQuery q = sequence_query(true);
+    q.appearance = [](std::int64_t) { return 0.0; };
+    q.single_frame = [](std::int64_t) { return 0.0; };
+    for (std::int64_t k = 0; k < 4; ++k) {
+      const std::int64_t j = variant == 2 && k >= 2 ? 28 + k : 10 + k;
+      std::vector<Candidate> candidates = {{j, 2.0}};
+      q.frame = 50 + k;
+      q.candidates = &candidates;
+      const Decision out = decision.decide(q, {&stage});
+      EXPECT_EQ(out.loop, variant == 0 && k == 3) << "frame " << q.frame;
+      if (out.loop) {
+        EXPECT_EQ(out.best.frame, 13);
+        EXPECT_DOUBLE_EQ(out.best.score, 2.0 + 3.5 + 1.5 + 0.25);
+      }
+    }
+  }
+}
+
 // The ranking (decision.h): the best candidate, checked on every query; one
 // that tracks the ranking's confirmed candidate of the previous frame passes
 // with kRankingTrackInliers of the track's inliers, unless it looks unlike

@@ -88,8 +88,9 @@ struct DecisionOptions {
   // at least strong_inliers (its geometric support) as a first loop: a
   // weak ranking (a viewpoint change, another lens) that geometry holds
   // strongly; sigma, [0, 1000] (0: off). With the defaults a first loop
-  // needs 2 sigma and 40 inliers, or 3.5 sigma and 20 (docs/results.md has
-  // the leave-one-sequence-out choice).
+  // needs 2 sigma and 40 inliers, or 3.5 sigma and 20, or 1.75 sigma and 20
+  // at the end of a track of strong_track frames (with track_bonus)
+  // (docs/results.md has the leave-one-sequence-out choices).
   double strong_bonus = 1.5;
   // The support a confirmed candidate needs for strong_bonus; inliers, [1, 100000].
   int strong_inliers = 40;

@@ -328,14 +328,17 @@ bool LoopDecision::first_loop(const DecisionQuery& q, const Window& w, const Can
 
 // Whether the candidate ranked first continues a track of the ranking's
 // confirmed candidates strong_track frames long (this frame included), each
-// within 1 + tolerance frames after the one of the frame before.
+// within 1 + tolerance frames after the one of the frame before. The walk
+// back stops where the track's run began (ContinuityState::Held::since,
+// reset by cut(): a new session carries no track over).
 bool LoopDecision::long_track(const DecisionQuery& q) const {
   const int needed = options_.strong_track;
   if (needed <= 0 || !first_tracks_ || q.frame < 1 || history_.size() < static_cast<std::size_t>(q.frame)) {
     return false;
   }
+  const std::int64_t since = std::max<std::int64_t>(track_.held.since, 0);
   int run = 2;  // the previous frame's confirmed candidate, and this one tracking it
-  for (std::int64_t f = q.frame - 2; f >= 0 && run < needed; --f, ++run) {
+  for (std::int64_t f = q.frame - 2; f >= since && run < needed; --f, ++run) {
     const std::int64_t at = history_[static_cast<std::size_t>(f)].track;
     const std::int64_t next = history_[static_cast<std::size_t>(f + 1)].track;
     if (at < 0 || next < at || next > at + 1 + q.tolerance) break;

@@ -350,9 +350,10 @@ TEST(LoopDecision, TheRankingsTrackLowersAFirstLoopsBar) {
 // frame. 2 sigma with 25 inliers scores 2 + 3.5 + 0.25 (tracked) = 5.75
 // below 7; the fourth frame of a track of 4 adds strong_bonus (7.25).
 // Variants: 0 a track of 4, 1 strong_track 0 (off), 2 the track broken at
-// frame 52 (its candidate elsewhere), 3 frame 51's candidate not confirmed.
+// frame 52 (its candidate elsewhere), 3 frame 51's candidate not confirmed,
+// 4 a cut() before frame 52 (a new session: the track before it does not count).
 TEST(LoopDecision, ALongTrackOfConfirmedCandidatesIsStrongGeometry) {
-  for (const int variant : {0, 1, 2, 3}) {
+  for (const int variant : {0, 1, 2, 3, 4}) {
     SCOPED_TRACE(testing::Message() << "variant " << variant);
     DecisionOptions d;
     d.strong_track = variant == 1 ? 0 : 4;
@@ -367,6 +368,7 @@ TEST(LoopDecision, ALongTrackOfConfirmedCandidatesIsStrongGeometry) {
       std::vector<Candidate> candidates = {{j, 2.0}};
       q.frame = 50 + k;
       q.candidates = &candidates;
+      if (variant == 4 && k == 2) decision.cut();
       const Decision out = decision.decide(q, {&stage});
       EXPECT_EQ(out.loop, variant == 0 && k == 3) << "frame " << q.frame;
       if (out.loop) {

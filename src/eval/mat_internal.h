@@ -73,7 +73,7 @@ struct V5Header {
 // naming the file and byte). read_mat() chooses its variable from these, not
 // from matio: matio's Mat_VarReadNextInfo allocates what a cell or struct
 // claims, at any depth, before it reads a byte of it (fuzz/fuzz_gt: 6 GB for
-// a cell of 0x30000004 elements inside a 100-byte file).
+// a cell of 0x30000004 elements inside a file of a few hundred bytes).
 std::vector<V5Header> matrix_headers(const std::string& path, const Container& c);
 // Reads top-level variable `name` (n x n) of a v5 file into `gt`.
 void read_v5(const std::string& path, const Container& c, const std::string& name, std::size_t n,

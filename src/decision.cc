@@ -11,6 +11,11 @@
 
 namespace lsgd {
 
+namespace {
+constexpr const char* kStayReason =
+    "a stay: every frame since it looks like the query (decision.stay_z), the camera never left";
+}  // namespace
+
 const OptionTable<DecisionOptions>& DecisionOptions::fields() {
   using S = DecisionOptions;
   static const OptionTable<S> table = [] {
@@ -38,6 +43,9 @@ const OptionTable<DecisionOptions>& DecisionOptions::fields() {
         integer_option("strong_track", &S::strong_track, 0, 1000, "frames",
                        "a first loop tracking the ranking's confirmed candidates this many frames in a row "
                        "gets strong_bonus as if it had strong_inliers (0: off)"),
+        real_option("stay_z", &S::stay_z, 0.0, 1000.0, false, "sigma",
+                    "a candidate is a stay, not a loop, when every frame between it and the query "
+                    "(8 sampled) scores at least this for the query, single frame (0: off)"),
         integer_option("continuity_gap", &S::continuity_gap, 0, 100, "frames",
                        "a loop is continued after at most this many frames that declared none (after more "
                        "than one, by the candidate ranked first only)"),
@@ -213,6 +221,11 @@ std::size_t LoopDecision::gate(const DecisionQuery& q, const std::vector<Verific
       gated_[i] = check.accepted ? 0 : 1;
     }
   }
+  for (std::size_t i = 0; i < n; ++i) {
+    if (gated_[i] || !stay(q, candidates[i].frame)) continue;
+    gated_[i] = 1;
+    out.verdicts.push_back({candidates[i].frame, name(), false, kStayReason, 0});
+  }
   std::size_t first = 0;
   while (first < n && gated_[first]) ++first;
   return first;
@@ -290,6 +303,31 @@ void LoopDecision::gate_continuation(const DecisionQuery& q, const std::vector<V
     out.verdicts.push_back({c.frame, gate->name(), check.accepted, check.reason, check.ms});
     if (!check.accepted) c = {};
   }
+  if (c.frame >= 0 && stay(q, c.frame)) {
+    out.verdicts.push_back({c.frame, name(), false, kStayReason, 0});
+    c = {};
+  }
+}
+
+// The frames between candidate j and query i, the middle one first, then
+// the quarters, the eighths ...: a revisit has left the place somewhere in
+// between, which the first samples usually show (one similarity).
+bool LoopDecision::stay(const DecisionQuery& q, std::int64_t frame) const {
+  const double level = options_.stay_z;
+  const std::int64_t span = q.frame - frame;
+  if (level <= 0 || !q.single_frame || frame < 0 || span < 2) return false;
+  int looked = 0;
+  for (std::int64_t parts = 2; looked < kStaySamples; parts *= 2) {
+    for (std::int64_t m = 1; m < parts && looked < kStaySamples; m += 2) {
+      const std::int64_t k = frame + span * m / parts;
+      if (k <= frame || k >= q.frame) continue;
+      const double z = q.single_frame(k);
+      if (!(z >= level)) return false;  // NaN (no statistics): no sign of a stay
+      ++looked;
+    }
+    if (parts >= 2 * span) break;  // every frame between has been looked at
+  }
+  return looked > 0;
 }
 
 // The candidates the confirming stages may check: those through the gates,

@@ -6,6 +6,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <map>
@@ -195,6 +196,63 @@ TEST(LoopDecision, NothingContinuesAcrossACut) {
       EXPECT_EQ(out.loop, continues);  // 1.5 + 3.5 + 2.5 with 13 of the 12 inliers needed
       EXPECT_EQ(out.evidence.continues, continues);
     }
+  }
+}
+
+// decision.stay_z: a candidate every frame after which looks like the query
+// (a camera that never left) is gated, for the ranking and the decision.
+// Frame 60's candidate 10 (5 sigma, 60 inliers: 5 + 3.5 + 1.5) is a loop
+// unless the frames between score stay_z (3) or more. Variants: 0 every
+// frame between at 4 (a stay), 1 the middle frame at 0 (the camera left), 2
+// stay_z 0 (off), 3 every frame at 2.9, 4 no statistics (NaN), 5 the frame
+// one past the first quarter low (the samples find it), 6 a continuation
+// that is a stay (frame 61 would continue 60's loop to 11).
+TEST(LoopDecision, ACandidateTheCameraNeverLeftIsAStayNotALoop) {
+  for (const int variant : {0, 1, 2, 3, 4, 5, 6}) {
+    SCOPED_TRACE(testing::Message() << "variant " << variant);
+    DecisionOptions d;
+    if (variant == 2) d.stay_z = 0;
+    LoopDecision decision(d);
+    FixedSupport stage(std::map<std::int64_t, int>{{10, 60}, {11, 60}});
+    DecisionQuery q = sequence_query(true);
+    q.appearance = [](std::int64_t j) { return j == 11 ? 5.0 : 0.0; };
+    bool stay_now = variant == 0 || variant == 2;  // variant 6: from frame 61 on
+    std::int64_t looked = 0;
+    q.single_frame = [&](std::int64_t j) {
+      ++looked;
+      if (variant == 4) return std::nan("");
+      if (variant == 1 && j == 35) return 0.0;
+      if (variant == 5 && j == 22) return -1.0;
+      if (variant == 3) return 2.9;
+      if (variant == 5) return 4.0;
+      return stay_now ? 4.0 : 0.0;
+    };
+    std::vector<Candidate> first = {{10, 5.0}};
+    q.frame = 60;
+    q.candidates = &first;
+    const Decision out = decision.decide(q, {&stage});
+    const bool stay = variant == 0;
+    EXPECT_EQ(out.loop, !stay);
+    EXPECT_EQ(out.ranking.best.frame, stay ? -1 : 10);
+    const bool gated = std::any_of(out.verdicts.begin(), out.verdicts.end(), [](const StageVerdict& v) {
+      return v.stage == "decision" && !v.accepted && v.reason.find("stay") != std::string::npos;
+    });
+    EXPECT_EQ(gated, stay);
+    // At most kStaySamples frames are looked at; the camera that left shows it at the first.
+    if (variant == 0) {
+      EXPECT_LE(looked, kStaySamples);
+    }
+    if (variant == 1) {
+      EXPECT_EQ(looked, 1);
+    }
+    if (variant != 6) continue;
+    stay_now = true;
+    std::vector<Candidate> second = {{11, 5.0}};
+    q.frame = 61;
+    q.candidates = &second;
+    const Decision next = decision.decide(q, {&stage});
+    EXPECT_FALSE(next.loop);
+    EXPECT_EQ(next.ranking.best.frame, -1);
   }
 }
 

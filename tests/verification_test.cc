@@ -193,6 +193,38 @@ TEST(DetectorVerification, DefaultsFindTheRevisitAndExplainThemselves) {
   EXPECT_GT(continued, 0);
 }
 
+// A camera that stays is not a loop (decision.stay_z): after three laps of
+// the route it stands at the last place for 15 frames (jittering by a
+// pixel), longer than min_gap (10). The frames since the stay began, and
+// the third lap's view of the place just before it, look like the query
+// all the way: no loop to them. Loops to the first two laps' views (the
+// camera left and came back) stay. With stay_z 0 (off) the stay declares
+// loops to itself.
+TEST(DetectorVerification, ACameraStandingStillDeclaresNoLoopToItself) {
+  for (const double stay_z : {3.0, 0.0}) {
+    SCOPED_TRACE(testing::Message() << "stay_z " << stay_z);
+    DetectorOptions options = route_options("temporal,geometric");
+    options.decision.stay_z = stay_z;
+    Detector detector(options);
+    constexpr int kLaps = 3, kStay = 15;
+    constexpr int kStayStart = kLaps * kPlaces;
+    int to_the_stay = 0, revisits = 0;
+    for (int i = 0; i < kStayStart + kStay; ++i) {
+      const cv::Mat frame = i < kStayStart ? place(i % kPlaces, i / kPlaces) : place(kPlaces - 1, i % 2);
+      const Result r = detector.process(frame);
+      if (!r.loop) continue;
+      if (r.best.frame >= kStayStart - 1) {
+        ++to_the_stay;
+      } else {
+        ++revisits;
+        EXPECT_EQ(r.best.frame % kPlaces, i < kStayStart ? i % kPlaces : kPlaces - 1) << "frame " << i;
+      }
+    }
+    EXPECT_EQ(to_the_stay == 0, stay_z > 0);
+    EXPECT_GT(revisits, kPlaces);
+  }
+}
+
 // Detector::cut() between two frames of a revisit: the frame after it
 // continues no loop (its result is the one of a first loop, or none), while
 // the same frame without the cut continues the loop.

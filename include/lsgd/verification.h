@@ -102,7 +102,7 @@ std::string verification_stages(const VerificationOptions& options);
 // The verdict of one stage on one candidate.
 struct StageVerdict {
   std::int64_t candidate = -1;
-  std::string stage;  // "temporal" or "geometric"
+  std::string stage;  // "temporal" or "geometric"; "decision" for a stay (DecisionOptions::stay_z)
   bool accepted = false;
   std::string reason;  // e.g. "3 of 3 previous queries agree" or "12 inliers < 20"
   double ms = 0;

@@ -45,7 +45,8 @@ const OptionTable<DecisionOptions>& DecisionOptions::fields() {
                        "gets strong_bonus as if it had strong_inliers (0: off)"),
         real_option("stay_z", &S::stay_z, 0.0, 1000.0, false, "sigma",
                     "a candidate is a stay, not a loop, when every frame between it and the query "
-                    "(8 sampled) scores at least this for the query, single frame (0: off)"),
+                    "(8 sampled) scores at least this for the query, single frame, or (a first loop) "
+                    "the query's geometry matches the frames between (0: both off)"),
         integer_option("continuity_gap", &S::continuity_gap, 0, 100, "frames",
                        "a loop is continued after at most this many frames that declared none (after more "
                        "than one, by the candidate ranked first only)"),
@@ -309,6 +310,33 @@ void LoopDecision::gate_continuation(const DecisionQuery& q, const std::vector<V
   }
 }
 
+// A first loop j of query i: every confirming stage also accepts the frame
+// halfway between them (i + j) / 2. A revisit's path left the place, so the
+// query does not match it; a camera that stood still, or has only begun to
+// move away, does (the appearance test, stay(), cannot see a stay that fills
+// the query's candidates: their statistics are the stay's own).
+bool LoopDecision::in_view_halfway(const DecisionQuery& q, std::int64_t frame, Decision& out) {
+  const std::int64_t span = q.frame - frame;
+  if (options_.stay_z <= 0 || confirms_.empty() || span < 4) return false;
+  // The middle first (a revisit's path is furthest from the place there),
+  // then the quarters: a route that passes the place again halfway is no stay.
+  double ms = 0;
+  std::string matched;
+  for (const std::int64_t k : {frame + span / 2, frame + span / 4, frame + 3 * span / 4}) {
+    for (VerificationStage* stage : confirms_) {
+      const StageCheck check = stage->check(q.frame, Candidate{k, 0});
+      ms += check.ms;
+      if (!check.accepted) return false;
+    }
+    matched += internal::concat(matched.empty() ? "" : ", ", k);
+  }
+  out.verdicts.push_back({frame, name(), false,
+                          internal::concat("a stay: the query also matches frames ", matched,
+                                           " between, by every confirming stage: the camera never left"),
+                          ms});
+  return true;
+}
+
 // The frames between candidate j and query i, the middle one first, then
 // the quarters, the eighths ...: a revisit has left the place somewhere in
 // between, which the first samples usually show (one similarity).
@@ -455,6 +483,8 @@ void LoopDecision::examine(const DecisionQuery& q, const std::vector<Verificatio
     // What it scores with its support: strong_bonus needs strong_inliers.
     const bool strong_enough = confirmed.support >= d.strong_inliers || long_track(q);
     const double scored = strong_enough ? score : score - strong(q, w, c);
+    // A first loop the query's view never left is a stay (stay_z).
+    if (scored >= d.threshold && !continuing && in_view_halfway(q, c.frame, out)) continue;
     if (out.best.frame < 0 || scored >= d.threshold) {
       out.best = {c.frame, scored};
       out.evidence = {c.score, static_cast<int>(confirmed.support), true, continuing};

@@ -256,6 +256,52 @@ TEST(LoopDecision, ACandidateTheCameraNeverLeftIsAStayNotALoop) {
   }
 }
 
+// A stay the appearance test cannot see (every candidate is of the stay, so
+// the query's statistics are the stay's own): a first loop whose query also
+// matches the frames halfway and a quarter and three quarters back, by every
+// confirming stage, is a stay. Frame 60's candidate 10 (60 inliers); the
+// frames between, 35, 22 and 47, match with 25. Variants: 0 all three match
+// (a stay), 1 the three-quarter frame does not (a route that passes the
+// place again halfway: a loop), 2 stay_z 0 (off), 3 a continuation (frame 61
+// continues 60's loop to 11: not a first loop, kept).
+TEST(LoopDecision, AFirstLoopWhoseQueryMatchesTheFramesBetweenIsAStay) {
+  for (const int variant : {0, 1, 2, 3}) {
+    SCOPED_TRACE(testing::Message() << "variant " << variant);
+    DecisionOptions d;
+    if (variant == 2) d.stay_z = 0;
+    LoopDecision decision(d);
+    std::map<std::int64_t, int> inliers{{10, 60}, {11, 60}, {35, 25}, {22, 25}};
+    if (variant != 1) inliers[47] = 25;
+    FixedSupport stage(inliers);
+    DecisionQuery q = sequence_query(true);
+    q.appearance = [](std::int64_t) { return 5.0; };
+    q.single_frame = [](std::int64_t) { return 0.0; };
+    std::vector<Candidate> first = {{10, 5.0}};
+    q.frame = 60;
+    q.candidates = &first;
+    if (variant == 3) {
+      stage = FixedSupport(std::map<std::int64_t, int>{{10, 60}, {11, 60}});
+      ASSERT_TRUE(decision.decide(q, {&stage}).loop);
+      stage = FixedSupport(std::map<std::int64_t, int>{{11, 60}, {36, 25}, {23, 25}, {48, 25}});
+      std::vector<Candidate> second = {{11, 5.0}};
+      q.frame = 61;
+      q.candidates = &second;
+      q.appearance = [](std::int64_t j) { return j == 11 ? 5.0 : 0.0; };  // the window's best
+      const Decision next = decision.decide(q, {&stage});
+      EXPECT_TRUE(next.loop);
+      EXPECT_TRUE(next.evidence.continues);
+      continue;
+    }
+    const Decision out = decision.decide(q, {&stage});
+    EXPECT_EQ(out.loop, variant != 0);
+    EXPECT_EQ(out.ranking.best.frame, 10);  // the ranking is appearance's: not gated
+    const bool said = std::any_of(out.verdicts.begin(), out.verdicts.end(), [](const StageVerdict& v) {
+      return v.stage == "decision" && v.reason.find("a stay: the query also matches frames 35, 22, 47") != std::string::npos;
+    });
+    EXPECT_EQ(said, variant == 0);
+  }
+}
+
 // A place the map found (DecisionQuery::places) ends a loop: frame 51 would
 // continue the run of loops that began at frame 49 (49 -> 9, 50 -> 10), but
 // not once a place is found to begin at 50 or 51 (the query's side: found

@@ -21,7 +21,8 @@
 // A stage can also sink a candidate: one a confirming stage or a gate (the
 // temporal stage's agreement gate) rejected is never reported, nor is a
 // stay: a candidate every frame after which, up to the query, looks like the
-// query (stay_z; the camera never left, it did not come back). With the defaults (threshold 7, bonuses
+// query, or a first loop whose query geometry also matches the frames
+// between (stay_z; the camera never left, it did not come back). With the defaults (threshold 7, bonuses
 // 3.5 and 2.5) a first loop needs appearance >= 3.5 sigma and geometry, a loop
 // that continues a declared one >= 1 sigma and geometry, and a loop on
 // appearance alone (no geometric stage) >= 7 sigma. docs/results.md has the
@@ -114,15 +115,19 @@ struct DecisionOptions {
   // leave-one-sequence-out chose 8, which adds 19 on synthetic street 3
   // (docs/results.md).
   int strong_track = 9;
-  // A stay, not a revisit: a candidate is gated (for the ranking and the
-  // decision) when every frame between it and the query (up to
+  // A stay, not a revisit: the camera never left the place (a train
+  // standing in a station, a robot waiting, a hand-held camera held still)
+  // for longer than search.min_gap. A candidate is gated (for the ranking
+  // and the decision) when every frame between it and the query (up to
   // kStaySamples of them, spread evenly) scores at least this for the query,
-  // single frame: the camera never left the place (a train standing in a
-  // station, a robot waiting, a hand-held camera held still) for longer
-  // than search.min_gap. Sigma, [0, 1000] (0: off). 3: the frames between
-  // a true loop and its query score 1.6 at the most on every sequence of
-  // the suite (a corridor after two other places), those of a train standing
-  // still 8.8 and more (docs/results.md, "A camera that stays is not a loop").
+  // single frame; and a first loop is none when the query also matches the
+  // frames a half, a quarter and three quarters of the way back by every
+  // confirming stage (a stay that fills the query's candidates, whose
+  // statistics are then the stay's own). Sigma, [0, 1000] (0: both off).
+  // 3: the frames between a true loop and its query score 1.65 at the most
+  // on every sequence of the suite (a corridor after two other places),
+  // those of a train standing still 5.8 and more (docs/results.md, "A
+  // camera that stays is not a loop").
   double stay_z = 3.0;
   void check() const;
   static const OptionTable<DecisionOptions>& fields();  // lsgd/options.h
@@ -330,6 +335,9 @@ class LoopDecision final : public Stateful {
   // Whether candidate `frame` is a stay (stay_z): every sampled frame
   // between it and the query scores at least stay_z, single frame.
   bool stay(const DecisionQuery& q, std::int64_t frame) const;
+  // Whether first loop `frame` is a stay by geometry: every confirming stage
+  // also accepts the frame halfway back (a verdict says so).
+  bool in_view_halfway(const DecisionQuery& q, std::int64_t frame, Decision& out);
   bool continues(const DecisionQuery& q, const Window& w, const Candidate& c) const;
   Candidate continuation(const DecisionQuery& q, const Window& w) const;
   void gate_continuation(const DecisionQuery& q, const std::vector<VerificationStage*>& stages,

@@ -484,7 +484,10 @@ void LoopDecision::examine(const DecisionQuery& q, const std::vector<Verificatio
     const bool strong_enough = confirmed.support >= d.strong_inliers || long_track(q);
     const double scored = strong_enough ? score : score - strong(q, w, c);
     // A first loop the query's view never left is a stay (stay_z).
-    if (scored >= d.threshold && !continuing && in_view_halfway(q, c.frame, out)) continue;
+    if (scored >= d.threshold && !continuing && in_view_halfway(q, c.frame, out)) {
+      if (is_first) verdict.rejected = true;  // reported, if at all, as never a loop
+      continue;
+    }
     if (out.best.frame < 0 || scored >= d.threshold) {
       out.best = {c.frame, scored};
       out.evidence = {c.score, static_cast<int>(confirmed.support), true, continuing};

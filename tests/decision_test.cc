@@ -263,9 +263,10 @@ TEST(LoopDecision, ACandidateTheCameraNeverLeftIsAStayNotALoop) {
 // frames between, 35, 22 and 47, match with 25. Variants: 0 all three match
 // (a stay), 1 the three-quarter frame does not (a route that passes the
 // place again halfway: a loop), 2 stay_z 0 (off), 3 a continuation (frame 61
-// continues 60's loop to 11: not a first loop, kept).
+// continues 60's loop to 11: not a first loop, kept), 4 a stay whose
+// appearance alone (7.5 sigma) reaches the threshold: still no loop.
 TEST(LoopDecision, AFirstLoopWhoseQueryMatchesTheFramesBetweenIsAStay) {
-  for (const int variant : {0, 1, 2, 3}) {
+  for (const int variant : {0, 1, 2, 3, 4}) {
     SCOPED_TRACE(testing::Message() << "variant " << variant);
     DecisionOptions d;
     if (variant == 2) d.stay_z = 0;
@@ -274,9 +275,10 @@ TEST(LoopDecision, AFirstLoopWhoseQueryMatchesTheFramesBetweenIsAStay) {
     if (variant != 1) inliers[47] = 25;
     FixedSupport stage(inliers);
     DecisionQuery q = sequence_query(true);
-    q.appearance = [](std::int64_t) { return 5.0; };
+    const double appearance = variant == 4 ? 7.5 : 5.0;
+    q.appearance = [&](std::int64_t) { return appearance; };
     q.single_frame = [](std::int64_t) { return 0.0; };
-    std::vector<Candidate> first = {{10, 5.0}};
+    std::vector<Candidate> first = {{10, appearance}};
     q.frame = 60;
     q.candidates = &first;
     if (variant == 3) {
@@ -293,12 +295,16 @@ TEST(LoopDecision, AFirstLoopWhoseQueryMatchesTheFramesBetweenIsAStay) {
       continue;
     }
     const Decision out = decision.decide(q, {&stage});
-    EXPECT_EQ(out.loop, variant != 0);
+    const bool stay = variant == 0 || variant == 4;
+    EXPECT_EQ(out.loop, !stay);
     EXPECT_EQ(out.ranking.best.frame, 10);  // the ranking is appearance's: not gated
     const bool said = std::any_of(out.verdicts.begin(), out.verdicts.end(), [](const StageVerdict& v) {
       return v.stage == "decision" && v.reason.find("a stay: the query also matches frames 35, 22, 47") != std::string::npos;
     });
-    EXPECT_EQ(said, variant == 0);
+    EXPECT_EQ(said, stay);
+    if (stay) {
+      EXPECT_EQ(out.status, LoopStatus::kNotConfirmed);
+    }
   }
 }
 

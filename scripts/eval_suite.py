@@ -99,6 +99,27 @@ def splice(name, dataset, gt, ranges):
     return out
 
 
+def held(name, dataset, gt, frame, copies):
+    """A camera held still: frame `frame` replaced by `copies` copies with sensor noise (normal,
+    sigma 2 gray levels, seed 1), gray; the ground truth shifted past them (a loop to the held
+    frame names its first copy)."""
+    out = os.path.join(W, name)
+    if not os.path.isfile(os.path.join(out, 'groundtruth.txt')):
+        images = frames(dataset)
+        os.makedirs(os.path.join(out, 'images'), exist_ok=True)
+        base = numpy.asarray(Image.open(images[frame]).convert('L'), dtype=numpy.float64)
+        noise = numpy.random.default_rng(1)
+        still = []
+        for k in range(copies):
+            target = os.path.join(out, 'images', f'still{k:04d}.png')
+            Image.fromarray(numpy.clip(base + noise.normal(0, 2, base.shape), 0, 255).astype(numpy.uint8)).save(target)
+            still.append(target)
+        shift = lambda k: k if k <= frame else k + copies - 1
+        write_dataset(out, images[:frame] + still + images[frame + 1:],
+                      sorted((shift(q), shift(m)) for q, m in pairs(gt)))
+    return out
+
+
 def mixed(name, parts):
     """scripts/mixed_map.py over parts [(dataset, gt, n), ..., (last, gt)]."""
     out = os.path.join(W, name)
@@ -161,13 +182,23 @@ for name, base, ranges in [('lip6-short', lip6, [(0, 40), (460, 500)]),
     if want(name):
         out = splice(name, *base, ranges)
         add(name, out, os.path.join(out, 'groundtruth.txt'), 20, 'early revisits')
+# A camera that stays (design.md, "A stay is not a loop"): held still for longer than the
+# window at the start or in the middle; nordland-trimmed's train standing in a station, seen
+# with a window shorter than its README's.
+for name, base, frame, copies, w in [('lip6-still-start', lip6, 0, 60, 20), ('corridor-still-start', corridor, 0, 60, 20),
+                                     ('lip6-still-300', lip6, 300, 80, 50)]:
+    if want(name):
+        out = held(name, *base, frame, copies)
+        add(name, out, os.path.join(out, 'groundtruth.txt'), w, 'camera held still')
+add('nordland-trimmed-w50', *nordland, 50, 'real, window shorter than its README\'s (a train standing in a station)')
 maps = [('mm-lip6-100-corridor', [(*lip6, 100), corridor]),
         ('mm-lip6-300-corridor', [(*lip6, 300), corridor]),
         ('mm-lip6-1000-corridor', [(*lip6, 1000), corridor]),
         ('mm-corridor-100-lip6', [(*corridor, 100), lip6]),
         ('mm-corridor-222-lip6', [(*corridor, 222), lip6]),
         ('mm-corridor-222-nordland-300-lip6', [(*corridor, 222), (*nordland, 300), lip6]),
-        ('mm-lip6-300-nordland-300-corridor', [(*lip6, 300), (*nordland, 300), corridor])]
+        ('mm-lip6-300-nordland-300-corridor', [(*lip6, 300), (*nordland, 300), corridor]),
+        ('mm-corridor-222-nordland', [(*corridor, 222), nordland])]
 for name, parts in maps:
     if not want(name):
         continue

@@ -310,12 +310,13 @@ void LoopDecision::gate_continuation(const DecisionQuery& q, const std::vector<V
   }
 }
 
-// A first loop j of query i: every confirming stage also accepts the frame
-// halfway between them (i + j) / 2. A revisit's path left the place, so the
-// query does not match it; a camera that stood still, or has only begun to
-// move away, does (the appearance test, stay(), cannot see a stay that fills
-// the query's candidates: their statistics are the stay's own).
-bool LoopDecision::in_view_halfway(const DecisionQuery& q, std::int64_t frame, Decision& out) {
+// A first loop j of query i is a stay when every confirming stage also
+// accepts, for the query, the frames a half, a quarter and three quarters of
+// the way from j to i. A revisit's path left the place, so the query does
+// not match them; a camera that stood still, or has only begun to move away,
+// does (the appearance test, stay(), cannot see a stay that fills the
+// query's candidates: their statistics are the stay's own).
+bool LoopDecision::sees_the_frames_between(const DecisionQuery& q, std::int64_t frame, Decision& out) {
   const std::int64_t span = q.frame - frame;
   if (options_.stay_z <= 0 || confirms_.empty() || span < 4) return false;
   // The middle first (a revisit's path is furthest from the place there),
@@ -484,7 +485,7 @@ void LoopDecision::examine(const DecisionQuery& q, const std::vector<Verificatio
     const bool strong_enough = confirmed.support >= d.strong_inliers || long_track(q);
     const double scored = strong_enough ? score : score - strong(q, w, c);
     // A first loop the query's view never left is a stay (stay_z).
-    if (scored >= d.threshold && !continuing && in_view_halfway(q, c.frame, out)) {
+    if (scored >= d.threshold && !continuing && sees_the_frames_between(q, c.frame, out)) {
       if (is_first) verdict.rejected = true;  // reported, if at all, as never a loop
       continue;
     }

@@ -336,8 +336,9 @@ class LoopDecision final : public Stateful {
   // between it and the query scores at least stay_z, single frame.
   bool stay(const DecisionQuery& q, std::int64_t frame) const;
   // Whether first loop `frame` is a stay by geometry: every confirming stage
-  // also accepts the frame halfway back (a verdict says so).
-  bool in_view_halfway(const DecisionQuery& q, std::int64_t frame, Decision& out);
+  // also accepts the frames a half, a quarter and three quarters of the way
+  // back (a verdict says so).
+  bool sees_the_frames_between(const DecisionQuery& q, std::int64_t frame, Decision& out);
   bool continues(const DecisionQuery& q, const Window& w, const Candidate& c) const;
   Candidate continuation(const DecisionQuery& q, const Window& w) const;
   void gate_continuation(const DecisionQuery& q, const std::vector<VerificationStage*>& stages,

@@ -198,7 +198,12 @@ maps = [('mm-lip6-100-corridor', [(*lip6, 100), corridor]),
         ('mm-corridor-222-lip6', [(*corridor, 222), lip6]),
         ('mm-corridor-222-nordland-300-lip6', [(*corridor, 222), (*nordland, 300), lip6]),
         ('mm-lip6-300-nordland-300-corridor', [(*lip6, 300), (*nordland, 300), corridor]),
-        ('mm-corridor-222-nordland', [(*corridor, 222), nordland])]
+        ('mm-corridor-222-nordland', [(*corridor, 222), nordland]),
+        # A loop in progress when the place changes (decision.leap): each carried one
+        # across the cut before it.
+        ('mm-corridor-150-lip6', [(*corridor, 150), lip6]),
+        ('mm-nordland-300-corridor-222-lip6', [(*nordland, 300), (*corridor, 222), lip6]),
+        ('mm-nordland-300-lip6-600-corridor', [(*nordland, 300), (*lip6, 600), corridor])]
 for name, parts in maps:
     if not want(name):
         continue

@@ -47,6 +47,9 @@ const OptionTable<DecisionOptions>& DecisionOptions::fields() {
                     "a candidate is a stay, not a loop, when every frame between it and the query "
                     "(8 sampled) scores at least this for the query, single frame, or (a first loop) "
                     "the query's geometry matches the frames between (0: both off)"),
+        real_option("leap", &S::leap, 0.0, 1000.0, false, "",
+                    "no loop is continued across a frame whose place signature leapt this far (block "
+                    "contrast) from the 8 frames before it: a scene cut as it happens (0: off)"),
         integer_option("continuity_gap", &S::continuity_gap, 0, 100, "frames",
                        "a loop is continued after at most this many frames that declared none (after more "
                        "than one, by the candidate ranked first only)"),
@@ -145,7 +148,7 @@ double LoopDecision::rank(const DecisionQuery& q, const Candidate& best,
   out.ranking.best = best;
   out.ranking.confirmed = best.frame >= 0;
   bool tracking = q.continuity && best.frame >= 0 && track_.continues(q.frame, best.frame, q.tolerance, 0) &&
-                  same_place(q.places, track_.held, q.frame) &&
+                  same_place(q.places, track_.held, q.frame) && !leapt(q, track_.held) &&
                   best.frame <= place_end(places_of(q.places), track_.held.loop);
   if (tracking && q.single_frame && !confirms.empty()) {
     tracking = !(q.single_frame(best.frame) < kRankingTrackMinZ);  // a scene cut; NaN: not unlike
@@ -239,7 +242,7 @@ LoopDecision::Window LoopDecision::open_window(const DecisionQuery& q, const Can
   w.held = state_.held.loop;  // the loop a candidate may continue
   w.open = q.continuity && d.continuity_bonus > 0 &&
            state_.continues(q.frame, w.held, q.tolerance, d.continuity_gap) &&
-           same_place(q.places, state_.held, q.frame);
+           same_place(q.places, state_.held, q.frame) && !leapt(q, state_.held);
   // Frame j stays in its place.
   w.end = std::min(state_.window_end(q.frame, q.tolerance), place_end(places_of(q.places), w.held));
   // Over more than one frame without a loop, only the candidate appearance
@@ -257,6 +260,14 @@ LoopDecision::Window LoopDecision::open_window(const DecisionQuery& q, const Can
     }
   }
   return w;
+}
+
+bool LoopDecision::leapt(const DecisionQuery& q, const ContinuityState::Held& held) const {
+  if (options_.leap <= 0 || !q.leap) return false;
+  for (std::int64_t f = std::max<std::int64_t>(held.query + 1, 0); f <= q.frame; ++f) {
+    if (q.leap(f) >= options_.leap) return true;  // NaN, -infinity: no leap known
+  }
+  return false;
 }
 
 bool LoopDecision::unlike(const Window& w, std::int64_t frame) const {

@@ -262,7 +262,8 @@ Result Detector::process_gray(double convert_ms, std::int64_t start_ns, bool sto
   } else {
     std::swap(exact_, descriptor_);  // descriptor_ is the frame's descriptor as stored
   }
-  if (place_cuts_.enabled() && store) signature_ = place_signature(gray_);  // a query stores none
+  // A query not stored keeps its signature for its leap (decision.leap) only.
+  if (place_cuts_.enabled()) signature_ = place_signature(gray_);
   result.timings.describe_ms = ms_since(t);
   return process_described(std::move(result), start_ns, store, nullptr, gray_.width, gray_.height);
 }
@@ -399,6 +400,9 @@ void Detector::verify(AppearanceEvidence& evidence, bool store, Result& result,
   q.cells = descriptor_.grid.cells();
   q.young = evidence.young();
   q.places = &place_cuts_.cuts();
+  q.leap = [&](std::int64_t f) {
+    return f == result.frame ? place_cuts_.leap(signature_) : place_cuts_.leap(f);
+  };
   q.single_frame = [&](std::int64_t j) {
     return evidence.single_frame(lsgd::similarity(descriptor_.view(), store_.view(j), metric));
   };

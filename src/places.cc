@@ -109,6 +109,21 @@ double block_contrast(const std::uint8_t* const* block) {
   return (within - cross) / std::max(1.0 - within, 1e-9);
 }
 
+double leap_contrast(const std::uint8_t* frame, const std::uint8_t* const* before) {
+  if (frame == nullptr) return kNone;
+  for (int k = 0; k < kPlaceBlock; ++k) {
+    if (before[k] == nullptr) return kNone;
+  }
+  double within = 0, cross = 0;
+  for (int a = 0; a < kPlaceBlock; ++a) {
+    for (int b = 0; b < a; ++b) within += signature_similarity(before[a], before[b]);
+    cross += signature_similarity(frame, before[a]);
+  }
+  within /= kPlaceBlock * (kPlaceBlock - 1) / 2.0;
+  cross /= kPlaceBlock;
+  return (within - cross) / std::max(1.0 - within, 1e-9);
+}
+
 PlaceCuts::PlaceCuts(double threshold) : threshold_(threshold) {
   if (!(threshold >= 0) || std::isinf(threshold)) {
     internal::throw_invalid("PlaceCuts: threshold ", threshold, " (0: off, else > 0)");
@@ -120,12 +135,28 @@ double PlaceCuts::contrast(std::int64_t c) const {
                                                                     : kNone;
 }
 
+double PlaceCuts::leap(std::int64_t frame) const {
+  return frame >= 0 && frame < static_cast<std::int64_t>(leap_.size()) ? leap_[static_cast<std::size_t>(frame)]
+                                                                        : kNone;
+}
+
+double PlaceCuts::leap(const std::vector<std::uint8_t>& signature) const {
+  if (signature.size() != static_cast<std::size_t>(kSignatureBytes) || size() < kPlaceBlock) return kNone;
+  const std::uint8_t* before[kPlaceBlock];
+  for (int k = 0; k < kPlaceBlock; ++k) {
+    const auto f = static_cast<std::size_t>(size() - kPlaceBlock + k);
+    before[k] = has_signature_[f] ? signatures_.data() + f * kSignatureBytes : nullptr;
+  }
+  return leap_contrast(signature.data(), before);
+}
+
 void PlaceCuts::push(const std::vector<std::uint8_t>& signature) {
   if (!signature.empty() && signature.size() != static_cast<std::size_t>(kSignatureBytes)) {
     internal::throw_invalid("PlaceCuts: a signature of ", signature.size(), " bytes, expected ",
                             kSignatureBytes);
   }
   const bool has = !signature.empty();
+  leap_.push_back(leap(signature));  // from the frames before it
   has_signature_.push_back(has);
   signatures_.resize(signatures_.size() + kSignatureBytes, 0);
   if (has) std::copy(signature.begin(), signature.end(), signatures_.end() - kSignatureBytes);

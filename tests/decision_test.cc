@@ -361,6 +361,64 @@ TEST(LoopDecision, NoLoopIsContinuedIntoAnotherPlace) {
   }
 }
 
+// A frame whose view leapt from the frames before it (DecisionQuery::leap
+// reaching decision.leap: a scene cut as it happens, before any place is
+// found) continues no loop and no track of the ranking: frame 51 would
+// continue the run 49 -> 9, 50 -> 10 (and the ranking's track, whose
+// relaxed bar confirms 11 with 13 inliers), but not when it leaps itself or
+// a frame after the last loop did (frame 51 after 50 declared none, here by
+// a gap: 52 after 50). A leap below decision.leap, unknown (NaN), one before
+// the run, or decision.leap 0 changes nothing.
+TEST(LoopDecision, NoLoopIsContinuedAcrossALeap) {
+  struct Variant {
+    std::int64_t at;   // the frame that leaps
+    double value;      // its leap
+    double option;     // decision.leap
+    bool skip_51;      // frame 51 declares nothing (no candidate); the query is 52
+    bool continues;
+  };
+  const double nan = std::nan("");
+  for (const Variant& v : {Variant{-1, 0, 1.5, false, true}, Variant{51, 5.0, 1.5, false, false},
+                           Variant{51, 1.5, 1.5, false, false}, Variant{51, 1.4, 1.5, false, true},
+                           Variant{51, nan, 1.5, false, true}, Variant{51, 5.0, 0.0, false, true},
+                           Variant{49, 5.0, 1.5, false, true}, Variant{51, 5.0, 1.5, true, false},
+                           Variant{52, 5.0, 1.5, true, false}, Variant{-1, 0, 1.5, true, true}}) {
+    SCOPED_TRACE(testing::Message() << "leap " << v.value << " at " << v.at << ", decision.leap " << v.option
+                                    << (v.skip_51 ? ", frame 51 without a loop" : ""));
+    DecisionOptions d;
+    d.leap = v.option;
+    LoopDecision decision(d);
+    FixedSupport stage(std::map<std::int64_t, int>{{9, 60}, {10, 13}, {11, 13}, {12, 13}});
+    DecisionQuery q = sequence_query(true);
+    std::vector<Candidate> candidates;
+    q.appearance = [&](std::int64_t j) {
+      return !candidates.empty() && j == candidates[0].frame ? candidates[0].score : 0.0;
+    };
+    q.single_frame = [](std::int64_t) { return 0.0; };
+    q.candidates = &candidates;
+    q.leap = [&](std::int64_t f) { return f == v.at && f <= q.frame ? v.value : 0.0; };
+    candidates = {{9, 4.0}};
+    q.frame = 49;
+    ASSERT_TRUE(decision.decide(q, {&stage}).loop);
+    candidates = {{10, 1.5}};
+    q.frame = 50;
+    ASSERT_TRUE(decision.decide(q, {&stage}).evidence.continues);
+    if (v.skip_51) {
+      candidates.clear();
+      q.frame = 51;
+      ASSERT_FALSE(decision.decide(q, {&stage}).loop);
+    }
+    q.frame = v.skip_51 ? 52 : 51;
+    candidates = {{q.frame - 40, 1.5}};
+    const Decision out = decision.decide(q, {&stage});
+    EXPECT_EQ(out.loop, v.continues);
+    EXPECT_EQ(out.evidence.continues, v.continues);
+    if (!v.skip_51) {
+      EXPECT_EQ(out.ranking.confirmed, v.continues) << "the ranking's track";
+    }
+  }
+}
+
 // decision.continuity_gap: a loop is continued over a frame that declared
 // none (frame 51: its candidate has no geometric support), not over more
 // than the gap; over two frames or more only by the candidate ranked first;

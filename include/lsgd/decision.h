@@ -129,6 +129,19 @@ struct DecisionOptions {
   // those of a train standing still 5.8 and more (docs/results.md, "A
   // camera that stays is not a loop").
   double stay_z = 3.0;
+  // A scene cut as it happens: no loop is continued (nor the ranking's track
+  // followed) across a frame whose view leapt from the frames just before
+  // it, its leap (lsgd/places.h: the block contrast of its place signature
+  // against the kPlaceBlock frames before it) reaching this; the loop must
+  // then be found again as a first loop. A place is found only kPlaceBlock
+  // frames after it begins; a leap at once. Needs the places' signatures
+  // (verification.temporal.place_cut > 0). [0, 1000] (0: off). 1.25 by
+  // leave-one-sequence-out with a margin (1.0 costs corridor-shifted 6
+  // loops, 2.0 leaves two maps' false loops): every frame of every real
+  // sequence here leaps 1.41 at the most, every cut where a loop was in
+  // progress 1.71 or more (docs/results.md, "A loop in progress is not
+  // carried into the next place").
+  double leap = 1.25;
   void check() const;
   static const OptionTable<DecisionOptions>& fields();  // lsgd/options.h
 };
@@ -223,6 +236,9 @@ struct DecisionQuery {
   // so far, ascending (Detector::place_starts(); nullptr or empty: one
   // place). No loop is continued, and no track followed, across one.
   const std::vector<std::int64_t>* places = nullptr;
+  // The leap of frame f (the query's own included) from the frames just
+  // before it (lsgd/places.h; -infinity or NaN: none known; unset: none).
+  std::function<double(std::int64_t)> leap;
 };
 
 // The ranking no decision setting changes (what R@100P and AP are computed
@@ -331,6 +347,9 @@ class LoopDecision final : public Stateful {
   std::size_t gate(const DecisionQuery& q, const std::vector<VerificationStage*>& stages,
                    std::size_t n, Decision& out);
   Window open_window(const DecisionQuery& q, const Candidate* first);
+  // Whether a frame after the held loop's last query, up to the query,
+  // leapt from the frames before it (DecisionOptions::leap): it continues nothing.
+  bool leapt(const DecisionQuery& q, const ContinuityState::Held& held) const;
   bool unlike(const Window& w, std::int64_t frame) const;
   // Whether candidate `frame` is a stay (stay_z): every sampled frame
   // between it and the query scores at least stay_z, single frame.

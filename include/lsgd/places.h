@@ -21,6 +21,14 @@
 // reaches the threshold, is the highest of c - 1, c, c + 1, and the place
 // before has at least kMinPlaceFrames frames. So a place beginning at c is
 // found when frame c + kPlaceBlock (its ninth) is stored.
+//
+// A cut is found late, so the decision also asks of each frame whether its
+// view leapt away from the frames just before it (a scene cut as it happens,
+// or a sharp turn): its leap is the contrast of its signature against the
+// kPlaceBlock frames before it, (within - cross) / (1 - within) with within
+// the mean similarity of those frames to each other and cross their mean
+// similarity to it. No loop is continued across a frame whose leap reaches
+// decision.leap (decision.h).
 #pragma once
 
 #include <cstdint>
@@ -34,9 +42,9 @@ namespace lsgd {
 constexpr int kSignatureBytes = 128;  // 4 x 4 cells x 8 orientations
 constexpr int kPlaceBlock = 8;        // frames on each side of a cut
 // Memory a map keeps per frame for its places (PlaceCuts): the signature,
-// the block contrast and the cut found then (the memory model of
-// estimated_map_bytes()).
-constexpr std::int64_t kPlaceBytesPerFrame = kSignatureBytes + 17;
+// the block contrast, the frame's leap and the cut found then (the memory
+// model of estimated_map_bytes()).
+constexpr std::int64_t kPlaceBytesPerFrame = kSignatureBytes + 25;
 // The fewest frames of a place: a place that could not calibrate its own
 // statistics (kMinCalibration) is no place.
 constexpr std::int64_t kMinPlaceFrames = 32;
@@ -51,6 +59,11 @@ double signature_similarity(const std::uint8_t* a, const std::uint8_t* b);
 // kPlaceBlock .. c + kPlaceBlock - 1 (`block`, 2 kPlaceBlock pointers, in
 // frame order); -infinity when one is missing (nullptr).
 double block_contrast(const std::uint8_t* const* block);
+
+// The leap of a frame (`frame`'s signature) from the kPlaceBlock frames
+// before it (`before`, kPlaceBlock pointers): the block contrast of one frame
+// (the comment at the top); -infinity when one is missing (nullptr).
+double leap_contrast(const std::uint8_t* frame, const std::uint8_t* const* before);
 
 // The first frame of the place holding `frame`, given the first frames of
 // the places after the first (`cuts`, ascending: PlaceCuts::cuts()); 0 in
@@ -78,6 +91,13 @@ class PlaceCuts : public Stateful {
   // The block contrast at c, computed once frame c + kPlaceBlock - 1 was
   // added (-infinity before, or when a signature is missing).
   double contrast(std::int64_t c) const;
+  // The leap of stored frame `frame` from the kPlaceBlock frames before it
+  // (leap_contrast; -infinity for the first kPlaceBlock frames, a frame
+  // without a signature or one after such a frame).
+  double leap(std::int64_t frame) const;
+  // The leap of a frame about to be added (or a query not stored) with
+  // `signature` from the last kPlaceBlock frames stored.
+  double leap(const std::vector<std::uint8_t>& signature) const;
 
   const char* name() const override { return "places"; }
   bool has_state() const override { return enabled(); }
@@ -98,6 +118,7 @@ class PlaceCuts : public Stateful {
   std::vector<std::uint8_t> signatures_;  // kSignatureBytes per frame
   std::vector<bool> has_signature_;
   std::vector<double> contrast_;          // by frame c: the block contrast of a cut at c
+  std::vector<double> leap_;              // by frame: its leap from the frames before it
   std::vector<std::int64_t> found_;       // by frame: the cut found when it was stored, -1
   std::vector<std::int64_t> cuts_;
 };

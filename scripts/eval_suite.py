@@ -101,8 +101,8 @@ def splice(name, dataset, gt, ranges):
 
 def held(name, dataset, gt, frame, copies):
     """A camera held still: frame `frame` replaced by `copies` copies with sensor noise (normal,
-    sigma 2 gray levels, seed 1), gray; the ground truth shifted past them (a loop to the held
-    frame names its first copy)."""
+    sigma 2 gray levels, seed 1), gray; the ground truth shifted past them, a loop to or from the
+    held frame naming every copy (each shows its place; the copies are no loops of each other)."""
     out = os.path.join(W, name)
     if not os.path.isfile(os.path.join(out, 'groundtruth.txt')):
         images = frames(dataset)
@@ -114,9 +114,9 @@ def held(name, dataset, gt, frame, copies):
             target = os.path.join(out, 'images', f'still{k:04d}.png')
             Image.fromarray(numpy.clip(base + noise.normal(0, 2, base.shape), 0, 255).astype(numpy.uint8)).save(target)
             still.append(target)
-        shift = lambda k: k if k <= frame else k + copies - 1
+        shift = lambda k: [k] if k < frame else list(range(frame, frame + copies)) if k == frame else [k + copies - 1]
         write_dataset(out, images[:frame] + still + images[frame + 1:],
-                      sorted((shift(q), shift(m)) for q, m in pairs(gt)))
+                      sorted({(a, b) for q, m in pairs(gt) for a in shift(q) for b in shift(m)}))
     return out
 
 
@@ -186,7 +186,7 @@ for name, base, ranges in [('lip6-short', lip6, [(0, 40), (460, 500)]),
 # window at the start or in the middle; nordland-trimmed's train standing in a station, seen
 # with a window shorter than its README's.
 for name, base, frame, copies, w in [('lip6-still-start', lip6, 0, 60, 20), ('corridor-still-start', corridor, 0, 60, 20),
-                                     ('lip6-still-300', lip6, 300, 80, 50)]:
+                                     ('lip6-still-300', lip6, 300, 80, 50), ('corridor-still-60', corridor, 60, 60, 50)]:
     if want(name):
         out = held(name, *base, frame, copies)
         add(name, out, os.path.join(out, 'groundtruth.txt'), w, 'camera held still')

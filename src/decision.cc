@@ -2,7 +2,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <cstdlib>
 #include <limits>
 
 #include "internal/check.h"
@@ -327,7 +326,8 @@ void LoopDecision::gate_continuation(const DecisionQuery& q, const std::vector<V
 // not match them; a camera that stood still, or has only begun to move away,
 // does (the appearance test, stay(), cannot see a stay that fills the
 // query's candidates: their statistics are the stay's own).
-bool LoopDecision::sees_the_frames_between(const DecisionQuery& q, std::int64_t frame, Decision& out) {
+bool LoopDecision::sees_the_frames_between(const DecisionQuery& q, std::int64_t frame, double support,
+                                           Decision& out) {
   const std::int64_t span = q.frame - frame;
   if (options_.stay_z <= 0 || confirms_.empty() || span < 4) return false;
   // The middle first (a revisit's path is furthest from the place there),
@@ -338,7 +338,9 @@ bool LoopDecision::sees_the_frames_between(const DecisionQuery& q, std::int64_t 
     for (VerificationStage* stage : confirms_) {
       const StageCheck check = stage->check(q.frame, Candidate{k, 0});
       ms += check.ms;
-      if (!check.accepted) return false;
+      // Below the stage's bar but with kStayBetweenSupport of the candidate's
+      // support: the same view (a stay's noisy copies score alike, around the bar).
+      if (!check.accepted && !(support > 0 && check.support >= kStayBetweenSupport * support)) return false;
     }
     matched += internal::concat(matched.empty() ? "" : ", ", k);
   }
@@ -496,7 +498,7 @@ void LoopDecision::examine(const DecisionQuery& q, const std::vector<Verificatio
     const bool strong_enough = confirmed.support >= d.strong_inliers || long_track(q);
     const double scored = strong_enough ? score : score - strong(q, w, c);
     // A first loop the query's view never left is a stay (stay_z).
-    if (scored >= d.threshold && !continuing && sees_the_frames_between(q, c.frame, out)) {
+    if (scored >= d.threshold && !continuing && sees_the_frames_between(q, c.frame, confirmed.support, out)) {
       if (is_first) verdict.rejected = true;  // reported, if at all, as never a loop
       continue;
     }

@@ -264,15 +264,19 @@ TEST(LoopDecision, ACandidateTheCameraNeverLeftIsAStayNotALoop) {
 // (a stay), 1 the three-quarter frame does not (a route that passes the
 // place again halfway: a loop), 2 stay_z 0 (off), 3 a continuation (frame 61
 // continues 60's loop to 11: not a first loop, kept), 4 a stay whose
-// appearance alone (7.5 sigma) reaches the threshold: still no loop.
+// appearance alone (7.5 sigma) reaches the threshold: still no loop. 5: the
+// candidate has 22 inliers and the frames between 12, below the stage's bar
+// (20) but above kStayBetweenSupport of the candidate's (the camera just
+// left its stay: noisy copies of one view): a stay; 6: 10, below both: a loop.
 TEST(LoopDecision, AFirstLoopWhoseQueryMatchesTheFramesBetweenIsAStay) {
-  for (const int variant : {0, 1, 2, 3, 4}) {
+  for (const int variant : {0, 1, 2, 3, 4, 5, 6}) {
     SCOPED_TRACE(testing::Message() << "variant " << variant);
     DecisionOptions d;
     if (variant == 2) d.stay_z = 0;
     LoopDecision decision(d);
-    std::map<std::int64_t, int> inliers{{10, 60}, {11, 60}, {35, 25}, {22, 25}};
-    if (variant != 1) inliers[47] = 25;
+    const int between = variant == 5 ? 12 : variant == 6 ? 10 : 25;
+    std::map<std::int64_t, int> inliers{{10, variant >= 5 ? 22 : 60}, {11, 60}, {35, between}, {22, between}};
+    if (variant != 1) inliers[47] = between;
     FixedSupport stage(inliers);
     DecisionQuery q = sequence_query(true);
     const double appearance = variant == 4 ? 7.5 : 5.0;
@@ -295,7 +299,7 @@ TEST(LoopDecision, AFirstLoopWhoseQueryMatchesTheFramesBetweenIsAStay) {
       continue;
     }
     const Decision out = decision.decide(q, {&stage});
-    const bool stay = variant == 0 || variant == 4;
+    const bool stay = variant == 0 || variant == 4 || variant == 5;
     EXPECT_EQ(out.loop, !stay);
     EXPECT_EQ(out.ranking.best.frame, 10);  // the ranking is appearance's: not gated
     const bool said = std::any_of(out.verdicts.begin(), out.verdicts.end(), [](const StageVerdict& v) {

@@ -149,6 +149,13 @@ struct DecisionOptions {
 // The most frames between a candidate and its query that decide whether it
 // is a stay (DecisionOptions::stay_z), the middle one first.
 constexpr int kStaySamples = 8;
+// A frame between a first loop and its query matches the query, for the
+// geometric stay test (stay_z), when every confirming stage accepts it or
+// gives it at least this fraction of the candidate's support: a camera that
+// has just left its stay sees the stay's noisy copies alike, some just below
+// the stage's bar (corridor's frame 60 held 60 times: 22 inliers for the
+// candidate, 12-15 for the frames between; docs/results.md).
+constexpr double kStayBetweenSupport = 0.5;
 
 // What decided the reported candidate (Result::evidence).
 struct LoopEvidence {
@@ -354,10 +361,11 @@ class LoopDecision final : public Stateful {
   // Whether candidate `frame` is a stay (stay_z): every sampled frame
   // between it and the query scores at least stay_z, single frame.
   bool stay(const DecisionQuery& q, std::int64_t frame) const;
-  // Whether first loop `frame` is a stay by geometry: every confirming stage
-  // also accepts the frames a half, a quarter and three quarters of the way
-  // back (a verdict says so).
-  bool sees_the_frames_between(const DecisionQuery& q, std::int64_t frame, Decision& out);
+  // Whether first loop `frame` (confirmed with `support`) is a stay by
+  // geometry: every confirming stage also accepts the frames a half, a
+  // quarter and three quarters of the way back, or gives them
+  // kStayBetweenSupport of `support` (a verdict says so).
+  bool sees_the_frames_between(const DecisionQuery& q, std::int64_t frame, double support, Decision& out);
   bool continues(const DecisionQuery& q, const Window& w, const Candidate& c) const;
   Candidate continuation(const DecisionQuery& q, const Window& w) const;
   void gate_continuation(const DecisionQuery& q, const std::vector<VerificationStage*>& stages,

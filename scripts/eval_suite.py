@@ -114,9 +114,12 @@ def held(name, dataset, gt, frame, copies):
             target = os.path.join(out, 'images', f'still{k:04d}.png')
             Image.fromarray(numpy.clip(base + noise.normal(0, 2, base.shape), 0, 255).astype(numpy.uint8)).save(target)
             still.append(target)
-        shift = lambda k: [k] if k < frame else list(range(frame, frame + copies)) if k == frame else [k + copies - 1]
+        def shifted(k):  # frame k's frames in the new sequence
+            if k < frame:
+                return [k]
+            return list(range(frame, frame + copies)) if k == frame else [k + copies - 1]
         write_dataset(out, images[:frame] + still + images[frame + 1:],
-                      sorted({(a, b) for q, m in pairs(gt) for a in shift(q) for b in shift(m)}))
+                      sorted({(a, b) for q, m in pairs(gt) for a in shifted(q) for b in shifted(m)}))
     return out
 
 

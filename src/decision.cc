@@ -48,7 +48,8 @@ const OptionTable<DecisionOptions>& DecisionOptions::fields() {
                     "the query's geometry matches the frames between (0: both off)"),
         real_option("leap", &S::leap, 0.0, 1000.0, false, "",
                     "no loop is continued across a frame whose place signature leapt this far (block "
-                    "contrast) from the 8 frames before it: a scene cut as it happens (0: off)"),
+                    "contrast) from the 8 frames before it: a scene cut as it happens (needs "
+                    "verification.temporal.place_cut; 0: off)"),
         integer_option("continuity_gap", &S::continuity_gap, 0, 100, "frames",
                        "a loop is continued after at most this many frames that declared none (after more "
                        "than one, by the candidate ranked first only)"),

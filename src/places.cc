@@ -91,22 +91,34 @@ std::int64_t place_end(const std::vector<std::int64_t>& cuts, std::int64_t frame
   return it == cuts.end() ? std::numeric_limits<std::int64_t>::max() : *it - 1;
 }
 
+namespace {
+
+// The summed similarity of every pair of the kPlaceBlock frames `block`.
+double pairs_similarity(const std::uint8_t* const* block) {
+  double sum = 0;
+  for (int a = 0; a < kPlaceBlock; ++a) {
+    for (int b = 0; b < a; ++b) sum += signature_similarity(block[a], block[b]);
+  }
+  return sum;
+}
+
+constexpr double kPairs = kPlaceBlock * (kPlaceBlock - 1) / 2.0;
+
+// (within - cross) / (1 - within): how much less alike across than within.
+double contrast_of(double within, double cross) { return (within - cross) / std::max(1.0 - within, 1e-9); }
+
+}  // namespace
+
 double block_contrast(const std::uint8_t* const* block) {
   for (int k = 0; k < 2 * kPlaceBlock; ++k) {
     if (block[k] == nullptr) return kNone;
   }
-  double before = 0, after = 0, cross = 0;
+  double cross = 0;
   for (int a = 0; a < kPlaceBlock; ++a) {
-    for (int b = 0; b < a; ++b) {
-      before += signature_similarity(block[a], block[b]);
-      after += signature_similarity(block[kPlaceBlock + a], block[kPlaceBlock + b]);
-    }
     for (int b = 0; b < kPlaceBlock; ++b) cross += signature_similarity(block[kPlaceBlock + a], block[b]);
   }
-  const double pairs = kPlaceBlock * (kPlaceBlock - 1) / 2.0;
-  const double within = (before + after) / (2 * pairs);
-  cross /= kPlaceBlock * kPlaceBlock;
-  return (within - cross) / std::max(1.0 - within, 1e-9);
+  const double within = (pairs_similarity(block) + pairs_similarity(block + kPlaceBlock)) / (2 * kPairs);
+  return contrast_of(within, cross / (kPlaceBlock * kPlaceBlock));
 }
 
 double leap_contrast(const std::uint8_t* frame, const std::uint8_t* const* before) {
@@ -114,14 +126,9 @@ double leap_contrast(const std::uint8_t* frame, const std::uint8_t* const* befor
   for (int k = 0; k < kPlaceBlock; ++k) {
     if (before[k] == nullptr) return kNone;
   }
-  double within = 0, cross = 0;
-  for (int a = 0; a < kPlaceBlock; ++a) {
-    for (int b = 0; b < a; ++b) within += signature_similarity(before[a], before[b]);
-    cross += signature_similarity(frame, before[a]);
-  }
-  within /= kPlaceBlock * (kPlaceBlock - 1) / 2.0;
-  cross /= kPlaceBlock;
-  return (within - cross) / std::max(1.0 - within, 1e-9);
+  double cross = 0;
+  for (int a = 0; a < kPlaceBlock; ++a) cross += signature_similarity(frame, before[a]);
+  return contrast_of(pairs_similarity(before) / kPairs, cross / kPlaceBlock);
 }
 
 PlaceCuts::PlaceCuts(double threshold) : threshold_(threshold) {
@@ -135,19 +142,25 @@ double PlaceCuts::contrast(std::int64_t c) const {
                                                                     : kNone;
 }
 
+const std::uint8_t* PlaceCuts::signature(std::int64_t frame) const {
+  const auto f = static_cast<std::size_t>(frame);
+  return has_signature_[f] ? signatures_.data() + f * kSignatureBytes : nullptr;
+}
+
+double PlaceCuts::leap_at(std::int64_t frame, const std::uint8_t* s) const {
+  if (frame < kPlaceBlock || frame > size()) return kNone;
+  const std::uint8_t* before[kPlaceBlock];
+  for (int k = 0; k < kPlaceBlock; ++k) before[k] = signature(frame - kPlaceBlock + k);
+  return leap_contrast(s, before);
+}
+
 double PlaceCuts::leap(std::int64_t frame) const {
-  return frame >= 0 && frame < static_cast<std::int64_t>(leap_.size()) ? leap_[static_cast<std::size_t>(frame)]
-                                                                        : kNone;
+  return frame >= 0 && frame < size() ? leap_at(frame, signature(frame)) : kNone;
 }
 
 double PlaceCuts::leap(const std::vector<std::uint8_t>& signature) const {
-  if (signature.size() != static_cast<std::size_t>(kSignatureBytes) || size() < kPlaceBlock) return kNone;
-  const std::uint8_t* before[kPlaceBlock];
-  for (int k = 0; k < kPlaceBlock; ++k) {
-    const auto f = static_cast<std::size_t>(size() - kPlaceBlock + k);
-    before[k] = has_signature_[f] ? signatures_.data() + f * kSignatureBytes : nullptr;
-  }
-  return leap_contrast(signature.data(), before);
+  return signature.size() == static_cast<std::size_t>(kSignatureBytes) ? leap_at(size(), signature.data())
+                                                                       : kNone;
 }
 
 void PlaceCuts::push(const std::vector<std::uint8_t>& signature) {
@@ -156,7 +169,6 @@ void PlaceCuts::push(const std::vector<std::uint8_t>& signature) {
                             kSignatureBytes);
   }
   const bool has = !signature.empty();
-  leap_.push_back(leap(signature));  // from the frames before it
   has_signature_.push_back(has);
   signatures_.resize(signatures_.size() + kSignatureBytes, 0);
   if (has) std::copy(signature.begin(), signature.end(), signatures_.end() - kSignatureBytes);
@@ -166,10 +178,7 @@ void PlaceCuts::push(const std::vector<std::uint8_t>& signature) {
   const std::int64_t frame = size() - 1, c = frame - kPlaceBlock + 1;
   if (c < kPlaceBlock) return;
   const std::uint8_t* block[2 * kPlaceBlock];
-  for (int k = 0; k < 2 * kPlaceBlock; ++k) {
-    const auto f = static_cast<std::size_t>(c - kPlaceBlock + k);
-    block[k] = has_signature_[f] ? signatures_.data() + f * kSignatureBytes : nullptr;
-  }
+  for (int k = 0; k < 2 * kPlaceBlock; ++k) block[k] = this->signature(c - kPlaceBlock + k);
   contrast_[static_cast<std::size_t>(c)] = block_contrast(block);
 }
 

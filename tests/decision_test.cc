@@ -34,6 +34,11 @@ TEST(DecisionOptions, RangesNameTheField) {
   d.continuity_bonus = std::nan("");
   EXPECT_THROW(d.check(), InvalidArgument);
   d = {};
+  d.leap = -0.5;
+  EXPECT_NE(test::message_of<InvalidArgument>([&] { d.check(); }).find("decision.leap"), std::string::npos);
+  d.leap = std::nan("");
+  EXPECT_THROW(d.check(), InvalidArgument);
+  d = {};
   d.continuity_inliers = 0;
   EXPECT_THROW(d.check(), InvalidArgument);
   d.continuity_inliers = 1.5;

@@ -137,10 +137,10 @@ struct DecisionOptions {
   // frames after it begins; a leap at once. Needs the places' signatures
   // (verification.temporal.place_cut > 0). [0, 1000] (0: off). 1.25 by
   // leave-one-sequence-out with a margin (1.0 costs corridor-shifted 6
-  // loops, 2.0 leaves two maps' false loops): every frame of every real
-  // sequence here leaps 1.41 at the most, every cut where a loop was in
-  // progress 1.71 or more (docs/results.md, "A loop in progress is not
-  // carried into the next place").
+  // loops, 2.0 leaves two maps' false loops): every frame of corridor,
+  // lip6-outdoor and their variants leaps 1.41 at the most, every cut where
+  // a loop was in progress 1.71 or more (docs/results.md, "A loop in
+  // progress is not carried into the next place").
   double leap = 1.25;
   void check() const;
   static const OptionTable<DecisionOptions>& fields();  // lsgd/options.h

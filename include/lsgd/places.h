@@ -42,9 +42,9 @@ namespace lsgd {
 constexpr int kSignatureBytes = 128;  // 4 x 4 cells x 8 orientations
 constexpr int kPlaceBlock = 8;        // frames on each side of a cut
 // Memory a map keeps per frame for its places (PlaceCuts): the signature,
-// the block contrast, the frame's leap and the cut found then (the memory
-// model of estimated_map_bytes()).
-constexpr std::int64_t kPlaceBytesPerFrame = kSignatureBytes + 25;
+// the block contrast and the cut found then (the memory model of
+// estimated_map_bytes()).
+constexpr std::int64_t kPlaceBytesPerFrame = kSignatureBytes + 17;
 // The fewest frames of a place: a place that could not calibrate its own
 // statistics (kMinCalibration) is no place.
 constexpr std::int64_t kMinPlaceFrames = 32;
@@ -91,9 +91,9 @@ class PlaceCuts : public Stateful {
   // The block contrast at c, computed once frame c + kPlaceBlock - 1 was
   // added (-infinity before, or when a signature is missing).
   double contrast(std::int64_t c) const;
-  // The leap of stored frame `frame` from the kPlaceBlock frames before it
-  // (leap_contrast; -infinity for the first kPlaceBlock frames, a frame
-  // without a signature or one after such a frame).
+  // The leap of stored frame `frame` from the kPlaceBlock frames before it,
+  // computed from their signatures (leap_contrast; -infinity for the first
+  // kPlaceBlock frames, a frame without a signature or one after such a frame).
   double leap(std::int64_t frame) const;
   // The leap of a frame about to be added (or a query not stored) with
   // `signature` from the last kPlaceBlock frames stored.
@@ -112,13 +112,16 @@ class PlaceCuts : public Stateful {
 
  private:
   void push(const std::vector<std::uint8_t>& signature);
+  // Frame `frame`'s signature (nullptr: none).
+  const std::uint8_t* signature(std::int64_t frame) const;
+  // The leap of signature `s` as frame `frame`, from the frames before it.
+  double leap_at(std::int64_t frame, const std::uint8_t* s) const;
   void record_cut(std::int64_t frame, std::int64_t cut);
 
   double threshold_ = 0;
   std::vector<std::uint8_t> signatures_;  // kSignatureBytes per frame
   std::vector<bool> has_signature_;
   std::vector<double> contrast_;          // by frame c: the block contrast of a cut at c
-  std::vector<double> leap_;              // by frame: its leap from the frames before it
   std::vector<std::int64_t> found_;       // by frame: the cut found when it was stored, -1
   std::vector<std::int64_t> cuts_;
 };

@@ -4,12 +4,11 @@ and gets the Results of the images; descriptions travel as bytes or pickle."""
 import math
 import pickle
 
-import numpy as np
 import pytest
 
 import lsgd
 
-from test_eval_tools import place
+from frames import place
 
 
 def frames():

@@ -12,15 +12,7 @@ import numpy as np
 import pytest
 
 import lsgd
-
-CLI = os.environ.get("LSGD_CLI", "")
-
-
-def place(p, shift=0, width=160, height=120):
-    rng = np.random.default_rng(1000 + p)
-    levels = np.random.default_rng(7000 + p).integers(0, 256, 8, dtype=np.uint8)
-    index = rng.integers(0, 8, (height, width + 8))
-    return levels[index[:, shift:shift + width]]
+from frames import CLI, place
 
 
 @pytest.fixture

@@ -510,6 +510,8 @@ struct Database::Impl {
                     const std::string& name, std::int64_t caller_id);
   // InvalidArgument unless frames may be appended to `session`.
   void check_session(std::int64_t session) const;
+  std::int64_t check_append(const Detector& detector, const Result& result, const std::string& name,
+                            std::int64_t frame) const;
   // The steps of Database::forget() (database_write.cc). Every row's keys,
   // in order.
   std::vector<FrameKeys> read_keys() const;

@@ -96,28 +96,28 @@ void Database::Impl::check_session(std::int64_t session) const {
   }
 }
 
-void Database::append(const Detector& detector, const Result& result, std::int64_t session,
-                      const std::string& name, std::int64_t frame) {
-  Impl& m = *impl_;
-  m.check_writable();
-  m.check_session(session);
+// What append() takes: a frame name a path can be, the detector's next frame
+// with the Result process() returned for it, and an id above the last
+// stored one. Returns the frame's id.
+std::int64_t Database::Impl::check_append(const Detector& detector, const Result& result,
+                                          const std::string& name, std::int64_t frame) const {
   // The image's name (a path, as lsgd run stores it): no NUL, which no path
   // holds, and not longer than a line of a list file.
   if (name.find('\0') != std::string::npos) {
-    internal::throw_invalid("database ", m.path, ": the frame's name '", name.substr(0, name.find('\0')),
+    internal::throw_invalid("database ", path, ": the frame's name '", name.substr(0, name.find('\0')),
                             "\\0...' has a NUL character inside: no image has such a name");
   }
   if (static_cast<std::int64_t>(name.size()) > kMaxLineBytes) {
-    internal::throw_invalid("database ", m.path, ": the frame's name is ", name.size(),
+    internal::throw_invalid("database ", path, ": the frame's name is ", name.size(),
                             " bytes, more than ", kMaxLineBytes, " ('", name.substr(0, 40), "...')");
   }
-  if (detector.size() == m.frames) {
-    internal::throw_invalid("database ", m.path, ": every frame of the detector (", m.frames,
+  if (detector.size() == frames) {
+    internal::throw_invalid("database ", path, ": every frame of the detector (", frames,
                             ") is stored already: append each frame once, right after process()");
   }
-  if (detector.size() != m.frames + 1) {
-    internal::throw_invalid("database ", m.path, ": append from a detector holding ",
-                            detector.size(), " frames, but the database holds ", m.frames,
+  if (detector.size() != frames + 1) {
+    internal::throw_invalid("database ", path, ": append from a detector holding ",
+                            detector.size(), " frames, but the database holds ", frames,
                             " (append each frame right after process())");
   }
   // The frame's id is the detector's (Detector::process(frame, id)): a
@@ -127,23 +127,32 @@ void Database::append(const Detector& detector, const Result& result, std::int64
   // (Result::frame may be a run's number, eval::run_detector) is the
   // detector's last; another detector's or a query's names another frame.
   if (result.id != own) {
-    internal::throw_invalid("database ", m.path, ": the Result is of frame id ", result.id,
+    internal::throw_invalid("database ", path, ": the Result is of frame id ", result.id,
                             ", not of the detector's last frame (id ", own,
                             "): append the Result this detector's process() just returned");
   }
   if (frame < -1) {
-    internal::throw_invalid("database ", m.path, ": frame id ", frame, " is negative (-1: the "
+    internal::throw_invalid("database ", path, ": frame id ", frame, " is negative (-1: the "
                             "detector's id of its last frame)");
   }
   if (frame >= 0 && frame != own) {
-    internal::throw_invalid("database ", m.path, ": frame id ", frame, " is not the detector's id ", own,
+    internal::throw_invalid("database ", path, ": frame id ", frame, " is not the detector's id ", own,
                             " of its last frame (give the id to Detector::process)");
   }
   frame = own;
-  if (frame <= m.last_frame || frame > kMaxFrameId) {
-    internal::throw_invalid("database ", m.path, ": frame id ", frame, " must be above the last ",
-                            "stored id ", m.last_frame, " and at most ", kMaxFrameId);
+  if (frame <= last_frame || frame > kMaxFrameId) {
+    internal::throw_invalid("database ", path, ": frame id ", frame, " must be above the last ",
+                            "stored id ", last_frame, " and at most ", kMaxFrameId);
   }
+  return frame;
+}
+
+void Database::append(const Detector& detector, const Result& result, std::int64_t session,
+                      const std::string& name, std::int64_t frame) {
+  Impl& m = *impl_;
+  m.check_writable();
+  m.check_session(session);
+  frame = m.check_append(detector, result, name, frame);
   const std::string yaml = to_yaml(detector.options());
   if (yaml != m.checked_yaml) {
     check_compatible(detector.options());

@@ -250,9 +250,60 @@ TEST(DatabaseLog, AnotherDatabasesLogIsRefusedSayingToMoveItAway) {
   EXPECT_EQ(read_bytes(a), before);
   // B's own log is B's.
   EXPECT_EQ(Database::open(b, Database::Mode::kReadOnly).frames(), 40);
+  // Through a symbolic link too: SQLite resolves the link and keeps the log
+  // beside the target, so the checks look there (they looked for LINK-wal,
+  // found none, and a writer through the link took in B's frames).
+  const std::string link = fs::path(a).parent_path().string() + "/link.db";
+  fs::create_symlink(a, link);
+  for (const auto mode : {Database::Mode::kReadOnly, Database::Mode::kReadWrite}) {
+    const std::string m = test::message_of<IoError>([&] { Database::open(link, mode); });
+    EXPECT_NE(m.find("'" + fs::canonical(a).string() + "-wal' is the write-ahead log of another database"),
+              std::string::npos) << m;
+  }
+  EXPECT_EQ(read_bytes(a), before);
   fs::rename(a + "-wal", a + "-wal.b");
   fs::remove(a + "-shm");
   EXPECT_EQ(Database::open(a, Database::Mode::kReadOnly).frames(), 32);
+  EXPECT_EQ(Database::open(link, Database::Mode::kReadOnly).frames(), 32);
+  // A link is no name to create a database at, and a link to nothing names itself.
+  EXPECT_NE(test::message_of<IoError>([&] { Database::create(link, DetectorOptions{}); }).find("symbolic link"),
+            std::string::npos);
+  const std::string dangling = fs::path(a).parent_path().string() + "/dangling.db";
+  fs::create_symlink(fs::path(a).parent_path() / "nothing.db", dangling);
+  for (const auto& attempt : std::vector<std::function<void()>>{
+           [&] { Database::create(dangling, DetectorOptions{}); }, [&] { Database::open(dangling); }}) {
+    const std::string m = test::message_of<IoError>(attempt);
+    EXPECT_NE(m.find("symbolic link to a file that cannot be reached"), std::string::npos) << m;
+  }
+  EXPECT_FALSE(fs::exists(fs::path(a).parent_path() / "nothing.db"));
+}
+
+// Names SQLite would read as something else: ":memory:" (a private database
+// in memory) and "file:..." (a URI) given as relative paths are files like
+// any other (lsgd created the file, then SQLite opened another database).
+TEST(DatabaseNames, NamesSqliteWouldInterpretAreFiles) {
+  const fs::path folder = fs::path(LSGD_TEST_TMP) / ("sqlite_names_" + std::to_string(::getpid()));
+  fs::remove_all(folder);
+  fs::create_directories(folder);
+  const fs::path was = fs::current_path();
+  fs::current_path(folder);
+  DetectorOptions o;
+  o.search.min_gap = 2;
+  o.verification.geometric_options.max_features = 32;
+  for (const std::string name : {":memory:", "file:a.db", "file:b.db?mode=memory"}) {
+    SCOPED_TRACE(name);
+    {
+      Database db = Database::create(name, o);
+      Detector d(o);
+      for (int i = 0; i < 3; ++i) db.append(d, d.process(frame(i)), 0);
+    }
+    EXPECT_TRUE(fs::is_regular_file(folder / name));
+    EXPECT_EQ(Database::open(name, Database::Mode::kReadOnly).frames(), 3);
+    EXPECT_EQ(Database::open(name).frames(), 3);
+  }
+  EXPECT_FALSE(fs::exists(folder / "a.db"));
+  fs::current_path(was);
+  fs::remove_all(folder);
 }
 
 }  // namespace

@@ -74,8 +74,10 @@ void check_file(const std::string& path, bool writable) {
 
 }  // namespace
 
-Database Database::open(const std::string& path, Mode mode) {
+Database Database::open(const std::string& given, Mode mode) {
   const bool writable = mode == Mode::kReadWrite;
+  if (given.empty()) throw InvalidArgument("the database path is empty: give a file name");
+  const std::string path = database_file(given, false);
   check_path_length(path, path);
   check_file(path, writable);
   auto impl = std::make_unique<Impl>();
@@ -166,7 +168,7 @@ void Database::Impl::open_sqlite(bool writer_active) {
   }
   const int flags = writable ? SQLITE_OPEN_READWRITE
                              : SQLITE_OPEN_READONLY | (immutable ? SQLITE_OPEN_URI : 0);
-  const std::string name = immutable ? immutable_uri(path) : path;
+  const std::string name = immutable ? immutable_uri(path) : sqlite_file_name(path);
   if (sqlite3_open_v2(name.c_str(), &db, flags, nullptr) != SQLITE_OK) {
     io_error(path, "cannot open (", sqlite_message(db), ")");
   }
@@ -233,6 +235,7 @@ void Database::Impl::start_writing() {
 Database Database::create(const std::string& path, const DetectorOptions& options) {
   options.check();
   if (path.empty()) throw InvalidArgument("the database path is empty: give a file name");
+  database_file(path, true);  // a symbolic link is refused
   struct stat st;
   if (::stat(path.c_str(), &st) == 0) io_error(path, "already exists");
   check_companions(path);
@@ -251,7 +254,7 @@ Database Database::create(const std::string& path, const DetectorOptions& option
   {
     Impl impl;  // closes the temporary database on every path
     impl.path = path;
-    if (sqlite3_open_v2(tmp.c_str(), &impl.db, SQLITE_OPEN_READWRITE | SQLITE_OPEN_CREATE,
+    if (sqlite3_open_v2(sqlite_file_name(tmp).c_str(), &impl.db, SQLITE_OPEN_READWRITE | SQLITE_OPEN_CREATE,
                         nullptr) != SQLITE_OK) {
       const std::string message = sqlite_message(impl.db);
       io_error(path, "cannot create ", tmp, " (", message, ")");

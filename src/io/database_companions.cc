@@ -14,6 +14,7 @@
 #include <cctype>
 #include <cstdio>
 #include <cstdlib>
+#include <cstring>
 #include <optional>
 #include <random>
 #include <string>
@@ -100,6 +101,27 @@ std::string immutable_uri(const std::string& path) {
   return uri + "?immutable=1";
 }
 
+std::string sqlite_file_name(const std::string& path) {
+  return !path.empty() && path[0] != '/' ? "./" + path : path;
+}
+
+std::string database_file(const std::string& path, bool creating) {
+  struct stat st;
+  if (::lstat(path.c_str(), &st) != 0 || !S_ISLNK(st.st_mode)) return path;
+  char* target = ::realpath(path.c_str(), nullptr);
+  if (target == nullptr) {
+    const int error = errno;
+    io_error(path, "is a symbolic link to a file that cannot be reached (", std::strerror(error),
+             "): give the database's own file", creating ? " (nothing was created)" : "");
+  }
+  const std::string file(target);
+  std::free(target);
+  if (creating) {
+    io_error(path, "already exists (a symbolic link to '", file, "')");
+  }
+  return file;
+}
+
 std::string new_database_id() {
   std::random_device random;
   static const char kHex[] = "0123456789abcdef";
@@ -120,7 +142,7 @@ std::optional<std::string> read_database_id(const std::string& path, const std::
   sqlite3* db = nullptr;
   const int flags = SQLITE_OPEN_READONLY | (uri ? SQLITE_OPEN_URI : 0);
   const std::unique_ptr<sqlite3, int (*)(sqlite3*)> owner(
-      sqlite3_open_v2(name.c_str(), &db, flags, nullptr) == SQLITE_OK ? db : (sqlite3_close(db), nullptr),
+      sqlite3_open_v2((uri ? name : sqlite_file_name(name)).c_str(), &db, flags, nullptr) == SQLITE_OK ? db : (sqlite3_close(db), nullptr),
       sqlite3_close);
   if (!owner) io_error(path, "cannot open (", uri ? "the file alone" : "with its log", ")");
   sqlite3_busy_timeout(db, 5000);

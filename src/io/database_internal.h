@@ -537,6 +537,16 @@ void check_rollback_journal(const std::string& path, bool creating);
 bool companions_cannot_be_created(const std::string& path);
 // SQLite's URI opening `path` as immutable (database_companions.cc).
 std::string immutable_uri(const std::string& path);
+// The name SQLite is given for `path`: a relative path as ./path, so that
+// SQLite never reads ":memory:" (a private in-memory database) or
+// "file:..." (a URI) into a file's name.
+std::string sqlite_file_name(const std::string& path);
+// The file a database at `path` is: the target of a symbolic link (SQLite
+// resolves the link and keeps the log beside the target, so lsgd checks and
+// opens the companions there too), else `path`. A link to nothing is an
+// IoError naming both; `creating`: a link at all is refused (a database is
+// created at its own name).
+std::string database_file(const std::string& path, bool creating);
 // A new database's meta database_id: 32 random hex digits. The writer
 // writes meta in the first transaction of every log (database_write.cc), so a log
 // carries the id of the database that wrote it.

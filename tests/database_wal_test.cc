@@ -204,6 +204,35 @@ TEST(DatabaseWal, ABackupBesideANewerLogSaysToMoveTheLogAway) {
   EXPECT_NO_THROW(db.verify());
 }
 
+// The other way round: a log copied before its file (a backup tool that
+// copies FILE-wal first, while the writer runs on). SQLite replays the old
+// log's pages over the newer file without damage: 130 frames would read as
+// 45, and the next writer would make it so. Refused by the checkpoint count
+// each log carries; readers and writers alike, nothing changed.
+TEST(DatabaseWal, ALogOlderThanItsFileIsRefused) {
+  const std::string live = temp_path("older_log_live"), path = temp_path("older_log");
+  DetectorOptions o = options(kExhaustiveSearch, "temporal");
+  o.search.min_gap = 2;
+  {
+    Database db = Database::create(live, o);
+    Detector d(o);
+    run(d, 0, 45, &db);  // frames 32 .. 44 in the log
+    fs::copy_file(live + "-wal", path + "-wal");
+    run(d, 45, 130, &db);  // checkpoints at 64 and 96 (and 128)
+    fs::copy_file(live, path);
+  }
+  const std::string before = read_bytes(path) + read_bytes(path + "-wal");
+  for (const auto mode : {Database::Mode::kReadOnly, Database::Mode::kReadWrite}) {
+    const std::string m = message_of<IoError>([&] { Database::open(path, mode); });
+    EXPECT_NE(m.find("'" + path + "-wal' is older than the file"), std::string::npos) << m;
+    EXPECT_NE(m.find("move '" + path + "-wal'"), std::string::npos) << m;
+  }
+  EXPECT_EQ(read_bytes(path) + read_bytes(path + "-wal"), before);
+  fs::rename(path + "-wal", path + "-wal.older");
+  fs::remove(path + "-shm");
+  EXPECT_GE(Database::open(path, Database::Mode::kReadOnly).frames(), 128);
+}
+
 // The log's companions must be files of their own: a folder, a FIFO or a
 // link where SQLite keeps them is refused, naming it, before anything is
 // created or read.

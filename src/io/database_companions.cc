@@ -20,6 +20,7 @@
 #include <string>
 #include <utility>
 
+#include "internal/numbers.h"
 #include "io/database_internal.h"
 
 #include <memory>
@@ -135,10 +136,10 @@ std::string new_database_id() {
 
 namespace {
 
-// meta's database_id as `name` reads it (a path, or an immutable URI: the
-// file alone, without its log); none for a file written before ids.
-std::optional<std::string> read_database_id(const std::string& path, const std::string& name,
-                                            bool uri) {
+// meta's `key` as `name` reads it (a path, or an immutable URI: the file
+// alone, without its log); none for a file written before the key.
+std::optional<std::string> read_meta(const std::string& path, const std::string& name, bool uri,
+                                     const char* key) {
   sqlite3* db = nullptr;
   const int flags = SQLITE_OPEN_READONLY | (uri ? SQLITE_OPEN_URI : 0);
   const std::unique_ptr<sqlite3, int (*)(sqlite3*)> owner(
@@ -147,28 +148,48 @@ std::optional<std::string> read_database_id(const std::string& path, const std::
   if (!owner) io_error(path, "cannot open (", uri ? "the file alone" : "with its log", ")");
   sqlite3_busy_timeout(db, 5000);
   sqlite3_stmt* raw = nullptr;
-  if (sqlite3_prepare_v2(db, "SELECT value FROM meta WHERE key = 'database_id'", -1, &raw, nullptr) !=
-      SQLITE_OK) {
+  if (sqlite3_prepare_v2(db, "SELECT value FROM meta WHERE key = ?", -1, &raw, nullptr) != SQLITE_OK) {
     sqlite3_finalize(raw);
     return std::nullopt;  // damage: the open's own checks name it
   }
   const std::unique_ptr<sqlite3_stmt, int (*)(sqlite3_stmt*)> stmt(raw, sqlite3_finalize);
+  sqlite3_bind_text(stmt.get(), 1, key, -1, SQLITE_STATIC);
   if (sqlite3_step(stmt.get()) != SQLITE_ROW) return std::nullopt;
   const unsigned char* text = sqlite3_column_text(stmt.get(), 0);
   return text ? std::optional<std::string>(reinterpret_cast<const char*>(text)) : std::nullopt;
 }
 
+// meta's checkpoint count as `name` reads it; -1 for none.
+std::int64_t read_checkpoints(const std::string& path, const std::string& name, bool uri) {
+  const std::optional<std::string> text = read_meta(path, name, uri, "checkpoints");
+  std::int64_t count = -1;
+  if (!text || !internal::parses_as(*text, count)) return -1;
+  return count;
+}
+
 }  // namespace
 
 void check_log_belongs(const std::string& path) {
-  const std::optional<std::string> own = read_database_id(path, immutable_uri(path), true);
+  const std::optional<std::string> own = read_meta(path, immutable_uri(path), true, "database_id");
   if (!own) return;  // written before database ids: nothing to compare
-  const std::optional<std::string> logged = read_database_id(path, path, false);
+  const std::optional<std::string> logged = read_meta(path, path, false, "database_id");
   if (logged && *logged != *own) {
     io_error(path, "'", path, "-wal' is the write-ahead log of another database (", *logged,
              "; this file is ", *own, "): SQLite would replay that database's frames into this "
              "one. Nothing was changed; move '", path, "-wal' and '", path, "-shm' away to open "
              "the file as of its last checkpoint");
+  }
+  // The log began after the file's last checkpoint, or later: one that began
+  // before it (FILE-wal copied before FILE) would replay its old pages over
+  // the file's newer frames.
+  const std::int64_t file = read_checkpoints(path, immutable_uri(path), true);
+  const std::int64_t log = read_checkpoints(path, path, false);
+  if (file >= 0 && log >= 0 && log < file) {
+    io_error(path, "'", path, "-wal' is older than the file: it was written after checkpoint ",
+             log, " of this database, and the file holds checkpoint ", file, " (the log copied "
+             "before the file?): SQLite would replay its old pages over newer frames. Nothing was "
+             "changed; move '", path, "-wal' and '", path, "-shm' away to open the file as of its "
+             "last checkpoint, or copy the file and its log together again");
   }
 }
 

@@ -1,5 +1,6 @@
 #include "lsgd/io/database.h"
 
+#include "internal/numbers.h"
 #include "io/database_internal.h"
 
 
@@ -406,6 +407,13 @@ void Database::Impl::checkpoint(const char* state) {
     const std::map<std::string, std::string> saved = meta;
     meta["writer"] = state;
     meta["checkpoint_frames"] = std::to_string(frames);
+    // Counts every checkpoint: a log carries the count it began after, so a
+    // log older than the file (a backup copying FILE-wal before FILE) is told
+    // apart (check_log_belongs).
+    const auto count = meta.find("checkpoints");
+    std::int64_t done = 0;
+    if (count != meta.end() && !internal::parses_as(count->second, done)) done = 0;
+    meta["checkpoints"] = std::to_string(done + 1);
     try {
       write_meta();
     } catch (...) {

@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "lsgd/error.h"
+#include "lsgd/eval/results_csv.h"
 #include "test_util.h"
 
 namespace lsgd::eval {
@@ -141,6 +142,35 @@ TEST_F(DetectionsTest, ReadsLsgdRunCsvUsingTheCandidateFrame) {
   // loop_frame says what lsgd declared: frame 2 only.
   EXPECT_FALSE(at(records, 1).loop);
   EXPECT_TRUE(at(records, 2).loop);
+}
+
+// Image names with a newline or a lone CR (both legal in a Linux file name)
+// in lsgd run's own CSV: written quoted, read back as one row each, and a
+// resumed run's trim() keeps the rows the database holds (it took the
+// newline for a row's end and cut every row after it; a lone CR was written
+// unquoted and ended the row for the readers).
+TEST_F(DetectionsTest, NamesWithNewlinesOrCarriageReturnsStayInTheirRow) {
+  const std::string path = (dir_ / "run.csv").string();
+  const std::vector<std::string> names = {"a\nb.png", "c\rd.png", "e.png", "f\r\ng,\".png"};
+  {
+    CsvWriter csv(path);
+    for (std::size_t i = 0; i < names.size(); ++i) {
+      Result r;
+      r.frame = static_cast<std::int64_t>(i);
+      r.best = {i > 0 ? 0 : -1, 0.5};
+      csv.write(r, names[i]);
+    }
+  }
+  EXPECT_EQ(read_detections(path, 4).size(), 4u);
+  EXPECT_EQ(at(read_detections(path, 4), 3).reported.frame, 0);
+  const CsvWriter::Trim trim = CsvWriter::trim(path, 2);
+  EXPECT_EQ(trim.last_row, 2);
+  EXPECT_EQ(trim.dropped, 1);
+  EXPECT_FALSE(trim.partial);
+  const auto kept = read_detections(path, 4);
+  EXPECT_EQ(kept.size(), 3u);
+  EXPECT_EQ(at(kept, 3).reported.frame, -1);  // cut
+  EXPECT_EQ(at(kept, 2).reported.frame, 0);
 }
 
 // Frame ids are bounded before the records are allocated.

@@ -1,5 +1,6 @@
 #include "lsgd/eval/results_csv.h"
 
+#include <algorithm>
 #include <charconv>
 #include <cmath>
 #include <filesystem>
@@ -28,7 +29,8 @@ std::string match_csv(const std::vector<TopMatch>& matches) {
 }
 
 std::string csv_field(const std::string& text) {
-  if (text.find_first_of(",\"\n") == std::string::npos) return text;
+  // A lone CR ends a line for every reader of text here (io::read_line): quoted too.
+  if (text.find_first_of(",\"\n\r") == std::string::npos) return text;
   std::string out = "\"";
   for (char c : text) out += c == '"' ? std::string("\"\"") : std::string(1, c);
   return out + "\"";
@@ -109,7 +111,14 @@ CsvWriter::Trim CsvWriter::trim(const std::string& path, std::int64_t last_frame
   std::int64_t keep = static_cast<std::int64_t>(line.size()) + 1;  // bytes kept
   bool cutting = false;
   while (std::getline(in, line)) {
-    const bool complete = !in.eof();  // the line ended with '\n'
+    bool complete = !in.eof();  // the line ended with '\n'
+    // A quoted image name may hold a newline (csv_field): the row goes on
+    // while its quotes are open.
+    std::string more;
+    while (complete && std::count(line.begin(), line.end(), '"') % 2 != 0 && std::getline(in, more)) {
+      line += '\n' + more;
+      complete = !in.eof();
+    }
     std::int64_t frame = -1;
     const auto comma = line.find(',');
     try {

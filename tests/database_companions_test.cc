@@ -7,6 +7,7 @@
 #include <errno.h>
 #include <fcntl.h>
 #include <gtest/gtest.h>
+#include <sqlite3.h>
 #include <sched.h>
 #include <sys/mount.h>
 #include <sys/resource.h>
@@ -276,6 +277,33 @@ TEST(DatabaseLog, AnotherDatabasesLogIsRefusedSayingToMoveItAway) {
     EXPECT_NE(m.find("symbolic link to a file that cannot be reached"), std::string::npos) << m;
   }
   EXPECT_FALSE(fs::exists(fs::path(a).parent_path() / "nothing.db"));
+}
+
+// Another program's SQLite database in WAL mode, with a log not yet in its
+// file: refused, and left byte for byte as it was (SQLite's checkpoint when
+// the connection closed moved the log into the file and deleted it).
+TEST(DatabaseNames, AnotherProgramsDatabaseIsLeftAsItWasFound) {
+  const std::string folder = std::string(LSGD_TEST_TMP) + "/other_program_" + std::to_string(::getpid());
+  fs::remove_all(folder);
+  fs::create_directories(folder);
+  const std::string live = folder + "/live.db", path = folder + "/app.db";
+  sqlite3* db = nullptr;
+  ASSERT_EQ(sqlite3_open(live.c_str(), &db), SQLITE_OK);
+  ASSERT_EQ(sqlite3_exec(db, "PRAGMA journal_mode=WAL; PRAGMA wal_autocheckpoint=0; CREATE TABLE t(a);",
+                         nullptr, nullptr, nullptr), SQLITE_OK);
+  for (int i = 0; i < 20; ++i) {
+    ASSERT_EQ(sqlite3_exec(db, "INSERT INTO t VALUES (1)", nullptr, nullptr, nullptr), SQLITE_OK);
+  }
+  fs::copy_file(live, path);
+  fs::copy_file(live + "-wal", path + "-wal");
+  sqlite3_close(db);
+  const std::string before = read_bytes(path) + "|" + read_bytes(path + "-wal");
+  for (const auto mode : {Database::Mode::kReadWrite, Database::Mode::kReadOnly}) {
+    const std::string m = test::message_of<FormatError>([&] { Database::open(path, mode); });
+    EXPECT_NE(m.find("not an lsgd database"), std::string::npos) << m;
+    EXPECT_EQ(read_bytes(path) + "|" + read_bytes(path + "-wal"), before);
+  }
+  fs::remove_all(folder);
 }
 
 // Names SQLite would read as something else: ":memory:" (a private database

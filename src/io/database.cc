@@ -93,6 +93,8 @@ Database Database::open(const std::string& given, Mode mode) {
   const wal::WalCheck log = impl->check_log(writer_active);
   impl->open_sqlite(writer_active);
   impl->load_header();
+  // An lsgd database: closing it empties and removes its log as before.
+  sqlite3_db_config(impl->db, SQLITE_DBCONFIG_NO_CKPT_ON_CLOSE, 0, nullptr);
   impl->note_last_writer(writer_active, log);
   if (writable && impl->format < kDatabaseFormatVersion) impl->upgrade();
   if (writable) impl->start_writing();
@@ -174,6 +176,12 @@ void Database::Impl::open_sqlite(bool writer_active) {
   }
   sqlite3_extended_result_codes(db, 1);
   sqlite3_busy_timeout(db, 5000);
+  // No checkpoint when the connection closes until the file is known to be
+  // an lsgd database (Database::open): a file refused on the way (another
+  // program's SQLite database, a damaged header) is left as it was found.
+  // SQLite's checkpoint on close moved another program's log into its file
+  // and deleted it before the refusal.
+  sqlite3_db_config(db, SQLITE_DBCONFIG_NO_CKPT_ON_CLOSE, 1, nullptr);
 }
 
 void Database::Impl::note_last_writer(bool writer_active, const wal::WalCheck& log) {

@@ -240,6 +240,25 @@ TEST(Cli, IntegerFlagsBeyond64BitsOrBelowZeroAreRefusedAsTyped) {
   EXPECT_EQ(within.err.find("far beyond"), std::string::npos) << within.err;
 }
 
+// An empty value (an unset shell variable) names nothing: refused, naming
+// the flag, where it was read as 0 (eval's required --min-gap) or the default.
+TEST(Cli, EmptyValuesAreRefusedNamingTheFlag) {
+  const std::pair<const char*, const char*> cases[] = {
+      {"eval --detections /dev/null --gt /dev/null --min-gap ''", "--min-gap: an empty value"},
+      {"run --sequence s.txt --last ''", "--last: an empty value"},
+      {"run --sequence s.txt --every ''", "--every: an empty value"},
+      {"options --threshold ''", "--threshold: an empty value"},
+      {"options --verify ''", "--verify: an empty value"},
+      {"demo --output ''", "--output: an empty"},
+  };
+  for (const auto& [args, expected] : cases) {
+    const CmdResult r = lsgd(args);
+    EXPECT_EQ(r.code, 1) << args;
+    EXPECT_NE(r.err.find(expected), std::string::npos) << args << ": " << r.err;
+    EXPECT_EQ(lines_of(r.err), 1) << r.err;
+  }
+}
+
 TEST(Cli, MissingSequenceFailsWithOneLineNamingIt) {
   const CmdResult r = lsgd("run --sequence /nonexistent/lsgd-seq");
   EXPECT_NE(r.code, 0);

@@ -87,6 +87,21 @@ void refuse_integer_overflow(CLI::App& app) {
   for (CLI::App* sub : app.get_subcommands({})) refuse_integer_overflow(*sub);
 }
 
+// An empty value ('' in a shell, often an unset variable) names no file and
+// no number: refused, where CLI11 read it as 0 (`eval --min-gap ''`
+// scored with min gap 0) or as the default.
+void refuse_empty_values(CLI::App& app) {
+  const CLI::Validator nonempty(
+      [](std::string& text) -> std::string {
+        return text.empty() ? "an empty value: give one, or leave the flag out" : std::string();
+      },
+      "", "not empty");
+  for (CLI::Option* o : app.get_options()) {
+    if (o->get_items_expected_max() > 0 && o->get_expected_min() != 0) o->check(nonempty);
+  }
+  for (CLI::App* sub : app.get_subcommands({})) refuse_empty_values(*sub);
+}
+
 // A usage error as one message: unknown commands and misspelt options name
 // the nearest right one.
 std::string usage_message(CLI::App& app, const CLI::ParseError& e, int argc, char** argv) {
@@ -151,6 +166,7 @@ int main(int argc, char** argv) {
   lsgd::cli::register_options(app);
   hide_sentinel_defaults(app);
   refuse_integer_overflow(app);
+  refuse_empty_values(app);
   // The detector runs on the calling thread; OpenCV's own thread pool (ORB,
   // RANSAC and resizing in the geometric stage) is off too, so that every
   // time the tool reports is single-thread and runs are repeatable. `lsgd

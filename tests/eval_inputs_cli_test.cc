@@ -173,4 +173,26 @@ TEST(EvalCli, RunReadsKittiAndFabmapLayouts) {
   EXPECT_NE(r.out.find("\n0," + (images / "0002.jpg").string()), std::string::npos) << r.out;
   EXPECT_NE(r.out.find("\n1," + (images / "0006.jpg").string()), std::string::npos) << r.out;
 }
+// lsgd match whose every query image is skipped matches nothing: an error,
+// no CSV of a header alone (it exited 0), and the skips listed as run lists
+// them, the first 100 and then a count (it printed one line for each).
+TEST(EvalCli, MatchWithNoReadableQueryImageIsAnError) {
+  const fs::path dir = kTmp / "match_no_query";
+  std::string refs, queries;
+  for (int i = 0; i < 3; ++i) {
+    write_image(dir / ("r" + std::to_string(i) + ".png"), i);
+    refs += (dir / ("r" + std::to_string(i) + ".png")).string() + "\n";
+  }
+  for (int i = 0; i < 150; ++i) queries += (dir / ("missing" + std::to_string(i) + ".png")).string() + "\n";
+  write_text(dir / "refs.txt", refs);
+  write_text(dir / "queries.txt", queries);
+  const CmdResult r = lsgd("match --reference " + q(dir / "refs.txt") + " --query " + q(dir / "queries.txt") +
+                           " --output " + q(dir / "m.csv"));
+  EXPECT_EQ(r.code, 1) << r.err;
+  EXPECT_NE(r.err.find("no image could be read (see above); 150 skipped"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("only the first 100 are listed"), std::string::npos) << r.err;
+  EXPECT_LE(lines_of(r.err), 102) << r.err;
+  EXPECT_FALSE(fs::exists(dir / "m.csv"));
+}
+
 }  // namespace

@@ -64,7 +64,14 @@ Described describe_all(Detector& detector, const io::Sequence& sequence, const c
   const auto skip = [&](std::int64_t i, const std::string& why) {
     const std::string message = std::string(flag) + " image " + std::to_string(i) + ": " + why;
     if (strict) throw InvalidArgument(message);
-    std::cerr << "lsgd match: skipping " << message << " (--strict stops here instead)\n";
+    // The first kListedSkips of a traverse each get a line (as run's); the
+    // summary counts them all.
+    if (out.skipped < kListedSkips) {
+      std::cerr << "lsgd match: skipping " << message << " (--strict stops here instead)\n";
+    } else if (out.skipped == kListedSkips) {
+      std::cerr << "lsgd match: more " << flag << " images skipped; only the first " << kListedSkips
+                << " are listed (the count is in the summary)\n";
+    }
     ++out.skipped;
   };
   for (std::int64_t i = 0; i < source.frames; ++i) {
@@ -142,6 +149,10 @@ void match(const MatchArgs& args) {
   const Described queries = describe_all(detector, query, "--query", strict, width, height);
   if (refs.descriptors.empty()) {
     throw InvalidArgument("--reference " + args.reference + ": no image could be read (see above)");
+  }
+  if (queries.descriptors.empty()) {  // nothing to match: no CSV of a header alone
+    throw InvalidArgument("--query " + args.query + ": no image could be read (see above); " +
+                          std::to_string(queries.skipped) + " skipped");
   }
   std::vector<DescriptorView> views;
   for (const Descriptor& d : refs.descriptors) views.push_back(d.view());

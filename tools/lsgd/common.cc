@@ -215,7 +215,6 @@ FrameRun run_frames(Detector& detector, const eval::FrameSource& source, const s
       [&](std::int64_t frame, const std::string& name, const std::string& error) {
         // The first kListedSkips each get a line; a list of half a million
         // missing files printed 43 MB over 30 s. The summary counts them all.
-        constexpr std::int64_t kListedSkips = 100;
         if (report_skips && run.skipped < kListedSkips) {
           std::cerr << "lsgd: skipped frame " + std::to_string(frame) + " (" + name + "): " + error + advice + "\n";
         } else if (report_skips && run.skipped == kListedSkips) {

@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "lsgd/error.h"
+#include "lsgd/limits.h"
 #include "lsgd/options.h"
 #include "test_util.h"
 
@@ -271,6 +272,17 @@ TEST(ParseConfig, StreamsThatHangYamlCppAreFormatErrors) {
   expect_error<FormatError>("search: {}\n,\n", {kSource, "invalid YAML"});
 }
 
+// Streams of many nodes are refused from the parser's events, before
+// yaml-cpp builds a node: "[,,,...]" of 1 MB held 550 MB of nodes.
+TEST(ParseConfig, MoreNodesThanAConfigCanHaveAreRefusedFirst) {
+  expect_error<FormatError>("[" + std::string(20000, ',') + "]", {kSource, "more than 10000 YAML nodes"});
+  std::string keys = "{";
+  for (int i = 0; i < 6000; ++i) keys += "a" + std::to_string(i) + ",";
+  expect_error<FormatError>(keys + "}", {kSource, "more than 10000 YAML nodes"});
+  // Every option of the detector, nested, is far below.
+  EXPECT_NO_THROW(parse_config(to_yaml(DetectorOptions{}), kSource));
+}
+
 // ---------------------------------------------------------------- files
 
 class LoadConfigTest : public ::testing::Test {
@@ -307,6 +319,14 @@ TEST_F(LoadConfigTest, ErrorsNameTheFile) {
   } catch (const InvalidArgument& e) {
     EXPECT_NE(std::string(e.what()).find(path), std::string::npos) << e.what();
   }
+}
+
+// A config is at most 64 KiB (kMaxConfigBytes), read or not.
+TEST_F(LoadConfigTest, AFileBeyondTheConfigLimitIsRefusedUnread) {
+  const fs::path big = dir_ / "big.yaml";
+  std::ofstream(big) << "# " << std::string(static_cast<std::size_t>(kMaxConfigBytes), 'x') << "\n";
+  const std::string m = test::message_of<FormatError>([&] { load_config(big.string()); });
+  EXPECT_NE(m.find("more than the 65536 this lsgd reads"), std::string::npos) << m;
 }
 
 TEST_F(LoadConfigTest, MissingFileIsIoError) {

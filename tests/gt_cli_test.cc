@@ -150,10 +150,10 @@ TEST(GtCli, BadInputExitsNonZeroNamingTheFile) {
   EXPECT_NE(lsgd("gt").code, 0);  // a subcommand is required
   // A frame count or window out of range is said in words (no -1 sentinel,
   // no 309-digit bound), for gt and eval alike.
-  for (const std::string& bad : {"-5", "0", "1e3"}) {
+  for (const char* bad : {"-5", "0", "1e3"}) {
     r = lsgd("gt stats '" + pairs.string() + "' --frames " + bad);
     EXPECT_EQ(r.code, 1);
-    EXPECT_TRUE(contains(r.err, "'" + bad + "' is not a frame count from 1 to 10000000")) << r.err;
+    EXPECT_TRUE(contains(r.err, "'" + std::string(bad) + "' is not a frame count from 1 to 10000000")) << r.err;
     r = lsgd("eval --detections '" + pairs.string() + "' --gt '" + pairs.string() +
              "' --min-gap 0 --json /dev/null --frames " + bad);
     EXPECT_EQ(r.code, 1);

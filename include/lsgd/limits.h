@@ -31,8 +31,10 @@ constexpr std::int64_t kMaxImagePixels = std::int64_t{8192} * 6144;
 constexpr std::int64_t kMaxJpegCoefficientBytes = std::int64_t{256} << 20;
 // A temporal window, tolerance or frame step: 10^9 frames.
 constexpr std::int64_t kMaxWindowFrames = 1'000'000'000;
-// A YAML configuration file: 1 MiB.
-constexpr std::int64_t kMaxConfigBytes = std::int64_t{1} << 20;
+// A YAML configuration file: 64 KiB (a detector config with every option and
+// its comment is about 4 KiB; yaml-cpp holds a node in some 500 bytes, so a
+// MiB of empty items cost 550 MB before the first key was read).
+constexpr std::int64_t kMaxConfigBytes = std::int64_t{1} << 16;
 // One line of a text input (list file, ground truth, detections, poses,
 // times): 64 KiB (a path is at most 4,096 bytes on Linux).
 constexpr std::int64_t kMaxLineBytes = std::int64_t{1} << 16;

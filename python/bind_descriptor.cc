@@ -22,27 +22,59 @@ namespace lsgd::python {
 
 namespace {
 
+// The values of `array`, an array of integers each in [0, most], as T:
+// counts of another dtype or beyond T were cast silently (-1 became 65535,
+// 1e12 and NaN became 0) into a descriptor that compared as if real.
+template <typename T>
+std::vector<T> counts_of(const py::array& array, const char* name, std::int64_t most) {
+  const char kind = array.dtype().kind();
+  if (kind != 'u' && kind != 'i') {
+    throw lsgd::InvalidArgument(std::string(name) + " has dtype " + py::str(array.dtype()).cast<std::string>() +
+                                ": a descriptor's " + name + " are unsigned integer counts (as Descriptor." + name +
+                                " gives them)");
+  }
+  const auto values = py::array_t<std::int64_t, py::array::c_style | py::array::forcecast>::ensure(array);
+  if (!values) throw lsgd::InvalidArgument(std::string(name) + " is not an array of counts");
+  std::vector<T> out;
+  out.reserve(static_cast<std::size_t>(values.size()));
+  for (py::ssize_t i = 0; i < values.size(); ++i) {
+    const std::int64_t v = values.data()[i];
+    // A uint64 above 2^63 reads as negative here: refused as well.
+    if (v < 0 || v > most) {
+      throw lsgd::InvalidArgument(std::string(name) + " value " + std::to_string(v) + " at flat index " +
+                                  std::to_string(i) + " is outside 0 .. " + std::to_string(most));
+    }
+    out.push_back(static_cast<T>(v));
+  }
+  return out;
+}
+
 lsgd::Descriptor descriptor_from_arrays(py::array histograms, const py::object& pixels, py::tuple grid,
                                         double cell_pixels) {
   lsgd::Descriptor d;
   if (grid.size() != 2) throw lsgd::InvalidArgument("grid is (rows, cols)");
-  d.grid = {grid[0].cast<int>(), grid[1].cast<int>()};
-  if (d.grid.rows <= 0 || d.grid.cols <= 0 || d.grid.cells() > 1 << 20) {
-    throw lsgd::InvalidArgument("grid " + std::to_string(d.grid.rows) + " x " +
-                                std::to_string(d.grid.cols) + " is not a descriptor's grid");
+  long long rows = 0, cols = 0;
+  try {
+    rows = grid[0].cast<long long>();
+    cols = grid[1].cast<long long>();
+  } catch (const py::cast_error&) {
+    throw lsgd::InvalidArgument("grid " + py::repr(grid).cast<std::string>() + " is not (rows, cols) of integers");
   }
-  if (py::isinstance<py::array_t<std::uint8_t>>(histograms)) {
-    const auto h = py::array_t<std::uint8_t, py::array::c_style | py::array::forcecast>::ensure(histograms);
+  if (rows <= 0 || cols <= 0 || rows > (1 << 20) || cols > (1 << 20) || rows * cols > (1 << 20)) {
+    throw lsgd::InvalidArgument("grid " + std::to_string(rows) + " x " + std::to_string(cols) +
+                                " is not a descriptor's grid");
+  }
+  d.grid = {static_cast<int>(rows), static_cast<int>(cols)};
+  if (histograms.dtype().kind() == 'u' && histograms.dtype().itemsize() == 1) {  // compact: uint8
     d.storage = lsgd::HistogramStorage::kCompact;
-    d.compact.assign(h.data(), h.data() + h.size());
+    d.compact = counts_of<std::uint8_t>(histograms, "histograms", 255);
     d.cell_pixels = cell_pixels;
   } else {
-    const auto h = py::array_t<std::uint16_t, py::array::c_style | py::array::forcecast>::ensure(histograms);
-    if (!h) throw lsgd::InvalidArgument("histograms is not an array of counts");
-    d.hist.assign(h.data(), h.data() + h.size());
-    const auto p = py::array_t<std::uint32_t, py::array::c_style | py::array::forcecast>::ensure(pixels);
-    if (!p) throw lsgd::InvalidArgument("an exact descriptor needs its pixels per cell");
-    d.pixels.assign(p.data(), p.data() + p.size());
+    d.hist = counts_of<std::uint16_t>(histograms, "histograms", 65535);
+    if (pixels.is_none()) throw lsgd::InvalidArgument("an exact descriptor needs its pixels per cell");
+    const py::array p = py::array::ensure(pixels);
+    if (!p) throw lsgd::InvalidArgument("pixels is not an array of counts");
+    d.pixels = counts_of<std::uint32_t>(p, "pixels", 4294967295LL);
   }
   d.check_consistent("Descriptor.from_arrays");
   return d;

@@ -383,6 +383,22 @@ def test_describe_to_numpy_and_back():
         lsgd.Descriptor.from_arrays(x.histograms[:-1], x.pixels, grid=x.grid)
     with pytest.raises(lsgd.InvalidArgument, match="differ in grid or storage"):
         lsgd.similarity(x, c)
+    # Counts of another dtype, or beyond the counts' type, are refused (they
+    # were cast: -1 became 65535, 1e12 and NaN 0, and compared as if real);
+    # integer counts in range are taken whatever their dtype.
+    for histograms, pixels, message in [
+            (-x.histograms.astype(np.int32), x.pixels, "histograms value -"),
+            (np.full(x.histograms.shape, 1e12), x.pixels, "histograms has dtype float64"),
+            (x.histograms.astype(bool), x.pixels, "histograms has dtype bool"),
+            (x.histograms.astype(np.int64) + 70000, x.pixels, "outside 0 .. 65535"),
+            (x.histograms, -x.pixels.astype(np.int64), "pixels value -")]:
+        with pytest.raises(lsgd.InvalidArgument, match=message):
+            lsgd.Descriptor.from_arrays(histograms, pixels, grid=x.grid)
+    same = lsgd.Descriptor.from_arrays(x.histograms.astype(np.int64), x.pixels.astype(np.int64), grid=x.grid)
+    assert lsgd.similarity(x, same) == lsgd.similarity(x, x)
+    for grid in [(2 ** 31, 2 ** 31), (1.5, 2)]:
+        with pytest.raises(lsgd.InvalidArgument, match="grid"):
+            lsgd.Descriptor.from_arrays(x.histograms, x.pixels, grid=grid)
 
 
 def test_bare_new_is_refused_and_values_pickle_by_reduce():

@@ -272,6 +272,18 @@ TEST(ParseConfig, StreamsThatHangYamlCppAreFormatErrors) {
   expect_error<FormatError>("search: {}\n,\n", {kSource, "invalid YAML"});
 }
 
+// YAML's line breaks: LF, CRLF and a lone CR (a classic-Mac config was read
+// as one line: "unknown key 'search:  min_gap'").
+TEST(ParseConfig, EveryLineBreakReadsTheSameOptions) {
+  for (const char* text : {"search:\n  min_gap: 7\ndecision:\n  threshold: 5\n",
+                           "search:\r\n  min_gap: 7\r\ndecision:\r\n  threshold: 5\r\n",
+                           "search:\r  min_gap: 7\rdecision:\r  threshold: 5\r"}) {
+    const DetectorOptions o = parse_config(text, kSource);
+    EXPECT_EQ(o.search.min_gap, 7);
+    EXPECT_EQ(o.decision.threshold, 5.0);
+  }
+}
+
 // Streams of many nodes are refused from the parser's events, before
 // yaml-cpp builds a node: "[,,,...]" of 1 MB held 550 MB of nodes.
 TEST(ParseConfig, MoreNodesThanAConfigCanHaveAreRefusedFirst) {

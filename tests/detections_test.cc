@@ -171,6 +171,13 @@ TEST_F(DetectionsTest, NamesWithNewlinesOrCarriageReturnsStayInTheirRow) {
   EXPECT_EQ(kept.size(), 3u);
   EXPECT_EQ(at(kept, 3).reported.frame, -1);  // cut
   EXPECT_EQ(at(kept, 2).reported.frame, 0);
+  // Lines that are no row, added after the rows, are cut and counted apart
+  // (a resumed run said the database had lost frames for them).
+  std::ofstream(path, std::ios::app) << "garbage\nmore\n";
+  const CsvWriter::Trim other = CsvWriter::trim(path, 2);
+  EXPECT_EQ(other.dropped, 0);
+  EXPECT_EQ(other.other, 2);
+  EXPECT_EQ(read_detections(path, 4).size(), 3u);
 }
 
 // Frame ids are bounded before the records are allocated.

@@ -132,13 +132,15 @@ CsvWriter::Trim CsvWriter::trim(const std::string& path, std::int64_t last_frame
       continue;
     }
     cutting = true;
-    if (complete) {
+    if (!complete) {
+      trim.partial = true;
+    } else if (frame >= 0) {
       ++trim.dropped;
     } else {
-      trim.partial = true;
+      ++trim.other;  // not a row of lsgd run (a line added to the file)
     }
   }
-  if (trim.dropped > 0 || trim.partial) {
+  if (trim.dropped > 0 || trim.other > 0 || trim.partial) {
     in.close();
     std::error_code ec;
     std::filesystem::resize_file(path, static_cast<std::uintmax_t>(keep), ec);

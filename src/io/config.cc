@@ -298,10 +298,31 @@ std::vector<YAML::Node> load_documents(const std::string& text, const std::strin
 
 }  // namespace
 
+namespace {
+
+// YAML's line breaks are LF, CRLF and a lone CR (YAML 1.2, 5.4); yaml-cpp
+// takes the first two only (a classic-Mac config was one line: "unknown key
+// 'search:  min_gap'"), so a lone CR is read as LF, as every text file here.
+std::string with_lf_line_breaks(const std::string& text) {
+  if (text.find('\r') == std::string::npos) return text;
+  std::string out;
+  out.reserve(text.size());
+  for (std::size_t i = 0; i < text.size(); ++i) {
+    if (text[i] != '\r') {
+      out += text[i];
+    } else if (i + 1 >= text.size() || text[i + 1] != '\n') {
+      out += '\n';
+    }
+  }
+  return out;
+}
+
+}  // namespace
+
 DetectorOptions parse_config(const std::string& yaml_text, const std::string& source,
                              const DetectorOptions& base) {
   const std::string name = source.empty() ? "<config>" : source;
-  const std::vector<YAML::Node> documents = load_documents(yaml_text, name);
+  const std::vector<YAML::Node> documents = load_documents(with_lf_line_breaks(yaml_text), name);
   if (documents.size() > 1) {
     throw FormatError(concat(name, ": expected one YAML document, got ", documents.size()));
   }

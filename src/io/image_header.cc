@@ -131,20 +131,37 @@ void read_pnm(const Bytes& b, ImageHeader& h) {
     }
     return v;
   };
+  std::int64_t depth = kind == '6' ? 3 : 1;
   if (kind == '7') {
     for (int tokens = 0; tokens < 64; ++tokens) {
       const std::string t = token();
       if (t.empty() || t == "ENDHDR") break;
       if (t == "WIDTH") h.width = number(token());
       if (t == "HEIGHT") h.height = number(token());
+      if (t == "DEPTH") depth = number(token());
       if (t == "MAXVAL") h.pnm_maxval = static_cast<int>(std::min<std::int64_t>(number(token()), 1 << 20));
     }
+  } else {
+    h.width = number(token());
+    h.height = number(token());
+    if (kind != '1' && kind != '4') {
+      h.pnm_maxval = static_cast<int>(std::min<std::int64_t>(number(token()), 1 << 20));
+    }
+  }
+  // Binary pixels (P4 bits, P5, P6, P7) start after one white-space byte: a
+  // file with fewer than its pixels need is truncated, said here (OpenCV
+  // printed its own "can't read data" line for it on stderr before lsgd's).
+  if (kind < '4' || h.width <= 0 || h.height <= 0 || depth <= 0 || depth > 4 ||
+      h.width > (1 << 20) || h.height > (1 << 20)) {
     return;
   }
-  h.width = number(token());
-  h.height = number(token());
-  if (kind != '1' && kind != '4') {
-    h.pnm_maxval = static_cast<int>(std::min<std::int64_t>(number(token()), 1 << 20));
+  const std::int64_t sample = h.pnm_maxval > 255 ? 2 : 1;
+  const std::int64_t need = kind == '4' ? h.height * ((h.width + 7) / 8) : h.width * h.height * depth * sample;
+  const auto start = static_cast<std::int64_t>(std::min(at + 1, b.size()));
+  const std::int64_t have = static_cast<std::int64_t>(b.size()) - start;
+  if (have < need) {
+    h.damage = "its pixel data holds " + std::to_string(have) + " bytes, fewer than the " + std::to_string(need) +
+               " its " + std::to_string(h.width) + " x " + std::to_string(h.height) + " pixels need (truncated)";
   }
 }
 

@@ -463,9 +463,6 @@ cv::Mat read_image(const std::string& path, int width, int height) {
     throw FormatError(concat("image '", path, "' is a truncated or damaged JPEG: its ",
                              bytes.size(), " bytes end before the end-of-image marker"));
   }
-  if (!declared.damage.empty()) {
-    throw FormatError(concat("image '", path, "' is a damaged ", declared.format, ": ", declared.damage));
-  }
   if (declared.width <= 0 || declared.height <= 0) {
     throw FormatError(concat("image '", path, "' is a damaged ", declared.format,
                              ": its header gives no size"));
@@ -475,6 +472,10 @@ cv::Mat read_image(const std::string& path, int width, int height) {
     throw FormatError(concat("image '", path, "' declares ", declared.width, " x ", declared.height,
                              " pixels, more than lsgd reads (sides up to ", kMaxImageSide, ", ",
                              kMaxImagePixels, " pixels in all); nothing was decoded"));
+  }
+  // Damage the structure shows (after the size: a bomb is said as one).
+  if (!declared.damage.empty()) {
+    throw FormatError(concat("image '", path, "' is a damaged ", declared.format, ": ", declared.damage));
   }
   // Another size than the stored frames': refused before decoding (an
   // 8192 x 6144 PNG in a 160 x 120 run cost 313 MB and 1.5 s first).

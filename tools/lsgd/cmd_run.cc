@@ -75,8 +75,12 @@ std::unique_ptr<CsvWriter> continue_csv(const RunArgs& args, const io::SessionPl
     std::cerr << "lsgd: warning: " << args.output << " had rows for " << trim.dropped
               << " frames after frame " << plan.last_stored
               << ", the last one " << args.database
-              << " holds: the database lost frames it had committed (was its write-ahead log "
-                 "damaged or deleted?); they are processed again\n";
+              << " holds: frames forgotten (lsgd db forget), or committed frames lost (a damaged or "
+                 "deleted write-ahead log); they are processed again\n";
+  }
+  if (trim.other > 0) {
+    std::cerr << "lsgd: note: " << args.output << " had " << trim.other
+              << " lines that are no row of lsgd run after its rows; they are cut\n";
   }
   if (trim.last_row != plan.last_stored) {
     std::cerr << "lsgd: note: " << args.output << " ends at frame " << trim.last_row

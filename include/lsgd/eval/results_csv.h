@@ -46,6 +46,7 @@ class CsvWriter {
 
   struct Trim {
     std::int64_t dropped = 0;    // complete rows cut
+    std::int64_t other = 0;      // complete lines cut that are no row (no frame id first)
     bool partial = false;        // an incomplete last line was cut
     std::int64_t last_row = -1;  // frame of the last row kept; -1: none
     int version = kCsvNewest;    // of the header: 0 none of the columns below, 1 ranked_*, 2 status, 3 stamp

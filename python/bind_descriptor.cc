@@ -169,6 +169,19 @@ void bind_descriptor(py::module_& m) {
                                         " and " + std::to_string(y.size()) + " bytes, expected " +
                                         std::to_string(lsgd::kSignatureBytes));
           }
+          // Each cell's 8 bins sum to about 255 (rounded), or 0 for a cell without
+          // gradients: any other bytes are no signature (they scored -3).
+          for (const auto& [name, bytes] : {std::pair<const char*, const std::string*>{"a", &x}, {"b", &y}}) {
+            for (std::size_t cell = 0; cell < bytes->size() / 8; ++cell) {
+              int sum = 0;
+              for (std::size_t k = 0; k < 8; ++k) sum += static_cast<unsigned char>((*bytes)[cell * 8 + k]);
+              if (sum != 0 && (sum < 255 - 8 || sum > 255 + 8)) {
+                throw lsgd::InvalidArgument(std::string("signature_similarity: ") + name + "'s cell " +
+                                            std::to_string(cell) + " sums to " + std::to_string(sum) +
+                                            ", not about 255 (or 0): not a place signature (lsgd.place_signature)");
+              }
+            }
+          }
           return lsgd::signature_similarity(reinterpret_cast<const std::uint8_t*>(x.data()),
                                             reinterpret_cast<const std::uint8_t*>(y.data()));
         }, py::arg("a"), py::arg("b"),

@@ -21,6 +21,10 @@ def test_signatures_tell_orientations_apart():
     assert lsgd.signature_similarity(a, b) == 0.0
     with pytest.raises(lsgd.InvalidArgument, match="128"):
         lsgd.signature_similarity(a, b[:5])
+    # Bytes whose cells do not sum to about 255 (or 0) are no signature (they scored -3).
+    with pytest.raises(lsgd.InvalidArgument, match="not a place signature"):
+        lsgd.signature_similarity(b"\xff" * 128, a)
+    assert lsgd.signature_similarity(a, bytes(128)) == 0.5
 
 
 def test_a_detector_finds_the_second_place():

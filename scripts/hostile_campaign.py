@@ -588,8 +588,9 @@ def compare_db(a, b):
     ma, mb = a['meta'], b['meta']
     # Every database has its own random database_id (it names its log), and
     # the meta checksum covers it: two runs never agree on either. `db info`
-    # checks the checksum of each.
-    own = {'database_id', 'checksum'}
+    # checks the checksum of each. `checkpoints` counts the writer's
+    # checkpoints, which a killed and resumed run takes at other frames.
+    own = {'database_id', 'checksum', 'checkpoints'}
     for k in sorted((set(ma) | set(mb)) - own):
         if ma.get(k) != mb.get(k) and k != 'options':
             out.append('meta %s: %r vs %r' % (k, ma.get(k), mb.get(k)))

@@ -231,6 +231,32 @@ TEST(DatabaseWal, ALogOlderThanItsFileIsRefused) {
   fs::rename(path + "-wal", path + "-wal.older");
   fs::remove(path + "-shm");
   EXPECT_GE(Database::open(path, Database::Mode::kReadOnly).frames(), 128);
+  // Only a checkpoint that moved something written counts: a writer that
+  // appends nothing leaves the count as it was (a re-run with nothing to do
+  // changes nothing in the database).
+  const auto checkpoints = [&] {
+    sqlite3* db = nullptr;
+    std::string value;
+    if (sqlite3_open_v2(path.c_str(), &db, SQLITE_OPEN_READONLY, nullptr) == SQLITE_OK) {
+      sqlite3_stmt* s = nullptr;
+      sqlite3_prepare_v2(db, "SELECT value FROM meta WHERE key = 'checkpoints'", -1, &s, nullptr);
+      if (s != nullptr && sqlite3_step(s) == SQLITE_ROW) value = reinterpret_cast<const char*>(sqlite3_column_text(s, 0));
+      sqlite3_finalize(s);
+    }
+    sqlite3_close(db);
+    return value;
+  };
+  const std::string closed = checkpoints();
+  EXPECT_FALSE(closed.empty());
+  { Database db = Database::open(path); }
+  EXPECT_EQ(checkpoints(), closed);
+  {
+    Database db = Database::open(path);
+    Detector d(o);
+    db.restore(d);
+    db.append(d, d.process(frame(130)), 0);
+  }
+  EXPECT_EQ(checkpoints(), std::to_string(std::stoll(closed) + 1));
 }
 
 // The log's companions must be files of their own: a folder, a FIFO or a

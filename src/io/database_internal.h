@@ -387,6 +387,9 @@ struct Database::Impl {
   int format = kDatabaseFormatVersion;
   int lock_fd = -1;                 // holds the writer's lock (flock) while open
   std::int64_t since_checkpoint = 0;
+  // sqlite3_total_changes64 after the last checkpoint's own meta write (0: as
+  // opened): a checkpoint with nothing written since counts no checkpoint.
+  std::int64_t changes_at_checkpoint = 0;
   bool log_named = false;  // meta is in the log since the last checkpoint
   std::string note;                 // what open() found about the last writer
   bool opened = false;              // open() completed: the destructor may checkpoint

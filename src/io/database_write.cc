@@ -407,13 +407,17 @@ void Database::Impl::checkpoint(const char* state) {
     const std::map<std::string, std::string> saved = meta;
     meta["writer"] = state;
     meta["checkpoint_frames"] = std::to_string(frames);
-    // Counts every checkpoint: a log carries the count it began after, so a
-    // log older than the file (a backup copying FILE-wal before FILE) is told
-    // apart (check_log_belongs).
-    const auto count = meta.find("checkpoints");
-    std::int64_t done = 0;
-    if (count != meta.end() && !internal::parses_as(count->second, done)) done = 0;
-    meta["checkpoints"] = std::to_string(done + 1);
+    // Counts the checkpoints that moved something written into the file: a
+    // log carries the count it began after, so a log older than the file (a
+    // backup copying FILE-wal before FILE) is told apart (check_log_belongs).
+    // A run that writes nothing (opened and closed) leaves the count, and the
+    // file, as they were.
+    if (sqlite3_total_changes64(db) != changes_at_checkpoint) {
+      const auto count = meta.find("checkpoints");
+      std::int64_t done = 0;
+      if (count != meta.end() && !internal::parses_as(count->second, done)) done = 0;
+      meta["checkpoints"] = std::to_string(done + 1);
+    }
     try {
       write_meta();
     } catch (...) {
@@ -421,6 +425,7 @@ void Database::Impl::checkpoint(const char* state) {
       throw;
     }
     exec_write(db, path, "COMMIT");
+    changes_at_checkpoint = sqlite3_total_changes64(db);
   } catch (...) {
     sqlite3_exec(db, "ROLLBACK", nullptr, nullptr, nullptr);
     throw;

@@ -294,12 +294,6 @@ std::vector<YAML::Node> load_documents(const std::string& text, const std::strin
   }
 }
 
-// ---------------------------------------------------------------- writing
-
-}  // namespace
-
-namespace {
-
 // YAML's line breaks are LF, CRLF and a lone CR (YAML 1.2, 5.4); yaml-cpp
 // takes the first two only (a classic-Mac config was one line: "unknown key
 // 'search:  min_gap'"), so a lone CR is read as LF, as every text file here.
@@ -348,6 +342,8 @@ DetectorOptions load_config(const std::string& path, const DetectorOptions& base
   const std::vector<unsigned char> bytes = read_file(path, "config", kMaxConfigBytes);
   return parse_config(std::string(bytes.begin(), bytes.end()), path, base);
 }
+
+// ---------------------------------------------------------------- writing
 
 std::string to_yaml(const DetectorOptions& options) {
   std::ostringstream out;

@@ -7,6 +7,9 @@
 
 #include "internal/check.h"
 #include "internal/kernels.h"
+#include "internal/option_tables.h"
+#include "internal/registry.h"
+#include "lsgd/descriptors/gradient.h"
 
 namespace lsgd {
 namespace {
@@ -43,21 +46,99 @@ HistogramStorage parse_histogram_storage(const char* name) {
   internal::throw_invalid("descriptor storage '", name, "' is unknown: expected exact or compact");
 }
 
-const OptionTable<DescriptorOptions>& DescriptorOptions::fields() {
+namespace {
+
+// The intensity descriptor's codes: the gray levels themselves (what
+// segment_and_describe() counts during the segmentation; this is for
+// describe_codes(), which counts any descriptor's codes after it).
+void intensity_codes(const GrayImage& work, const DescriptorOptions&, GrayImage& codes) { codes = work; }
+
+// The registered descriptors: a built-in one is one line here (and its file
+// pair in src/descriptors/, include/lsgd/descriptors/); others come from
+// register_descriptor_type().
+internal::Registry<DescriptorType>& registry() {
+  static internal::Registry<DescriptorType> types(
+      "descriptor",
+      {
+          {kIntensityDescriptor, "the paper's: a 256-bin gray-level histogram per cell", intensity_codes},
+          {kGradientDescriptor, "gradient orientations per cell (lighting change; not the paper's)",
+           gradient_codes, gradient_options()},
+      });
+  return types;
+}
+
+OptionTable<DescriptorOptions> descriptor_table() {
   using S = DescriptorOptions;
-  static const OptionTable<S> table = {
+  OptionField<S> type_field;
+  type_field.name = "type";
+  type_field.kind = OptionKind::kChoice;
+  type_field.doc = "what each cell's histogram counts: a registered descriptor (descriptor.h)";
+  type_field.choices = [] {
+    std::vector<std::string> names;
+    for (const DescriptorType& d : descriptor_types()) names.emplace_back(d.name);
+    return names;
+  };
+  type_field.text = [](const S& s) { return s.type; };
+  type_field.set_choice = [](S& s, const std::string& name) {
+    find_descriptor_type(name);
+    s.type = name;
+  };
+  OptionTable<S> t = {
+      type_field,
       enum_option("storage", &S::storage, {HistogramStorage::kExact, HistogramStorage::kCompact},
                   parse_histogram_storage,
                   "exact: 16-bit counts in 256 bins; compact: 8-bit shares in 128 bins (10 KB "
                   "per KITTI frame, faster search)"),
   };
-  return table;
+  for (const DescriptorType& d : descriptor_types()) {
+    const std::string name = d.name;
+    add_own_options<S>(t, name, d.options, &S::own, [name](const S& s) { return s.type == name; },
+                       "with the " + name + " descriptor");
+  }
+  return t;
+}
+
+}  // namespace
+
+std::vector<DescriptorType> descriptor_types() { return registry().entries(); }
+
+void register_descriptor_type(const DescriptorType& type) {
+  registry().add(internal::with_checked_options<DescriptorOptions>(type, "register_descriptor_type",
+                                                                   "descriptor", "descriptor"),
+                 "register_descriptor_type");
+  internal::count_registration();
+}
+
+std::string descriptor_type_names() { return registry().names(); }
+
+DescriptorType find_descriptor_type(const std::string& name) { return registry().find(name); }
+
+const OptionTable<DescriptorOptions>& DescriptorOptions::fields() {
+  return internal::current_table(descriptor_table);
+}
+
+std::int64_t DescriptorOptions::own_integer(const std::string& name) const {
+  return lsgd::own_integer(own, find_descriptor_type(type).options, type, name);
+}
+
+double DescriptorOptions::own_real(const std::string& name) const {
+  return lsgd::own_real(own, find_descriptor_type(type).options, type, name);
+}
+
+std::string DescriptorOptions::own_choice(const std::string& name) const {
+  return lsgd::own_choice(own, find_descriptor_type(type).options, type, name);
 }
 
 void DescriptorOptions::check() const {
+  try {
+    find_descriptor_type(type);
+  } catch (const InvalidArgument& e) {
+    internal::throw_invalid("descriptor.type: ", e.what());
+  }
   if (storage != HistogramStorage::kExact && storage != HistogramStorage::kCompact) {
     internal::throw_invalid("descriptor.storage = ", static_cast<int>(storage), " is unknown");
   }
+  check_options(fields(), *this, "descriptor");
 }
 
 DescriptorView Descriptor::view() const {
@@ -138,6 +219,7 @@ void describe(const GrayImage& image, const Segmentation& segmentation, Descript
 struct DescribeScratch::Buffers {
   std::vector<Bin> second;               // second histogram set (HistogramRows)
   std::vector<internal::LabelRun> runs;  // one row's runs of equal labels
+  GrayImage codes;                       // a descriptor's codes (DescriptorType::make)
 };
 
 DescribeScratch::DescribeScratch() : buffers_(std::make_unique<Buffers>()) {}
@@ -223,6 +305,26 @@ void segment_and_describe(Segmenter& segmenter, const GrayImage& image, Segmenta
       recount_saturated(work, segmentation, k, &out.hist[static_cast<std::size_t>(k) * kBins]);
     }
   }
+}
+
+void segment_and_describe(Segmenter& segmenter, const GrayImage& image, Segmentation& segmentation,
+                          Descriptor& out, DescribeScratch& scratch, const DescriptorOptions& options) {
+  if (options.type == kIntensityDescriptor) {
+    segment_and_describe(segmenter, image, segmentation, out, scratch);
+    return;
+  }
+  const DescriptorType type = find_descriptor_type(options.type);
+  const GrayImage& work = segmenter.working(image);
+  segmenter.segment(work, segmentation);
+  GrayImage& codes = scratch.buffers().codes;
+  type.make(work, options, codes);
+  if (codes.width != work.width || codes.height != work.height ||
+      codes.pixels.size() != work.pixels.size()) {
+    internal::throw_invalid("descriptor ", options.type, ": its codes are ", codes.width, "x",
+                            codes.height, " (", codes.pixels.size(), " values) for a ", work.width,
+                            "x", work.height, " frame");
+  }
+  describe(codes, segmentation, out);
 }
 
 Descriptor describe(const GrayImage& image, const Segmentation& segmentation) {

@@ -177,7 +177,7 @@ void Detector::check_size(int width, int height) const {
 
 Descriptor Detector::describe_gray() {
   check_size(gray_.width, gray_.height);
-  segment_and_describe(segmenter_, gray_, segmentation_, exact_, describe_scratch_);
+  segment_and_describe(segmenter_, gray_, segmentation_, exact_, describe_scratch_, options_.descriptor);
   if (options_.descriptor.storage == HistogramStorage::kCompact) {
     Descriptor out;
     compact(exact_, out);
@@ -253,7 +253,7 @@ Result Detector::process_gray(double convert_ms, std::int64_t start_ns, bool sto
   // The histograms are counted during the segmentation's last pass, so
   // segment_ms includes them and describe_ms is the storage encoding.
   std::int64_t t = now_ns();
-  segment_and_describe(segmenter_, gray_, segmentation_, exact_, describe_scratch_);
+  segment_and_describe(segmenter_, gray_, segmentation_, exact_, describe_scratch_, options_.descriptor);
   result.timings.segment_ms = ms_since(t);
 
   t = now_ns();

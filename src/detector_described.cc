@@ -207,7 +207,7 @@ FrameDescription Detector::describe_image(const Image& frame) {
   out.height = gray_.height;
   out.options_key = describing_key_;
   t = now_ns();
-  segment_and_describe(segmenter_, gray_, segmentation_, exact_, describe_scratch_);
+  segment_and_describe(segmenter_, gray_, segmentation_, exact_, describe_scratch_, options_.descriptor);
   out.segment_ms = ms_since(t);
   t = now_ns();
   if (options_.descriptor.storage == HistogramStorage::kCompact) {

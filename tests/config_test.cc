@@ -489,7 +489,8 @@ TEST(OptionTables, ResumableAndAppliesSayWhatAResumeCompares) {
     const bool applies = !f.applies || f.applies(exhaustive);
     const bool expected = f.name.rfind("search.nodes.", 0) != 0 &&
                           f.name.rfind("search.index.", 0) != 0 &&
-                          f.name.rfind("verification.temporal.", 0) != 0;
+                          f.name.rfind("verification.temporal.", 0) != 0 &&
+                          f.name.rfind("descriptor.gradient.", 0) != 0;  // intensity by default
     EXPECT_EQ(applies, expected);
     EXPECT_EQ(f.applies == nullptr, f.when.empty());
   }

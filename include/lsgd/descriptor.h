@@ -1,5 +1,9 @@
 // LSGD descriptor, paper Sec. III-C: one 256-bin intensity histogram per
 // superpixel-grid cell, stored as one contiguous block of cells * 256 counts.
+// What a cell's histogram counts is the registered descriptor's
+// (DescriptorType below: "intensity", the paper's, by default); the storage,
+// its codecs (exact, compact), the similarity and persistence are shared by
+// every one of them.
 // Bins are 16-bit: exact for every bin below 65535 pixels (a cell would need
 // more than 65535 pixels of one intensity, i.e. cells larger than 256 x 256
 // pixels, to saturate); a fuller bin is stored as 65535. Half the memory and
@@ -9,9 +13,11 @@
 #include <cstddef>
 #include <cstdint>
 #include <memory>
+#include <string>
 #include <vector>
 
 #include "lsgd/image.h"
+#include "lsgd/options.h"
 #include "lsgd/segmentation.h"
 
 namespace lsgd {
@@ -42,11 +48,60 @@ const char* to_string(HistogramStorage storage);
 // Parses "exact" or "compact"; throws InvalidArgument otherwise.
 HistogramStorage parse_histogram_storage(const char* name);
 
+// The built-in descriptors (DescriptorOptions::type).
+inline constexpr const char* kIntensityDescriptor = "intensity";  // the paper's
+inline constexpr const char* kGradientDescriptor = "gradient";    // lsgd/descriptors/gradient.h
+
 struct DescriptorOptions {
+  // A registered descriptor (descriptor_types()): what each cell's 256 bins
+  // count. "intensity": the paper's gray levels; "gradient": gradient
+  // orientations (lighting change).
+  std::string type = kIntensityDescriptor;
   HistogramStorage storage = HistogramStorage::kExact;
+  // The options registered descriptors declare (DescriptorType::options),
+  // keys "<type>.<name>" (descriptor.<type>.<name> in DetectorOptions), as
+  // SearchOptions::own: read with own_integer("name") and the like.
+  OwnOptionValues own;
+  std::int64_t own_integer(const std::string& name) const;
+  double own_real(const std::string& name) const;
+  std::string own_choice(const std::string& name) const;
   void check() const;
+  // Built again after register_descriptor_type() (a new descriptor's options).
   static const OptionTable<DescriptorOptions>& fields();  // lsgd/options.h
 };
+
+// A registered descriptor: what each pixel is counted as in its cell's
+// histogram. Everything else (the grid, the 256 bins of a cell, storage and
+// its codecs, the similarity, databases, described frames) is the same for
+// every descriptor, and a map is made of one: descriptor.type is stored with
+// the map's options, so a database or a described frame of another
+// descriptor is refused by name. docs/design.md, "Add a descriptor".
+struct DescriptorType {
+  const char* name;
+  const char* summary;  // one line, for help texts
+  // Writes `codes` (resized to work's size): for each pixel of `work` (the
+  // frame, gray, at its working size: Segmenter::working()) the bin, 0-255,
+  // it is counted in. Reads its own options from `options`.
+  void (*make)(const GrayImage& work, const DescriptorOptions& options, GrayImage& codes);
+  // Its own options (lsgd/options.h): descriptor.<name>.<option>, with this
+  // descriptor only.
+  std::vector<OwnOption> options = {};
+};
+
+// Every registered descriptor, in registration order: the built-in ones first.
+std::vector<DescriptorType> descriptor_types();
+// Registers another descriptor, usable by name in DescriptorOptions::type
+// from then on; call it before the detectors that use it are made.
+// InvalidArgument for a missing name, summary or make function, a name
+// already registered, or an own option that is not complete (as
+// register_search_mode(); a descriptor with options may not be named as a
+// descriptor option: "storage"). Thread-safe.
+void register_descriptor_type(const DescriptorType& type);
+// "intensity, gradient": the names, for messages and help texts.
+std::string descriptor_type_names();
+// The registered descriptor named `name` (InvalidArgument naming it and the
+// registered ones when there is none).
+DescriptorType find_descriptor_type(const std::string& name);
 
 // Non-owning view of one frame's descriptor (inside a Descriptor or a
 // FrameStore), in either storage: exact when `hist` is set, compact when
@@ -113,6 +168,11 @@ void segment_and_describe(Segmenter& segmenter, const GrayImage& image, Segmenta
                           Descriptor& out, DescribeScratch& scratch);
 void segment_and_describe(Segmenter& segmenter, const GrayImage& image, Segmentation& segmentation,
                           Descriptor& out);
+// The same with the descriptor `options.type` names: intensity as above; any
+// other counts its codes (DescriptorType::make) of the working image after
+// the segmentation (describe() of the codes). The exact descriptor either way.
+void segment_and_describe(Segmenter& segmenter, const GrayImage& image, Segmentation& segmentation,
+                          Descriptor& out, DescribeScratch& scratch, const DescriptorOptions& options);
 
 // Encodes an exact descriptor in compact storage (see HistogramStorage). An
 // empty cell encodes as all zeros. Throws InvalidArgument when `exact` is not

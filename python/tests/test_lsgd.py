@@ -39,6 +39,25 @@ def test_option_errors_are_the_librarys():
         lsgd.Detector(search={"min_gap": True})
 
 
+def test_the_descriptor_is_an_option_with_its_own_options():
+    """descriptor.type (issue 36's seam): gradient orientations instead of gray levels."""
+    assert lsgd.default_options()["descriptor.type"] == "intensity"
+    d = lsgd.Detector(descriptor={"type": "gradient", "gradient": {"orientations": 16}})
+    assert (d.options["descriptor.type"], d.options["descriptor.gradient.orientations"]) == ("gradient", "16")
+    i = lsgd.Detector()
+    frame = place(3)
+    brighter = (frame // 2) * 2  # the same edges at a lower and a higher gain
+    darker = frame // 2
+    for detector in (d, i):
+        detector.process(darker)
+        detector.process(brighter)
+    assert d.similarity(0, 1) > i.similarity(0, 1)
+    with pytest.raises(lsgd.Error, match="descriptor 'sift' is unknown"):
+        lsgd.Detector(descriptor={"type": "sift"})
+    with pytest.raises(ValueError, match="descriptor.gradient.orientations"):
+        lsgd.Detector(descriptor={"type": "gradient", "gradient": {"orientations": 500}})
+
+
 def test_images_gray_bgr_and_strided_give_the_same_results():
     gray = route(20, 2)
     a = lsgd.Detector(search={"min_gap": 5}, verification={"stages": "temporal"})

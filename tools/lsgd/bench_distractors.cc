@@ -124,7 +124,7 @@ Frames load_frames(const DistractorSetup& a, const DetectorOptions& options) {
     }
     const GrayImage image = to_gray(g);
     Descriptor d;
-    segment_and_describe(segmenter, image, segmentation, d, scratch);
+    segment_and_describe(segmenter, image, segmentation, d, scratch, options.descriptor);
     f.exact.push_back(std::move(d));
   }
   return f;

@@ -266,6 +266,59 @@ TEST(BenchCli, DistractorsCompareTheModesOnOneMap) {
   EXPECT_NE(street_gt.err.find("the synthetic street has its own"), std::string::npos) << street_gt.err;
 }
 
+// --sequence is read as lsgd eval reads a dataset: its ground truth in the
+// dataset's own numbering, moved onto the frames --first and --every keep;
+// every frame must be readable; the flags that choose frames need it.
+TEST(BenchCli, ASequenceAndItsGroundTruthAreReadAsLsgdEvalReadsThem) {
+  const fs::path dir = kTmp / "bench-gt";
+  fs::create_directories(dir / "images");
+  cv::Mat image(48, 64, CV_8UC1);
+  std::string list;
+  for (int i = 0; i < 30; ++i) {
+    cv::randu(image, 0, 255);
+    const fs::path file = dir / "images" / (std::to_string(100 + i) + ".png");
+    ASSERT_TRUE(cv::imwrite(file.string(), image));
+    list += file.string() + "\n";
+  }
+  std::ofstream(dir / "list.txt") << list;
+  // Pairs in the sequence's numbering: (25, 12) and (28, 4) lie beyond the
+  // 20 frames --first 10 keeps, and beyond the 15 --every 2 keeps.
+  std::ofstream(dir / "gt.txt") << "25 12\n28 4\n";
+  const std::string base = "bench --distractors 3 --min-gap 2 --verify none --sequence '" +
+                           (dir / "list.txt").string() + "' --gt '" + (dir / "gt.txt").string() + "'";
+  for (const char* keep : {" --first 10", " --every 2", ""}) {
+    const auto r = lsgd(base + keep);
+    EXPECT_EQ(r.code, 0) << keep << ": " << r.err;
+  }
+  // A pair beyond the whole sequence is still refused, in its own numbering.
+  std::ofstream(dir / "far.txt") << "35 2\n";
+  const auto far = lsgd("bench --distractors 3 --min-gap 2 --sequence '" + (dir / "list.txt").string() +
+                        "' --gt '" + (dir / "far.txt").string() + "' --first 10");
+  EXPECT_EQ(far.code, 1);
+  EXPECT_NE(far.err.find("30 frames"), std::string::npos) << far.err;
+
+  // A frame that cannot be read stops the bench, naming it and its frame.
+  std::ofstream(dir / "bad.png") << "junk";
+  std::ofstream(dir / "with-bad.txt") << list << (dir / "bad.png").string() << "\n";
+  const auto bad = lsgd("bench --distractors 3 --min-gap 2 --sequence '" + (dir / "with-bad.txt").string() + "'");
+  EXPECT_EQ(bad.code, 1);
+  EXPECT_NE(bad.err.find("frame 30"), std::string::npos) << bad.err;
+  EXPECT_NE(bad.err.find("bad.png"), std::string::npos) << bad.err;
+  EXPECT_NE(bad.err.find("needs every frame"), std::string::npos) << bad.err;
+  // It cannot skip one, so it has no --strict.
+  EXPECT_NE(lsgd(base + " --strict").code, 0);
+  // The flags that choose the frames of --sequence do nothing without one.
+  for (const char* args : {"bench --frames 40 --width 64 --height 48 --every 4 --first 3",
+                           "bench --distractors 2 --frames 40 --width 64 --height 48 --every 4",
+                           "bench --frames 40 --width 64 --height 48 --layout folder"}) {
+    const auto r = lsgd(args);
+    EXPECT_EQ(r.code, 1) << args;
+    EXPECT_NE(r.err.find("the frames of --sequence: give --distractors N --sequence PATH too"),
+              std::string::npos)
+        << args << ": " << r.err;
+  }
+}
+
 TEST(BenchCli, BadArgumentsFailNamingTheFlag) {
   const std::pair<const char*, const char*> cases[] = {
       {"bench --frames 0", "--frames"},           {"bench --width 10", "--width"},

@@ -376,6 +376,10 @@ TEST_F(RunCli, LocalizeAnswersAsANewSessionAndLeavesTheMapAsItWas) {
   // Refusals, each naming what is wrong, the map untouched.
   const CmdResult no_db = lsgd("run --sequence " + q(dir_) + " --localize");
   EXPECT_NE(no_db.err.find("--localize needs --database"), std::string::npos) << no_db.err;
+  const CmdResult rebuild = lsgd("run --sequence " + q(dir_) + " --output x.csv --rebuild-index");
+  EXPECT_EQ(rebuild.code, 1);
+  EXPECT_NE(rebuild.err.find("--rebuild-index needs --database"), std::string::npos) << rebuild.err;
+  EXPECT_FALSE(fs::exists(kTmp / "x.csv"));
   const CmdResult session = lsgd(run_args("a.db", "x.csv", " --localize --session 2"));
   EXPECT_NE(session.err.find("--localize stores nothing, so it takes no --session"), std::string::npos)
       << session.err;

@@ -38,6 +38,7 @@
 #include "bench_support.h"
 #include "distractor.h"
 #include "lsgd/error.h"
+#include "lsgd/eval/dataset.h"
 #include "lsgd/eval/gt_formats.h"
 #include "lsgd/eval/runner.h"
 #include "lsgd/io/layouts.h"
@@ -99,18 +100,30 @@ Frames load_frames(const DistractorSetup& a, const DetectorOptions& options) {
     // Its ground truth covers one lap of the route.
     if (a.frames <= world.frames()) f.gt = world.ground_truth();
   } else {
-    const io::Sequence sequence = io::open_sequence(a.sequence, a.layout);
-    for (const std::string& path : sequence.images) {
-      cv::Mat image = io::read_image(path);
+    // As lsgd eval reads a dataset: the ground truth in the dataset's own
+    // numbering, moved onto the frames --first/--last/--every keep.
+    io::Sequence sequence;
+    if (a.gt.empty()) {
+      sequence = io::open_sequence(a.sequence, a.layout);
+    } else {
+      eval::Dataset dataset = eval::open_dataset(a.sequence, a.layout, a.gt);
+      sequence = std::move(dataset.frames);
+      f.gt = std::move(dataset.gt);
+    }
+    for (std::size_t k = 0; k < sequence.images.size(); ++k) {
+      cv::Mat image;
+      try {
+        image = io::read_image(sequence.images[k]);
+      } catch (const Error& e) {
+        // The map and its ground truth are numbered by frame: a benchmark
+        // cannot skip one (lsgd run and eval can).
+        throw InvalidArgument("--sequence: frame " + std::to_string(k) + ": " + e.what() +
+                              " (lsgd bench needs every frame: leave it out of the sequence)");
+      }
       if (image.channels() > 1) cv::cvtColor(image, image, cv::COLOR_BGR2GRAY);
       f.gray.push_back(image);
     }
     f.source = a.sequence + ", " + std::to_string(f.gray.size()) + " frames";
-    if (!a.gt.empty()) {
-      eval::GtOptions o;
-      o.frames = static_cast<std::int64_t>(f.gray.size());
-      f.gt = eval::load_groundtruth(a.gt, o);
-    }
   }
   f.width = f.gray.front().cols;
   f.height = f.gray.front().rows;

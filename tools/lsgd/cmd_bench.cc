@@ -233,7 +233,20 @@ void check_memory(const bench::Setup& a, const DetectorOptions& options) {
                         bench::available_memory_bytes(), "fewer frames");
 }
 
+// --layout, --first, ... choose the frames of --sequence: without one they
+// would change nothing.
+void refuse_sequence_flags_without_sequence(const BenchArgs& args) {
+  const std::vector<std::string> given = SequenceFlags::given(*args.command);
+  if (!args.sequence.empty() || given.empty()) return;
+  std::string flags;
+  for (const std::string& f : given) flags += (flags.empty() ? "" : ", ") + f;
+  throw InvalidArgument(flags + (given.size() > 1 ? " choose" : " chooses") +
+                        " the frames of --sequence: give --distractors N --sequence PATH too "
+                        "(the synthetic street takes --frames, --width and --height)");
+}
+
 void bench_command(const BenchArgs& args) {
+  refuse_sequence_flags_without_sequence(args);
   if (args.distractors > 0) return distractors_command(args);
   if (!args.sequence.empty() || !args.gt.empty() || args.command->count("--distractor-run") > 0) {
     throw InvalidArgument(
@@ -311,7 +324,7 @@ void register_bench(CLI::App& app) {
                   "with --distractors --sequence: its loop ground truth (as lsgd eval reads it), "
                   "to count the declared loops that are true; the synthetic street has its own")
       ->check(kNonEmptyPath);
-  args->layout.add_to(*cmd);
+  args->layout.add_to(*cmd, /*skips=*/false);  // a benchmark needs every frame
   args->command = cmd;
   args->detector.add_to(*cmd);
   cmd->callback([args] { bench_command(*args); });

@@ -288,6 +288,9 @@ void run(const RunArgs& args) {
   if (args.session && args.database.empty()) {
     throw InvalidArgument("--session needs --database");
   }
+  if (args.rebuild_index && args.database.empty()) {
+    throw InvalidArgument("--rebuild-index needs --database (the map whose saved index to rebuild)");
+  }
   if (args.localize && args.database.empty()) {
     throw InvalidArgument("--localize needs --database (the map to localise against)");
   }

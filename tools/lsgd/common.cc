@@ -73,7 +73,16 @@ void DetectorFlags::apply(DetectorOptions& o) const {
   o.check();
 }
 
-void SequenceFlags::add_to(CLI::App& command) {
+std::vector<std::string> SequenceFlags::given(const CLI::App& command) {
+  std::vector<std::string> out;
+  for (const char* flag : {"--layout", "--kitti-sequence", "--camera", "--side", "--first", "--last",
+                           "--every", "--strict"}) {
+    if (command.get_option_no_throw(flag) != nullptr && command.count(flag) > 0) out.emplace_back(flag);
+  }
+  return out;
+}
+
+void SequenceFlags::add_to(CLI::App& command, bool skips) {
   command
       .add_option("--layout", layout, [] {
         std::string help =
@@ -99,6 +108,7 @@ void SequenceFlags::add_to(CLI::App& command) {
   command.add_option("--every", every,
                      "keep frames first, first + K, first + 2K, ...; frame ids, --min-gap and "
                      "the CSV count kept frames");
+  if (!skips) return;
   command.add_flag("--strict", strict,
                    "stop at the first image that cannot be read or is rejected (corrupt, "
                    "truncated, not an image, other size, 16-bit); default: skip it, report it on "

@@ -54,7 +54,10 @@ struct SequenceFlags {
   std::int64_t every = 1;
   bool strict = false;  // stop at the first unreadable or rejected image
 
-  void add_to(CLI::App& command);
+  // The flags on `command`; --strict only when the command can skip an image.
+  void add_to(CLI::App& command, bool skips = true);
+  // The flags given on the command line (--layout, --first, ...): empty when none.
+  static std::vector<std::string> given(const CLI::App& command);
   // Validated options. InvalidArgument for a flag that does not apply to the
   // chosen layout (--side without --layout fabmap, --camera with fabmap, ...).
   io::SequenceOptions resolve() const;

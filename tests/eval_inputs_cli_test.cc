@@ -73,6 +73,43 @@ TEST(EvalCli, ResultsAreWrittenAndInputsCheckedBeforeTheRun) {
   EXPECT_NE(r.err.find("nowhere.csv"), std::string::npos) << r.err;
   EXPECT_FALSE(fs::exists(csv));
   EXPECT_FALSE(fs::exists(kTmp / "c.json"));
+  // --poses that do not fit the evaluated frames, or are not poses: refused
+  // before the run, as --compare.
+  write_text(kTmp / "poses-3.txt", "1 0 0 0 0 1 0 0 0 0 1 0\n1 0 0 0 0 1 0 0 0 0 1 0\n1 0 0 0 0 1 0 0 0 0 1 0\n");
+  write_text(kTmp / "poses-nan.txt", "1 0 0 nan 0 1 0 0 0 0 1 0\n");
+  for (const char* poses : {"poses-3.txt", "poses-nan.txt"}) {
+    r = lsgd("eval --sequence " + q(dir) + " --gt " + q(kTmp / "skipped-gt.txt") + " --min-gap 1 --json " +
+             q(kTmp / "c.json") + " --output " + q(csv) + " --report " + q(kTmp / "p.html") + " --poses " +
+             q(kTmp / poses));
+    EXPECT_EQ(r.code, 1) << poses;
+    EXPECT_NE(r.err.find(poses), std::string::npos) << r.err;
+    EXPECT_EQ(r.err.find("skipped frame 3"), std::string::npos) << poses << ": the run started: " << r.err;
+    EXPECT_FALSE(fs::exists(csv));
+  }
+  // The same with --detections: --compare and --poses are read before anything is scored.
+  write_text(kTmp / "d8.csv", "query,match,score\n4,0,1\n5,1,1\n6,-1,\n7,3,1\n");
+  for (const std::string extra : {" --compare " + q(kTmp / "nowhere.csv"),
+                                  " --report " + q(kTmp / "p.html") + " --poses " + q(kTmp / "poses-3.txt")}) {
+    r = lsgd("eval --detections " + q(kTmp / "d8.csv") + " --gt " + q(kTmp / "skipped-gt.txt") +
+             " --min-gap 1 --frames 8 --json " + q(kTmp / "c.json") + extra);
+    EXPECT_EQ(r.code, 1) << extra;
+    EXPECT_TRUE(r.out.empty()) << extra << ": " << r.out;
+    EXPECT_FALSE(fs::exists(kTmp / "c.json"));
+  }
+  // Detections with rows for fewer frames than the ground truth covers (a
+  // CSV of lsgd run --every 2 scored without --every 2): a warning, in the JSON too.
+  r = lsgd("eval --detections " + q(kTmp / "d8.csv") + " --gt " + q(kTmp / "skipped-gt.txt") +
+           " --min-gap 1 --frames 12 --json " + q(kTmp / "c.json"));
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_NE(r.err.find("has rows for 4 of the 12 frames the ground truth covers: the other 8 count as "
+                       "frames that reported nothing"),
+            std::string::npos)
+      << r.err;
+  EXPECT_EQ(read_json(kTmp / "c.json")["warnings"].size(), 1u);
+  r = lsgd("eval --detections " + q(kTmp / "d8.csv") + " --gt " + q(kTmp / "skipped-gt.txt") +
+           " --min-gap 1 --json " + q(kTmp / "c.json"));
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_NE(r.err.find("has rows for 4 of the 8 frames"), std::string::npos) << r.err;
 
   // A folder whose name is not UTF-8: the JSON is written, the byte replaced.
   const fs::path odd = kTmp / "odd\xff\xfe";

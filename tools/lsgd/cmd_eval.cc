@@ -168,11 +168,24 @@ void describe_inputs(const EvalArgs& args, const io::SequenceOptions& options, i
   if (!options.selection.keeps_all()) json["subsample_match"] = args.subsample_match;
 }
 
-// The parts of the HTML report common to both paths; the trajectory comes from
-// --poses (x, z of each evaluated frame's camera centre).
+// --poses, read and checked against the evaluated frames before anything
+// runs (empty without --poses): x, z of each frame's camera centre.
+std::vector<eval::Pose> report_poses(const EvalArgs& args, const eval::GroundTruth& gt) {
+  if (args.poses.empty()) return {};
+  std::vector<eval::Pose> poses = eval::read_kitti_poses(args.poses);
+  if (static_cast<std::int64_t>(poses.size()) != gt.frames()) {
+    throw FormatError("--poses " + args.poses + " has " + std::to_string(poses.size()) +
+                      " poses but " + std::to_string(gt.frames()) +
+                      " frames are evaluated (subsampled sequences: subsample the poses too)");
+  }
+  return poses;
+}
+
+// The parts of the HTML report common to both paths; the trajectory is
+// --poses' (report_poses()).
 eval::ReportInput report_input(const EvalArgs& args, const eval::Metrics& metrics,
                                const std::vector<eval::FrameRecord>& records,
-                               const eval::GroundTruth& gt) {
+                               const eval::GroundTruth& gt, const std::vector<eval::Pose>& poses) {
   eval::ReportInput input;
   input.title = "lsgd eval";
   input.ground_truth = args.gt;
@@ -182,15 +195,7 @@ eval::ReportInput report_input(const EvalArgs& args, const eval::Metrics& metric
   input.gt = &gt;
   input.command = command_line();
   input.version = version_text();
-  if (!args.poses.empty()) {
-    const std::vector<eval::Pose> poses = eval::read_kitti_poses(args.poses);
-    if (static_cast<std::int64_t>(poses.size()) != gt.frames()) {
-      throw FormatError("--poses " + args.poses + " has " + std::to_string(poses.size()) +
-                        " poses but " + std::to_string(gt.frames()) +
-                        " frames are evaluated (subsampled sequences: subsample the poses too)");
-    }
-    for (const eval::Pose& p : poses) input.trajectory.push_back({p.x, p.z});
-  }
+  for (const eval::Pose& p : poses) input.trajectory.push_back({p.x, p.z});
   return input;
 }
 
@@ -224,9 +229,23 @@ void evaluate_detections(const EvalArgs& args, const io::SequenceOptions& option
     }
   }
   const auto records = eval::read_detections(args.detections, gt.frames());
+  // What else is read is read now: a bad --compare or --poses fails before
+  // anything is scored or written.
+  for (const std::string& file : compared_files(args)) eval::read_detections(file, gt.frames());
+  const std::vector<eval::Pose> poses = report_poses(args, gt);
+  std::vector<std::string> warnings;
+  if (const auto missing = gt.frames() - static_cast<std::int64_t>(records.size()); missing > 0) {
+    warnings.push_back(args.detections + " has rows for " + std::to_string(records.size()) + " of the " +
+                       std::to_string(gt.frames()) + " frames the ground truth covers: the other " +
+                       std::to_string(missing) +
+                       " count as frames that reported nothing (score a CSV of lsgd run --first, "
+                       "--last or --every with the same flags)");
+  }
+  for (const std::string& w : warnings) std::cerr << "lsgd: warning: " << w << "\n";
   const std::int64_t min_gap = *args.detector.min_gap;
   const eval::Metrics metrics = score(args, records, gt, min_gap);
   nlohmann::json json = metrics_json(metrics);
+  json["warnings"] = warnings;
   json["detections"] = args.detections;
   describe_inputs(args, options, options.layout, gt, json);
   std::cout << args.detections << " (detections read from the file, no detector run)\n";
@@ -234,8 +253,9 @@ void evaluate_detections(const EvalArgs& args, const io::SequenceOptions& option
   const auto compared = compared_systems(args, gt, min_gap, json);
   write_json(json, args.json);
   if (!args.report.empty()) {
-    eval::ReportInput input = report_input(args, metrics, records, gt);
+    eval::ReportInput input = report_input(args, metrics, records, gt, poses);
     input.compared = compared;
+    input.warnings = warnings;
     input.sequence = args.detections + " (detections of another system)";
     input.declared = true;
     eval::write_report(input, args.report);
@@ -253,6 +273,7 @@ void evaluate_sequence(const EvalArgs& args, const io::SequenceOptions& options)
   check_files(args, dataset.all.images);
   // Every --compare file is read now: a bad one fails before the (long) run.
   for (const std::string& file : compared_files(args)) eval::read_detections(file, gt.frames());
+  const std::vector<eval::Pose> poses = report_poses(args, gt);  // --poses, the same
   const eval::FrameSource source = eval::sequence_source(sequence);
   std::unique_ptr<CsvWriter> csv;
   if (!args.output.empty()) csv = std::make_unique<CsvWriter>(args.output);
@@ -290,7 +311,7 @@ void evaluate_sequence(const EvalArgs& args, const io::SequenceOptions& options)
   const auto compared = compared_systems(args, gt, detector_options.search.min_gap, json);
   write_json(json, args.json);
   if (!args.report.empty()) {
-    eval::ReportInput input = report_input(args, metrics, records, gt);
+    eval::ReportInput input = report_input(args, metrics, records, gt, poses);
     input.compared = compared;
     input.width = detector.width();
     input.height = detector.height();

@@ -77,6 +77,7 @@ lsgd::Descriptor descriptor_from_arrays(py::array histograms, const py::object& 
     d.pixels = counts_of<std::uint32_t>(p, "pixels", 4294967295LL);
   }
   d.check_consistent("Descriptor.from_arrays");
+  d.check_counts("Descriptor.from_arrays");
   return d;
 }
 

@@ -10,6 +10,7 @@
 #include "internal/option_tables.h"
 #include "internal/registry.h"
 #include "lsgd/descriptors/gradient.h"
+#include "lsgd/limits.h"
 
 namespace lsgd {
 namespace {
@@ -173,6 +174,42 @@ void Descriptor::check_consistent(const char* what) const {
                             grid.cols, " grid has ", hist.size(), " exact bins, ", pixels.size(),
                             " pixel counts and ", compact.size(), " compact bins (cell_pixels ",
                             cell_pixels, ")");
+  }
+}
+
+void Descriptor::check_counts(const char* what) const {
+  const int cells = grid.cells();
+  for (int k = 0; k < cells; ++k) {
+    std::uint64_t sum = 0;
+    bool saturated = false;
+    if (storage == HistogramStorage::kCompact) {
+      const CompactBin* h = &compact[static_cast<std::size_t>(k) * kCompactBins];
+      for (int b = 0; b < kCompactBins; ++b) {
+        sum += h[b];
+        saturated = saturated || h[b] == std::numeric_limits<CompactBin>::max();
+      }
+      // Each bin rounds to the nearest: the cell's mass within half a unit a bin.
+      const std::uint64_t lo = kCompactMass - kCompactBins / 2, hi = kCompactMass + kCompactBins / 2;
+      // Cells of more than 65535 pixels may have saturated in exact storage
+      // before they were encoded: their mass may fall short.
+      const bool big = cell_pixels > static_cast<double>(kBinMax);
+      if (sum == 0 || (sum <= hi && (sum >= lo || saturated || big))) continue;
+      internal::throw_invalid(what, ": cell ", k, "'s compact bins add up to ", sum, ", not ",
+                              kCompactMass, " (+-", kCompactBins / 2, "): not a histogram compact() made");
+    }
+    const Bin* h = &hist[static_cast<std::size_t>(k) * kBins];
+    for (int b = 0; b < kBins; ++b) {
+      sum += h[b];
+      saturated = saturated || h[b] == kBinMax;
+    }
+    const std::uint64_t n = pixels[static_cast<std::size_t>(k)];
+    if (n > static_cast<std::uint64_t>(kMaxImagePixels)) {
+      internal::throw_invalid(what, ": cell ", k, " has ", n, " pixels, more than a frame may (",
+                              kMaxImagePixels, ")");
+    }
+    if (sum == n || (saturated && sum < n)) continue;
+    internal::throw_invalid(what, ": cell ", k, "'s bins add up to ", sum, " pixels but its pixel count is ",
+                            n, ": not a histogram of the cell");
   }
 }
 

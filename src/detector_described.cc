@@ -1,6 +1,9 @@
 // Frames described apart from the map (FrameDescription, detector.h): a
 // robot describes its frames (describe_frame), the map's process takes them
 // (process / query of a description) with the Results of the images.
+#include <zlib.h>
+
+#include <algorithm>
 #include <cstring>
 #include <opencv2/core.hpp>
 
@@ -16,7 +19,21 @@ using internal::now_ns;
 namespace {
 
 constexpr std::uint8_t kMagic[8] = {'L', 'S', 'G', 'D', 'F', 'R', 'M', 'D'};
-constexpr std::int64_t kVersion = 2;  // 2: the place signature (1 read as without)
+// 2: the place signature (1 read as without); 3: a CRC-32 of every byte
+// before it at the end (1 and 2 are read without one).
+constexpr std::int64_t kVersion = 3;
+constexpr std::size_t kChecksumBytes = 4;
+
+std::uint32_t crc_of(const std::uint8_t* data, std::size_t size) {
+  uLong crc = crc32(0L, Z_NULL, 0);
+  while (size > 0) {  // zlib takes 32-bit lengths
+    const auto chunk = static_cast<uInt>(std::min<std::size_t>(size, 1u << 30));
+    crc = crc32(crc, data, chunk);
+    data += chunk;
+    size -= chunk;
+  }
+  return static_cast<std::uint32_t>(crc);
+}
 
 bool describing_option(const std::string& name) {
   for (const char* prefix : {"segmentation.", "descriptor.", "verification."}) {
@@ -86,7 +103,10 @@ std::vector<std::uint8_t> encode_frame_description(const FrameDescription& d) {
   }
   out.put_i64(static_cast<std::int64_t>(d.signature.size()));
   out.put_bytes(d.signature.data(), d.signature.size());
-  return out.take();
+  std::vector<std::uint8_t> bytes = out.take();
+  const std::uint32_t crc = crc_of(bytes.data(), bytes.size());
+  for (std::size_t b = 0; b < kChecksumBytes; ++b) bytes.push_back(static_cast<std::uint8_t>(crc >> (8 * b)));
+  return bytes;
 }
 
 namespace {
@@ -108,7 +128,7 @@ FrameDescription decode(StateReader& in) {
     throw FormatError("frame description: the bytes do not start with its mark (LSGDFRMD)");
   }
   const std::int64_t version = in.get_i64();
-  if (version != 1 && version != kVersion) {
+  if (version < 1 || version > kVersion) {
     throw FormatError(internal::concat("frame description: version ", version, ", this lsgd reads 1 to ",
                                        kVersion));
   }
@@ -167,15 +187,42 @@ FrameDescription decode(StateReader& in) {
   in.finish();
   try {
     x.check_consistent("frame description: the descriptor");
+    x.check_counts("frame description: the descriptor");
   } catch (const InvalidArgument& e) {
     throw FormatError(e.what());
   }
   return d;
 }
 
+// The version a description's bytes declare (0 when they are too short to
+// say), read before they are decoded: version 3 and later end in a checksum.
+std::int64_t declared_version(const std::uint8_t* data, std::size_t size) {
+  if (size < sizeof kMagic + 8) return 0;
+  std::uint64_t v = 0;
+  for (int b = 7; b >= 0; --b) v = v << 8 | data[sizeof kMagic + static_cast<std::size_t>(b)];
+  return static_cast<std::int64_t>(v);
+}
+
 }  // namespace
 
 FrameDescription decode_frame_description(const std::uint8_t* data, std::size_t size) {
+  // Not a description at all is said first; then a damaged one.
+  if (size >= sizeof kMagic && std::memcmp(data, kMagic, sizeof kMagic) != 0) {
+    throw FormatError("frame description: the bytes do not start with its mark (LSGDFRMD)");
+  }
+  // A version this lsgd does not read is said by decode(), whatever its end holds.
+  if (const std::int64_t version = declared_version(data, size); version >= 3 && version <= kVersion) {
+    if (size < sizeof kMagic + 8 + kChecksumBytes) throw FormatError("frame description: cut short");
+    size -= kChecksumBytes;
+    std::uint32_t stored = 0;
+    for (std::size_t b = kChecksumBytes; b-- > 0;) stored = stored << 8 | data[size + b];
+    const std::uint32_t computed = crc_of(data, size);
+    if (stored != computed) {
+      throw FormatError(internal::concat("frame description: its checksum ", stored,
+                                         " does not match its bytes (", computed,
+                                         "): they were damaged or cut"));
+    }
+  }
   StateReader in(data, size, "frame description");
   try {
     return decode(in);
@@ -248,6 +295,7 @@ void Detector::check_description(const FrameDescription& frame) const {
                             " of a ", frame.width, "x", frame.height, " frame");
   }
   x.check_consistent("the described frame's descriptor");
+  x.check_counts("the described frame's descriptor");
   const std::size_t signature = place_cuts_.enabled() ? static_cast<std::size_t>(kSignatureBytes) : 0;
   if (frame.signature.size() != signature) {
     internal::throw_invalid("the frame description has a place signature of ", frame.signature.size(),

@@ -110,8 +110,36 @@ TEST(DescribedFrames, DamagedBytesAreFormatErrors) {
   EXPECT_NE(message_of<FormatError>([&] { decode_frame_description(other.data(), other.size()); }).find("mark"),
             std::string::npos);
   other = bytes;
-  other[8] = 3;  // version 3
-  EXPECT_NE(message_of<FormatError>([&] { decode_frame_description(other.data(), other.size()); }).find("version 3"),
+  other[8] = 4;  // version 4
+  EXPECT_NE(message_of<FormatError>([&] { decode_frame_description(other.data(), other.size()); }).find("version 4"),
+            std::string::npos);
+  // Version 3 ends in a CRC-32 of its bytes: any flipped bit is refused
+  // (before, 299 of 300 random flips decoded, 46 into another descriptor).
+  for (std::size_t at = sizeof(std::uint64_t) * 2; at < bytes.size(); at += (at < 400 ? 1 : 13)) {
+    std::vector<std::uint8_t> flipped = bytes;
+    flipped[at] ^= static_cast<std::uint8_t>(1u << (at % 8));
+    EXPECT_THROW(decode_frame_description(flipped.data(), flipped.size()), FormatError) << "byte " << at;
+  }
+  EXPECT_NE(message_of<FormatError>([&] {
+              std::vector<std::uint8_t> flipped = bytes;
+              flipped[200] ^= 1;
+              decode_frame_description(flipped.data(), flipped.size());
+            }).find("checksum"),
+            std::string::npos);
+  // Version 2 (no checksum) is still read, as it was written.
+  std::vector<std::uint8_t> v2(bytes.begin(), bytes.end() - 4);
+  v2[8] = 2;
+  const FrameDescription old = decode_frame_description(v2.data(), v2.size());
+  const FrameDescription now = decode_frame_description(bytes.data(), bytes.size());
+  EXPECT_EQ(old.descriptor.hist, now.descriptor.hist);
+  EXPECT_EQ(old.records, now.records);
+  EXPECT_EQ(old.signature, now.signature);
+  // Bins that do not add up to their cell's pixels are refused even under a
+  // valid checksum (and in version 2): not a histogram describe() made.
+  std::vector<std::uint8_t> counts = v2;
+  counts[96] ^= 1;  // cell 0's bin 0 (after the 96 bytes of the header)
+  EXPECT_NE(message_of<FormatError>([&] { decode_frame_description(counts.data(), counts.size()); })
+                .find("cell 0's bins add up to"),
             std::string::npos);
   // A huge count in the header asks for nothing beyond the bytes given.
   for (std::size_t at = 8; at < 120; ++at) {

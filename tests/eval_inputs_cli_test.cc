@@ -88,7 +88,7 @@ TEST(EvalCli, ResultsAreWrittenAndInputsCheckedBeforeTheRun) {
   }
   // The same with --detections: --compare and --poses are read before anything is scored.
   write_text(kTmp / "d8.csv", "query,match,score\n4,0,1\n5,1,1\n6,-1,\n7,3,1\n");
-  for (const std::string extra : {" --compare " + q(kTmp / "nowhere.csv"),
+  for (const std::string& extra : {" --compare " + q(kTmp / "nowhere.csv"),
                                   " --report " + q(kTmp / "p.html") + " --poses " + q(kTmp / "poses-3.txt")}) {
     r = lsgd("eval --detections " + q(kTmp / "d8.csv") + " --gt " + q(kTmp / "skipped-gt.txt") +
              " --min-gap 1 --frames 8 --json " + q(kTmp / "c.json") + extra);

@@ -135,6 +135,13 @@ struct Descriptor {
   // Throws InvalidArgument when the vectors' sizes do not match the grid and
   // storage (`what` names the descriptor in the message).
   void check_consistent(const char* what) const;
+  // Throws InvalidArgument (`what` naming it) unless every cell's bins add up
+  // as describe() and compact() make them: exact, to the cell's pixel count
+  // (less only when a bin saturated at 65535); compact, to 0 (an empty cell)
+  // or kCompactMass within the rounding of its 128 bins (less only when a bin
+  // saturated at 255). For descriptors that come from outside (a described
+  // frame's bytes, arrays); check_consistent() first.
+  void check_counts(const char* what) const;
 };
 
 // Builds the descriptor of `image` from its segmentation (same size; throws

@@ -413,6 +413,14 @@ def test_describe_to_numpy_and_back():
             (x.histograms, -x.pixels.astype(np.int64), "pixels value -")]:
         with pytest.raises(lsgd.InvalidArgument, match=message):
             lsgd.Descriptor.from_arrays(histograms, pixels, grid=x.grid)
+    # Bins that do not add up to their cell's pixels are no histogram: an
+    # all-zero and an all-full descriptor compared 0.996 alike (l1).
+    zeros, full = np.zeros_like(x.histograms), np.full_like(x.histograms, 100)
+    for histograms in (zeros, full):
+        with pytest.raises(lsgd.InvalidArgument, match="cell 0's bins add up to"):
+            lsgd.Descriptor.from_arrays(histograms, x.pixels, grid=x.grid)
+    with pytest.raises(lsgd.InvalidArgument, match="compact bins add up to"):
+        lsgd.Descriptor.from_arrays(np.full_like(c.histograms, 200), grid=c.grid, cell_pixels=c.cell_pixels)
     same = lsgd.Descriptor.from_arrays(x.histograms.astype(np.int64), x.pixels.astype(np.int64), grid=x.grid)
     assert lsgd.similarity(x, same) == lsgd.similarity(x, x)
     for grid in [(2 ** 31, 2 ** 31), (1.5, 2)]:

@@ -170,6 +170,11 @@ TEST(EvalCli, FlagsThatWouldBeIgnoredAreErrors) {
            {det + " --mode nodes", "--mode"},
            {det + " --gt-rows image", "--gt-rows"},
            {seq + " --frames 10", "--frames"},
+           // A shortcut and an --option of the same key: one would be lost.
+           {seq + " --option search.min_gap=3", "--option search.min_gap and --min-gap both set search.min_gap"},
+           {seq + " --mode nodes --option search.mode=index", "both set search.mode: give one"},
+           {seq + " --threshold 5 --option decision.threshold=6", "both set decision.threshold"},
+           {seq + " --verify none --option verification.stages=temporal", "both set verification.stages"},
            {seq + " --detections " + q(dir / "d.csv"), "exactly one"},
            {"eval" + base, "exactly one"}}) {
     const CmdResult r = lsgd(args);

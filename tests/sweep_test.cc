@@ -172,6 +172,17 @@ TEST(SweepGrid, TheWindowIsNotSwept) {
       << message;
 }
 
+// The same for a window in the options the grid is applied on (Python's
+// lsgd.sweep(options=...), a --config).
+TEST(SweepGrid, AWindowInTheOptionsIsRefused) {
+  lsgd::DetectorOptions base;
+  base.search.min_gap = 3;
+  const std::string message = message_of<InvalidArgument>([&] { expand_sweep({}, base); });
+  EXPECT_NE(message.find("the sweep's options set search.min_gap = 3: the window is set per dataset"),
+            std::string::npos)
+      << message;
+}
+
 TEST(SweepGrid, KeySweptTwiceIsAnError) {
   const std::string message = message_of<InvalidArgument>([] {
     expand_sweep({parse_sweep_axis("search.top_n=1"), parse_sweep_axis("search.top_n=2")}, {});
@@ -478,6 +489,20 @@ TEST_F(SweepCli, BadSetFailsBeforeAnyRunOrOutput) {
   const CmdResult gap = lsgd_cli("sweep " + dataset() + " --set search.min_gap=5");
   EXPECT_EQ(gap.code, 1);
   EXPECT_NE(gap.err.find("--dataset"), std::string::npos) << gap.err;
+  // A fixed flag the grid would override, or a window the datasets replace,
+  // is refused, not dropped without a word.
+  for (const auto& [args, expected] : std::vector<std::pair<std::string, std::string>>{
+           {" --option search.min_gap=3", "--option search.min_gap: the window is set per dataset"},
+           {" --min-gap 3", "unknown option --min-gap"},
+           {" --mode nodes --set search.mode=index",
+            "--set search.mode=index sweeps search.mode, which --mode also sets: give one"},
+           {" --threshold 3 --set decision.threshold=5,6", "which --threshold also sets"},
+           {" --option search.top_n=3 --set search.top_n=5", "which --option search.top_n also sets"}}) {
+    const CmdResult refused = lsgd_cli("sweep " + dataset() + args + " --csv '" + csv.string() + "'");
+    EXPECT_EQ(refused.code, 1) << args;
+    EXPECT_NE(refused.err.find(expected), std::string::npos) << args << ": " << refused.err;
+    EXPECT_FALSE(fs::exists(csv));
+  }
   const CmdResult missing = lsgd_cli("sweep --dataset x='" + (kTmp / "nowhere").string() + "',5");
   EXPECT_EQ(missing.code, 1);
   EXPECT_NE(missing.err.find("nowhere"), std::string::npos) << missing.err;

@@ -38,9 +38,24 @@ def _worker_address():
         return ""
 
 
+# How long a sweep waits for its cluster's first worker before it says so.
+WORKER_WAIT_S = 30
+
+
 def sweep(client, datasets, sets, options, jobs, strict):
     """lsgd.sweep's rows, each cell run as a task of `client` (a distributed.Client)."""
+    if not (callable(getattr(client, "submit", None)) and callable(getattr(client, "wait_for_workers", None))):
+        raise _lsgd.InvalidArgument(
+            f"lsgd.sweep: client is a {type(client).__name__}, not a distributed.Client "
+            "(distributed.Client('tcp://HOST:8786') for a scheduler, or a LocalCluster's)")
     plan = _lsgd._sweep_plan(list(datasets), list(sets), options, jobs)
+    # A cluster without a worker would run nothing and say nothing.
+    try:
+        client.wait_for_workers(1, timeout=WORKER_WAIT_S)
+    except (TimeoutError, OSError) as error:
+        address = getattr(getattr(client, "scheduler", None), "address", "") or "the scheduler"
+        raise _lsgd.Error(f"lsgd.sweep: the Dask cluster at {address} has had no worker for "
+                          f"{WORKER_WAIT_S} s (start one: dask worker {address})") from error
     try:
         from distributed import as_completed
     except ImportError as error:  # a client was given, so Dask is there; keep the message clear

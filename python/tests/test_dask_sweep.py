@@ -139,3 +139,13 @@ def test_robots_describe_on_workers_and_the_map_stores(route, client):  # noqa: 
         assert (got.loop, got.best.frame, [c.frame for c in got.candidates]) == (
             expected.loop, expected.best.frame, [c.frame for c in expected.candidates])
     assert reference.size == map_.size == len(images)
+
+
+def test_a_cluster_without_a_worker_is_an_error_not_a_hang(route, monkeypatch):  # noqa: F811
+    import lsgd._dask
+    monkeypatch.setattr(lsgd._dask, "WORKER_WAIT_S", 1)
+    with distributed.LocalCluster(n_workers=0, processes=False, dashboard_address=":0",
+                                  silence_logs=40) as cluster:
+        with distributed.Client(cluster) as c:
+            with pytest.raises(lsgd.Error, match="has had no worker for 1 s"):
+                lsgd.sweep(["route=%s,10" % route], client=c)

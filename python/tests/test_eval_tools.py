@@ -77,6 +77,12 @@ def test_everything_is_checked_before_the_first_run(route):
         lsgd.sweep(["route=%s,10" % route], ["segmentation.superpixel_size=0,30"])
     with pytest.raises(lsgd.InvalidArgument, match="per dataset"):
         lsgd.sweep(["route=%s,10" % route], ["search.min_gap=5,10"])
+    # A window in the options would be replaced by each dataset's: refused.
+    with pytest.raises(lsgd.InvalidArgument, match="options set search.min_gap = 3: the window is set per dataset"):
+        lsgd.sweep(["route=%s,10" % route], options={"search.min_gap": 3})
+    # A client that is not a distributed.Client: said so, before anything runs.
+    with pytest.raises(lsgd.InvalidArgument, match="distributed.Client"):
+        lsgd.sweep(["route=%s,10" % route], client="tcp://127.0.0.1:8786")
     with pytest.raises(lsgd.Error):
         lsgd.sweep(["route=/no/such/folder,10"])
     with pytest.raises(lsgd.InvalidArgument, match="used twice"):

@@ -247,6 +247,12 @@ std::vector<SweepPoint> expand_sweep(const std::vector<SweepAxis>& axes,
                   " configurations, more than the ", kMaxPoints,
                   " a sweep runs (each one is a whole run of every dataset): sweep fewer values");
   }
+  // Each dataset has its own window (sweep_cells()): one in the options would
+  // be dropped without a word.
+  if (base.search.min_gap != DetectorOptions{}.search.min_gap) {
+    throw_invalid("the sweep's options set search.min_gap = ", base.search.min_gap,
+                  ": the window is set per dataset, by its spec NAME=...,MIN_GAP, so it would be ignored");
+  }
   std::vector<std::string> keys;
   std::size_t total = 1;
   for (const SweepAxis& axis : axes) {

@@ -274,11 +274,24 @@ void run_cells(const std::vector<Cell>& cells, int jobs, bool strict, SweepOutpu
 void sweep(const SweepArgs& args) {
   // Everything is validated before the first run: grid, configs, datasets, outputs.
   const DetectorOptions base = args.detector.resolve();
+  const std::vector<std::pair<std::string, std::string>> fixed = args.detector.keys();
   std::vector<eval::SweepAxis> axes;
   std::vector<std::string> keys;
   for (const std::string& spec : args.sets) {
     axes.push_back(eval::parse_sweep_axis(spec));
     keys.push_back(axes.back().key);
+    for (const auto& [key, flag] : fixed) {  // the swept values would replace it without a word
+      if (key == axes.back().key) {
+        throw InvalidArgument("--set " + spec + " sweeps " + key + ", which " + flag +
+                              " also sets: give one");
+      }
+    }
+  }
+  for (const auto& [key, flag] : fixed) {
+    if (key == "search.min_gap") {
+      throw InvalidArgument(flag + ": the window is set per dataset, by its spec NAME=...,MIN_GAP "
+                            "(--dataset), so it would be ignored");
+    }
   }
   const std::vector<eval::SweepPoint> points = eval::expand_sweep(axes, base);
   std::vector<Dataset> datasets;

@@ -58,12 +58,36 @@ DetectorOptions DetectorFlags::resolve() const {
   return resolved;
 }
 
-void DetectorFlags::apply(DetectorOptions& o) const {
+std::vector<std::pair<std::string, std::string>> DetectorFlags::keys() const {
+  std::vector<std::pair<std::string, std::string>> out;
   for (const std::string& setting : options) {
     const std::size_t eq = setting.find('=');
     if (eq == std::string::npos) {
       throw InvalidArgument("--option " + setting + ": expected KEY=VALUE (keys: lsgd options)");
     }
+    out.emplace_back(setting.substr(0, eq), "--option " + setting.substr(0, eq));
+  }
+  if (!mode.empty()) out.emplace_back("search.mode", "--mode");
+  if (min_gap) out.emplace_back("search.min_gap", "--min-gap");
+  if (threshold) out.emplace_back("decision.threshold", "--threshold");
+  if (!verify.empty()) out.emplace_back("verification.stages", "--verify");
+  return out;
+}
+
+void DetectorFlags::apply(DetectorOptions& o) const {
+  const std::vector<std::pair<std::string, std::string>> set = keys();
+  for (std::size_t i = 0; i < set.size(); ++i) {
+    for (std::size_t k = 0; k < i; ++k) {
+      // Two --option of one key: the last wins, as on any command line; a
+      // shortcut and an --option of one key: one would be lost without a word.
+      if (set[k].first == set[i].first && set[i].second.rfind("--option", 0) != 0) {
+        throw InvalidArgument(set[k].second + " and " + set[i].second + " both set " + set[i].first +
+                              ": give one");
+      }
+    }
+  }
+  for (const std::string& setting : options) {
+    const std::size_t eq = setting.find('=');
     set_option(o, setting.substr(0, eq), setting.substr(eq + 1));
   }
   if (!mode.empty()) set_option(o, "search.mode", mode);

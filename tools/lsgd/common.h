@@ -18,6 +18,7 @@
 #include "lsgd/io/layouts.h"
 
 #include <CLI/CLI.hpp>
+#include <utility>
 
 namespace lsgd::cli {
 
@@ -37,8 +38,12 @@ struct DetectorFlags {
   void add_to(CLI::App& command);
   // Defaults, then the config file, then the flags; validated.
   DetectorOptions resolve() const;
+  // The option keys the flags set, each with the flag that sets it
+  // ("search.mode", "--mode"; "decision.threshold", "--option decision.threshold").
+  std::vector<std::pair<std::string, std::string>> keys() const;
   // Sets the options the flags name on `options` (--option first, then the
-  // shortcuts --mode, --min-gap, --threshold, --verify) and validates.
+  // shortcuts --mode, --min-gap, --threshold, --verify) and validates. A
+  // shortcut and an --option of the same key is an error (one would be lost).
   void apply(DetectorOptions& options) const;
 };
 

@@ -233,6 +233,37 @@ TEST_F(Files, UnwritableOutputsStopTheCommandFirst) {
   fs::permissions(db, fs::perms::owner_read | fs::perms::owner_write);
 }
 
+// A legal name as long as the file system takes (255 bytes) is written:
+// its temporary file gets a short name beside it (NAME.tmp-PID did not fit,
+// and the results were lost after the run). A name longer than the folder
+// takes, or a database whose SQLite companions would not fit, fails first.
+TEST_F(Files, NamesAsLongAsTheFileSystemTakesAreWrittenLongerOnesRefusedFirst) {
+  const std::string eval = "eval --sequence " + q(dir_ / "sequence.txt") + " --gt " +
+                           q(dir_ / "gt.txt") + " --min-gap 5";
+  const fs::path folder = kTmp / "long-names";
+  fs::create_directories(folder);
+  const fs::path longest = folder / (std::string(250, 'a') + ".json");  // 255 bytes
+  CmdResult r = lsgd(eval + " --json " + q(longest));
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_NE(slurp(longest).find("recall_at_1"), std::string::npos);
+  EXPECT_EQ(std::distance(fs::directory_iterator(folder), fs::directory_iterator{}), 1);  // no temporary left
+  const fs::path too_long = folder / (std::string(256, 'b') + ".json");
+  r = lsgd(eval + " --json " + q(too_long));
+  EXPECT_EQ(r.code, 1);
+  EXPECT_NE(r.err.find("its name is 261 bytes, more than the 255 its folder takes"), std::string::npos)
+      << r.err;
+  EXPECT_EQ(r.out, "");  // nothing was run
+  const fs::path db = folder / (std::string(250, 'c') + ".db");
+  r = lsgd("run --sequence " + q(dir_ / "sequence.txt") + " --output /dev/null --database " + q(db));
+  EXPECT_EQ(r.code, 1);
+  EXPECT_NE(r.err.find("give a name of at most 247 bytes (nothing was created)"), std::string::npos) << r.err;
+  EXPECT_FALSE(fs::exists(db));
+  const fs::path fits = folder / (std::string(244, 'd') + ".db");  // 247 bytes
+  r = lsgd("run --sequence " + q(dir_ / "sequence.txt") + " --output /dev/null --database " + q(fits));
+  EXPECT_EQ(r.code, 0) << r.err;
+  EXPECT_TRUE(fs::exists(fits));
+}
+
 // A result that cannot be written whole is an error (exit 1 naming the file),
 // never a success; a device given as an output is written, never replaced.
 TEST_F(Files, AFullDiskFailsTheCommandAndDevicesStayDevices) {

@@ -1,4 +1,5 @@
 #include "lsgd/io/database.h"
+#include "lsgd/io/files.h"
 
 #include "io/database_internal.h"
 #include "internal/file_mode.h"
@@ -256,7 +257,18 @@ Database Database::create(const std::string& path, const DetectorOptions& option
              "Move '", path, "-wal' and '", path, "-shm' away, or give another path "
              "(nothing was created)");
   }
-  const std::string tmp = path + ".tmp-" + std::to_string(::getpid());
+  // SQLite names its companions FILE-journal, -wal and -shm: the file's name
+  // must leave room for the longest.
+  constexpr std::size_t kCompanionSuffix = 8;  // "-journal"
+  const std::size_t slash = path.rfind('/');
+  const std::size_t name = slash == std::string::npos ? path.size() : path.size() - slash - 1;
+  if (const std::size_t limit = name_limit(path); name + kCompanionSuffix > limit) {
+    io_error(path, "its name is ", name, " bytes; SQLite's companion NAME-journal would be ",
+             name + kCompanionSuffix, ", over the folder's limit of ", limit,
+             " bytes a name: give a name of at most ", limit - kCompanionSuffix,
+             " bytes (nothing was created)");
+  }
+  const std::string tmp = temporary_beside(path, kCompanionSuffix);
   check_path_length(path, tmp);
   for (const char* suffix : {"", "-journal", "-wal", "-shm"}) ::unlink((tmp + suffix).c_str());
   {

@@ -187,7 +187,7 @@ void write_output_file(const std::string& path, const std::string& content,
     if (!ok) write_failed(what, path, error);
     return;
   }
-  const std::string temp = concat(path, ".tmp-", ::getpid());
+  const std::string temp = temporary_beside(path);
   const Writing writing(temp);  // an interrupted write leaves no temporary file
   const int fd = ::open(temp.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
   if (fd < 0) throw IoError(concat("cannot write ", what, " '", path, "': ", std::strerror(errno)));
@@ -204,6 +204,29 @@ void write_output_file(const std::string& path, const std::string& content,
     std::remove(temp.c_str());
     throw IoError(concat("cannot write ", what, " '", path, "': ", std::strerror(error)));
   }
+}
+
+std::size_t name_limit(const std::string& path) {
+  const std::size_t slash = path.rfind('/');
+  const std::string folder = slash == std::string::npos ? "." : slash == 0 ? "/" : path.substr(0, slash);
+  errno = 0;
+  const long limit = ::pathconf(folder.c_str(), _PC_NAME_MAX);
+  return limit > 0 ? static_cast<std::size_t>(limit) : 255;
+}
+
+std::string temporary_beside(const std::string& path, std::size_t reserve) {
+  const std::string suffix = concat(".tmp-", ::getpid());
+  const std::size_t slash = path.rfind('/');
+  const std::size_t name = slash == std::string::npos ? path.size() : path.size() - slash - 1;
+  if (name + suffix.size() + reserve <= name_limit(path)) return path + suffix;
+  std::uint64_t h = 14695981039346656037ULL;  // FNV-1a of the whole path: one name per output
+  for (const char c : path) {
+    h ^= static_cast<unsigned char>(c);
+    h *= 1099511628211ULL;
+  }
+  char hex[17];
+  std::snprintf(hex, sizeof hex, "%016llx", static_cast<unsigned long long>(h));
+  return path.substr(0, slash == std::string::npos ? 0 : slash + 1) + ".lsgd-" + hex + suffix;
 }
 
 void throw_cannot_write(const std::string& path) {

@@ -14,6 +14,7 @@
 #include "internal/check.h"
 #include "internal/file_mode.h"
 #include "lsgd/error.h"
+#include "lsgd/io/files.h"
 
 namespace lsgd::cli {
 namespace {
@@ -132,6 +133,12 @@ struct Outputs {
 // An output: writable where it goes, a regular file when it exists, and not
 // the file of another flag; notes it in `outputs`.
 void check_output(const std::string& flag, const std::string& path, Outputs& outputs) {
+  // A name the file system cannot hold fails now, not after the run.
+  const std::string name = fs::path(path).filename().string();
+  if (const std::size_t limit = io::name_limit(path); name.size() > limit) {
+    unwritable(flag, path, concat("its name is ", name.size(), " bytes, more than the ", limit,
+                                  " its folder takes"));
+  }
   FileId id{};
   struct stat st {};
   if (identify(path, id, st)) {

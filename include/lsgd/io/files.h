@@ -41,6 +41,16 @@ std::vector<unsigned char> read_file(const std::string& path, const std::string&
 void write_output_file(const std::string& path, const std::string& content,
                        const std::string& what);
 
+// The longest file name the folder of `path` takes (pathconf's NAME_MAX;
+// 255 when the folder does not say or does not exist yet).
+std::size_t name_limit(const std::string& path);
+// A temporary file beside `path`, for writing it whole and renaming it over:
+// PATH.tmp-PID, or, when that name and `reserve` more bytes (suffixes the
+// writer adds, as SQLite's -journal) would not fit the folder's name limit,
+// a short name in the same folder (.lsgd-HASH.tmp-PID): a legal 255-byte
+// output name still gets its temporary file.
+std::string temporary_beside(const std::string& path, std::size_t reserve = 0);
+
 // Installs handlers of SIGINT, SIGTERM, SIGHUP and SIGXFSZ (a file size
 // limit reached; those not ignored) that
 // remove the temporary file write_output_file() is writing, then end the

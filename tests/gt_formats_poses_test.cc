@@ -103,6 +103,20 @@ TEST(GroundTruthFromPoses, BoundsAreStrict) {
   EXPECT_THROW(lsgd::eval::groundtruth_from_poses({{1e300, 0, 0}}, 1.0, 0), lsgd::InvalidArgument);
 }
 
+// Any distance in range works, however small against the poses' extent
+// (1e-15 m was refused blaming a valid coordinate: its cell index passed 1e15).
+TEST(GroundTruthFromPoses, ATinyDistanceFindsTheFramesAtTheSamePlace) {
+  std::vector<Pose> poses;
+  for (int k = 0; k < 100; ++k) poses.push_back({1000.0 + 3.7 * k, -2.0, 250.0 + 0.1 * k});
+  poses.push_back(poses[10]);  // frame 100 at frame 10's place exactly
+  poses.push_back({1000.0 + 3.7 * 20 + 1e-9, -2.0, 250.0 + 0.1 * 20});  // 1e-9 m from frame 20
+  for (double d : {1e-15, 1e-12, 1e-6}) {
+    const Pairs expected = brute_force(poses, d, 5);
+    EXPECT_EQ(pairs_of(lsgd::eval::groundtruth_from_poses(poses, d, 5)), expected) << d;
+    EXPECT_EQ(expected, (d < 1e-9 ? Pairs{{100, 10}} : Pairs{{100, 10}, {101, 20}})) << d;
+  }
+}
+
 // Poses of a robot standing still give every pair of frames: refused while
 // they are added (10,000 poses were 49 M pairs, 1.3 GB), the file named;
 // a coordinate beyond the range names the file too.
@@ -120,7 +134,7 @@ TEST(GroundTruthFromPoses, ABombOfPairsIsRefusedNamingTheFile) {
   EXPECT_EQ(lsgd::eval::load_groundtruth(p.string(), o).pairs(), 2799 * 2800 / 2);
   const fs::path far = write_file("far.txt", "1 0 0 1e308 0 1 0 0 0 0 1 0\n");
   const std::string f = message_of<lsgd::FormatError>([&] { lsgd::eval::load_groundtruth(far.string(), o); });
-  EXPECT_TRUE(contains(f, far.string()) && contains(f, "not finite or too large")) << f;
+  EXPECT_TRUE(contains(f, far.string()) && contains(f, "not finite or beyond 1e12 metres")) << f;
 }
 
 // ---- loopinf -------------------------------------------------------------------------

@@ -305,9 +305,22 @@ GroundTruth groundtruth_from_poses(const std::vector<Pose>& poses, double distan
   internal::check_range<std::int64_t>("poses min_gap", min_gap, 0, kMaxWindowFrames, "frames");
   const auto n = static_cast<std::int64_t>(poses.size());
   GroundTruth gt(n);
-  const auto cell_of = [distance](const Pose& p) {
-    const auto index = [distance](double v) {
-      const double c = std::floor(v / distance);
+  // Cells of side `distance`, or larger when the poses span more than 1e14
+  // such cells (a tiny distance in range): pairs are still tested exactly,
+  // a cell only finds the candidates.
+  double extent = 0;
+  for (const Pose& p : poses) {
+    for (const double v : {p.x, p.y, p.z}) {
+      if (!(std::abs(v) <= 1e12)) {
+        internal::throw_invalid("camera centre coordinate ", v, " is not finite or beyond 1e12 metres");
+      }
+      extent = std::max(extent, std::abs(v));
+    }
+  }
+  const double side = std::max(distance, extent / 1e14);
+  const auto cell_of = [side](const Pose& p) {
+    const auto index = [side](double v) {
+      const double c = std::floor(v / side);
       if (!(std::abs(c) < 1e15)) {
         internal::throw_invalid("camera centre coordinate ", v, " is not finite or too large");
       }
@@ -315,7 +328,7 @@ GroundTruth groundtruth_from_poses(const std::vector<Pose>& poses, double distan
     };
     return Cell{index(p.x), index(p.y), index(p.z)};
   };
-  // Cells of side `distance`: a pair closer than that lies in adjacent cells.
+  // A pair closer than `distance` lies in the same or adjacent cells.
   std::unordered_map<Cell, std::vector<std::int64_t>, CellHash> grid;
   const double d2 = distance * distance;
   for (std::int64_t i = 0; i < n; ++i) {

@@ -295,6 +295,37 @@ TEST_F(Files, AFullDiskFailsTheCommandAndDevicesStayDevices) {
 // SIGXFSZ; SIGINT, SIGTERM and SIGHUP alike) leaves no temporary file; one
 // started with standard error closed does not write its diagnostics into
 // the first file it opens.
+// Under a file size limit (ulimit -f) a write that passes it is an error
+// naming the file, as a full disk's (lsgd was killed by SIGXFSZ, no word
+// said); with no file descriptor left for a new database, nothing is left
+// behind to pin the run's options for the next one.
+TEST_F(Files, ASizeLimitOrNoDescriptorLeftIsAnErrorAndLeavesNoDatabase) {
+  const auto limited = [](const std::string& limit, const std::string& args) {
+    return lsgd::test::run_command("/bin/sh", "-c \"ulimit " + limit + "; exec '" + std::string(LSGD_CLI) + "' " +
+                                                  args + "\"",
+                                   kTmp);
+  };
+  const fs::path csv = kTmp / "limited.csv", json = kTmp / "limited.json";
+  CmdResult r = limited("-f 1", "run --sequence " + q(dir_ / "sequence.txt") + " --output " + q(csv));
+  EXPECT_EQ(r.code, 1) << r.err;
+  EXPECT_NE(r.err.find("to '" + csv.string() + "' (File too large)"), std::string::npos) << r.err;
+  r = limited("-f 1", "eval --sequence " + q(dir_ / "sequence.txt") + " --gt " + q(dir_ / "gt.txt") +
+                          " --min-gap 5 --json " + q(json));
+  EXPECT_EQ(r.code, 1) << r.err;
+  EXPECT_NE(r.err.find(json.string()), std::string::npos) << r.err;
+  EXPECT_FALSE(fs::exists(json));
+  for (const auto& entry : fs::directory_iterator(kTmp)) {
+    EXPECT_EQ(entry.path().filename().string().find(".tmp-"), std::string::npos) << entry.path();
+  }
+  const fs::path db = kTmp / "no-descriptors.db";
+  r = limited("-n 5", "run --sequence " + q(dir_ / "sequence.txt") + " --output /dev/null --database " + q(db));
+  EXPECT_NE(r.code, 0) << r.err;
+  EXPECT_FALSE(fs::exists(db)) << r.err;
+  r = lsgd("run --sequence " + q(dir_ / "sequence.txt") + " --output /dev/null --database " + q(db) +
+           " --option segmentation.superpixel_size=30");
+  EXPECT_EQ(r.code, 0) << r.err;  // a new database, not a resume of the failed one's options
+}
+
 TEST_F(Files, AKilledWriteLeavesNoTemporaryAndAClosedStderrStaysClosed) {
   const fs::path out = kTmp / "killed";
   fs::create_directories(out);

@@ -1,8 +1,10 @@
 #include "lsgd/eval/results_csv.h"
 
 #include <algorithm>
+#include <cerrno>
 #include <charconv>
 #include <cmath>
+#include <cstring>
 #include <filesystem>
 #include <iomanip>
 #include <iostream>
@@ -85,11 +87,15 @@ void CsvWriter::write(const Result& r, const std::string& image) {
     *out_ << ',';
     if (std::isfinite(r.stamp)) *out_ << shortest_text(r.stamp);
   }
+  errno = 0;
   *out_ << '\n' << std::flush;
   if (!*out_) {
+    // The system's reason when the stream kept it (a full disk, a file size limit).
+    const int error = errno;
+    const std::string why = error == ENOSPC || error == EFBIG || error == EIO ? std::strerror(error)
+                                                                             : "is the disk full?";
     throw IoError("error while writing the row of frame " + std::to_string(r.frame) + " to " +
-                  (path_.empty() ? std::string("standard output")
-                                 : "'" + path_ + "' (is the disk full?)"));
+                  (path_.empty() ? std::string("standard output") : "'" + path_ + "' (" + why + ")"));
   }
   loops_ += r.loop ? 1 : 0;
 }

@@ -326,7 +326,15 @@ Database Database::create(const std::string& path, const DetectorOptions& option
     ::fsync(fd);
     ::close(fd);
   }
-  return open(path, Mode::kReadWrite);
+  // A database that cannot be opened once created (no file descriptor left,
+  // an I/O error) holds nothing yet: removed, so that it does not pin these
+  // options for the next run at this path.
+  try {
+    return open(path, Mode::kReadWrite);
+  } catch (...) {
+    for (const char* suffix : {"", "-journal", "-wal", "-shm"}) ::unlink((path + suffix).c_str());
+    throw;
+  }
 }
 
 const std::string& Database::path() const { return impl_->path; }

@@ -152,7 +152,10 @@ void remove_temporary_files_on_signal() {
   for (const int signal : {SIGINT, SIGTERM, SIGHUP, SIGXFSZ}) {
     struct sigaction action {};
     if (::sigaction(signal, nullptr, &action) != 0 || action.sa_handler == SIG_IGN) continue;
-    action.sa_handler = remove_temporary_and_die;
+    // A file size limit (ulimit -f): the write that passes it fails with
+    // EFBIG instead of killing the process, so the error names the file, as
+    // a full disk's does, and the temporary file is removed on that path.
+    action.sa_handler = signal == SIGXFSZ && action.sa_handler == SIG_DFL ? SIG_IGN : remove_temporary_and_die;
     sigemptyset(&action.sa_mask);
     action.sa_flags = 0;
     ::sigaction(signal, &action, nullptr);

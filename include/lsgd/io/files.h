@@ -51,10 +51,11 @@ std::size_t name_limit(const std::string& path);
 // output name still gets its temporary file.
 std::string temporary_beside(const std::string& path, std::size_t reserve = 0);
 
-// Installs handlers of SIGINT, SIGTERM, SIGHUP and SIGXFSZ (a file size
-// limit reached; those not ignored) that
+// Installs handlers of SIGINT, SIGTERM and SIGHUP (those not ignored) that
 // remove the temporary file write_output_file() is writing, then end the
-// process by the signal as before. For programs (lsgd calls it first).
+// process by the signal as before; SIGXFSZ (a file size limit reached), when
+// it would end the process, is ignored instead, so that the write fails with
+// EFBIG and its error names the file. For programs (lsgd calls it first).
 void remove_temporary_files_on_signal();
 
 }  // namespace lsgd::io

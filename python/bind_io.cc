@@ -67,8 +67,10 @@ void bind_database_contents(DatabaseClass& database) {
            "Saves the detector's search index (index mode's graph) so a resume need not rebuild "
            "it; returns the frames it covers.")
       .def("append", [](PyDatabase& db, const lsgd::Detector& d, const lsgd::Result& r, std::int64_t session,
-                        const std::string& name, std::int64_t frame) {
-             db.get().append(d, r, session, name, frame);
+                        const py::object& name, std::int64_t frame) {
+             // The image's name as a path (open_sequence's str, bytes, pathlib.Path): a
+             // name that is not UTF-8 is stored as its bytes, as lsgd run stores it.
+             db.get().append(d, r, session, path_of(name, "append: name"), frame);
            }, py::arg("detector"), py::arg("result"), py::arg("session"), py::arg("name") = "",
            py::arg("frame") = -1, "Stores the detector's last frame (call right after process()).")
       .def("forget", [](PyDatabase& db, std::int64_t first_id, std::int64_t last_id) {
@@ -104,13 +106,13 @@ void bind_database_handle(DatabaseClass& database) {
              db.close();
              return false;
            })
-      .def_property_readonly("path", [](const PyDatabase& db) { return db.path; })
+      .def_property_readonly("path", [](const PyDatabase& db) { return fs_str(db.path); })
       .def_property_readonly("frames", [](const PyDatabase& db) { return db.get().frames(); })
       .def_property_readonly("last_session", [](const PyDatabase& db) { return db.get().last_session(); })
       .def_property_readonly("options", [](const PyDatabase& db) { return options_dict(db.get().options()); })
       .def("frame_ids", [](const PyDatabase& db) { return db.get().frame_ids(); })
       .def("__repr__", [](const PyDatabase& db) {
-        return "Database('" + db.path + "', " +
+        return "Database(" + py::repr(fs_str(db.path)).cast<std::string>() + ", " +
                (db.db ? std::to_string(db.db->frames()) + " frames)" : std::string("closed)"));
       });
 }

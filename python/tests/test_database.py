@@ -248,3 +248,25 @@ def test_callers_ids_and_stamps(tmp_path):
         assert db.frame_ids() == [50 + 10 * i for i in range(10)]
         r = db.detector()
         assert [r.id_of(k) for k in range(10)] == db.frame_ids() and r.stamp_of(9) == 9.0
+
+
+def test_names_that_are_not_utf8(tmp_path):
+    """A database and images whose names are not UTF-8 (issue 35, fifth pass:
+    Database.path and repr raised UnicodeDecodeError, and append refused the
+    name open_sequence itself returned, after process() had taken the frame)."""
+    folder = os.fsencode(tmp_path) + b"/d\xff"
+    os.mkdir(folder)
+    for i, image in enumerate(route(3, 1)):
+        write_pgm(folder + b"/%d.pgm" % i, image)
+    path = os.fsencode(tmp_path) + b"/m\xfe.db"
+    with lsgd.Database.create(path) as db:
+        assert os.fsencode(db.path) == path
+        assert "m\\udcfe.db" in repr(db)
+        images = lsgd.open_sequence(folder)
+        detector = db.detector()
+        for k, image in enumerate(images):
+            db.append(detector, detector.process(lsgd.read_image(image)), 0, image)
+        db.append(detector, detector.process(lsgd.read_image(images[0])), 0, pathlib.Path(os.fsdecode(images[0])))
+        with pytest.raises(lsgd.InvalidArgument, match="append: name: int is not a path"):
+            db.append(detector, detector.process(lsgd.read_image(images[0])), 0, 7)
+    assert lsgd.Database.open(path, writable=False).frames == 4  # the refused one is not stored

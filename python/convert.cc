@@ -62,19 +62,39 @@ std::vector<std::string> paths_of(const py::handle& values, const char* what) {
 
 namespace {
 
-std::string option_value_text(const py::handle& value) {
+// Python text as bytes: a str that is not valid UTF-8 (lone surrogates, as
+// os.fsdecode makes them) keeps its bytes (surrogateescape), so the library
+// refuses it naming the option instead of pybind11's bare "Unable to cast".
+std::string text_of(const py::handle& value) {
+  if (py::isinstance<py::bytes>(value)) return value.cast<std::string>();
+  const py::object encoded = py::str(value).attr("encode")("utf-8", "surrogateescape");
+  return encoded.cast<std::string>();
+}
+
+bool is_option_key(const std::string& key) {
+  for (const auto& f : lsgd::DetectorOptions::fields()) {
+    if (f.name == key) return true;
+  }
+  return false;
+}
+
+std::string option_value_text(const std::string& key, const py::handle& value) {
   if (py::isinstance<py::bool_>(value)) {
-    throw lsgd::InvalidArgument("an option value is a bool; options take numbers or names");
+    throw lsgd::InvalidArgument("option " + key + ": the value is a bool; options take numbers or names");
   }
   if (py::isinstance<py::float_>(value)) {
     return lsgd::format_real(value.cast<double>());
   }
   if (py::isinstance<py::list>(value) || py::isinstance<py::tuple>(value)) {
-    std::string text;  // verification.stages as a list of names
-    for (const py::handle& item : value) text += (text.empty() ? "" : ",") + py::str(item).cast<std::string>();
+    if (key != "verification.stages") {  // the one option that is a list of names
+      throw lsgd::InvalidArgument("option " + key + ": the value is a list; only verification.stages "
+                                  "takes a list (of stage names)");
+    }
+    std::string text;
+    for (const py::handle& item : value) text += (text.empty() ? "" : ",") + text_of(item);
     return text.empty() ? "none" : text;
   }
-  return py::str(value).cast<std::string>();
+  return text_of(value);
 }
 
 // Option keys are a few names deep ("verification.temporal.place_cut"): a
@@ -87,7 +107,10 @@ constexpr int kMaxOptionDepth = 16;
 void set_options(lsgd::DetectorOptions& options, const py::dict& values, const std::string& prefix,
                  std::map<std::string, std::string>& given, int depth) {
   for (const auto& [k, v] : values) {
-    const std::string key = prefix + py::str(k).cast<std::string>();
+    const std::string key = prefix + text_of(k);
+    if (py::isinstance<py::dict>(v) && is_option_key(key)) {  // {} was taken as a section, and ignored
+      throw lsgd::InvalidArgument("option " + key + ": the value is a dict; it takes a number or a name");
+    }
     if (py::isinstance<py::dict>(v)) {
       if (depth + 1 >= kMaxOptionDepth) {
         throw lsgd::InvalidArgument("options nested more than " + std::to_string(kMaxOptionDepth) +
@@ -97,7 +120,7 @@ void set_options(lsgd::DetectorOptions& options, const py::dict& values, const s
       set_options(options, v.cast<py::dict>(), key + ".", given, depth + 1);
       continue;
     }
-    const std::string text = option_value_text(v);
+    const std::string text = option_value_text(key, v);
     const auto [at, added] = given.emplace(key, text);
     if (!added) {
       throw lsgd::InvalidArgument("option " + key + " is given twice (" + at->second + " and " + text +

@@ -37,6 +37,19 @@ def test_option_errors_are_the_librarys():
         lsgd.Detector(verification={"stages": "sift"})
     with pytest.raises(lsgd.InvalidArgument, match="bool"):
         lsgd.Detector(search={"min_gap": True})
+    # A value that is no value is refused, naming the option (issue 35, fifth
+    # pass: {} was taken as an empty section and ignored, [] read as 'none',
+    # a lone surrogate gave pybind11's bare "Unable to cast").
+    with pytest.raises(lsgd.InvalidArgument, match="option decision.threshold: the value is a dict"):
+        lsgd.options({"decision.threshold": {}})
+    with pytest.raises(lsgd.InvalidArgument, match="option decision.threshold: the value is a list"):
+        lsgd.options({"decision": {"threshold": []}})
+    with pytest.raises(lsgd.InvalidArgument, match="search mode 'nodes.*' is unknown"):
+        lsgd.options({"search.mode": "nodes\udcff"})
+    with pytest.raises(lsgd.InvalidArgument, match="unknown option 'sea.*rch.mode'"):
+        lsgd.options({"sea\udcffrch.mode": "nodes"})
+    assert lsgd.options({"verification.stages": []})["verification.stages"] == "none"
+    assert lsgd.options({"search": {}}) == lsgd.default_options()
 
 
 def test_the_descriptor_is_an_option_with_its_own_options():

@@ -221,6 +221,11 @@ TEST(ParseConfig, InvalidEnumsAreFormatErrors) {
   expect_error<FormatError>("search:\n  mode: [nodes]\n", {"'search.mode'"});
   expect_error<FormatError>("descriptor:\n  storage: tiny\n",
                             {kSource, "'descriptor.storage'", "tiny", "compact"});
+  // A NUL inside a value is shown as \0 and the message goes on past it
+  // (what() ended at the NUL: "search mode 'nodes (line 2)").
+  expect_error<FormatError>("search:\n  mode: \"nodes\\0evil\"\n",
+                            {"'nodes\\0evil' is unknown: expected one of exhaustive", "(line 2)"});
+  EXPECT_STREQ(InvalidArgument(std::string("a\0b", 3)).what(), "a\\0b");
 }
 
 TEST(LoadConfig, ShippedConfigsLoad) {

@@ -8,10 +8,28 @@
 
 namespace lsgd {
 
-// Base class: catch this to handle every lsgd error.
+// Base class: catch this to handle every lsgd error. A NUL in the message
+// (a value quoted from a config or a Python str) is written as "\0": what()
+// is read up to the first NUL, which cut the rest of the message off.
 class Error : public std::runtime_error {
  public:
-  using std::runtime_error::runtime_error;
+  explicit Error(const std::string& message) : std::runtime_error(visible(message)) {}
+  explicit Error(const char* message) : std::runtime_error(message) {}
+
+ private:
+  static std::string visible(const std::string& message) {
+    if (message.find('\0') == std::string::npos) return message;
+    std::string out;
+    out.reserve(message.size() + 8);
+    for (const char c : message) {
+      if (c == '\0') {
+        out += "\\0";
+      } else {
+        out += c;
+      }
+    }
+    return out;
+  }
 };
 
 // A value given by the caller is out of range or inconsistent

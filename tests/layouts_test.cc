@@ -300,6 +300,22 @@ TEST_F(LayoutTest, KittiTimesTxtIsRequiredAndParsed) {
   kitti_layout.layout = std::string(kKittiLayout);
   expect_error<FormatError>([&] { open_sequence(seq.string(), kitti_layout); },
                             {"no times.txt", "--layout folder"});
+  // A times.txt that is not a file is named for what it is, and the folder
+  // is still found to be a KITTI sequence (it was "has no times.txt", or,
+  // with auto, "no images in folder").
+  fs::create_directory(seq / "times.txt");
+  for (const SequenceOptions& o : {SequenceOptions{}, kitti_layout}) {
+    expect_error<FormatError>([&] { open_sequence(seq.string(), o); }, {"a times.txt that is a folder"});
+  }
+  fs::remove(seq / "times.txt");
+  fs::create_symlink("/dev/zero", seq / "times.txt");
+  expect_error<FormatError>([&] { open_sequence(seq.string(), SequenceOptions{}); },
+                            {"a times.txt that is not a regular file"});
+  fs::remove(seq / "times.txt");
+  fs::create_symlink(seq / "nowhere.txt", seq / "times.txt");
+  expect_error<FormatError>([&] { open_sequence(seq.string(), SequenceOptions{}); },
+                            {"a times.txt that is a broken link"});
+  fs::remove(seq / "times.txt");
 }
 
 TEST_F(LayoutTest, KittiMissingFrameNumberIsAnError) {

@@ -51,9 +51,17 @@ int image_folder_camera(const fs::path& dir) {
   return c >= 0 && c < kKittiCameras ? c : -1;
 }
 
-// True when `dir` holds times.txt and at least one image_X folder.
+// Anything named `p` (a folder, a device, a dangling link): what a layout
+// that expects a file there is about, so it can say what is wrong with it.
+bool exists_as_anything(const fs::path& p) {
+  std::error_code ec;
+  return fs::exists(fs::symlink_status(p, ec));
+}
+
+// True when `dir` holds times.txt (whatever it is: open_kitti says what is
+// wrong with one that is not a file) and at least one image_X folder.
 bool is_kitti_sequence(const fs::path& dir) {
-  if (!is_file(dir / "times.txt")) return false;
+  if (!exists_as_anything(dir / "times.txt")) return false;
   for (int c = 0; c < kKittiCameras; ++c) {
     if (is_folder(dir / ("image_" + std::to_string(c)))) return true;
   }
@@ -153,8 +161,14 @@ Sequence open_kitti(const std::string& path, const SequenceOptions& options) {
   }
   const fs::path times = dir / "times.txt";
   if (!is_file(times)) {
-    throw FormatError(concat("KITTI sequence '", dir.string(),
-                             "' has no times.txt (one line per frame; to read the images without "
+    std::error_code ec;
+    const fs::file_status st = fs::status(times, ec);
+    const std::string what = !exists_as_anything(times)     ? "has no times.txt"
+                             : fs::is_directory(st)         ? "has a times.txt that is a folder"
+                             : !fs::exists(st)              ? "has a times.txt that is a broken link"
+                                                            : "has a times.txt that is not a regular file (a device or a pipe)";
+    throw FormatError(concat("KITTI sequence '", dir.string(), "' ", what,
+                             " (one line per frame; to read the images without "
                              "it use --layout folder on '",
                              folder.string(), "')"));
   }
@@ -249,7 +263,7 @@ bool detect_kitti(const std::string& path, const SequenceOptions&) {
   if (!fs::is_directory(path, ec)) return false;
   const fs::path dir = clean(path);
   return is_kitti_sequence(dir) ||
-         (image_folder_camera(dir) >= 0 && is_file(dir.parent_path() / "times.txt"));
+         (image_folder_camera(dir) >= 0 && exists_as_anything(dir.parent_path() / "times.txt"));
 }
 
 // The layouts, built-in ones first (register_layout()).

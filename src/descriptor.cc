@@ -70,22 +70,10 @@ internal::Registry<DescriptorType>& registry() {
 
 OptionTable<DescriptorOptions> descriptor_table() {
   using S = DescriptorOptions;
-  OptionField<S> type_field;
-  type_field.name = "type";
-  type_field.kind = OptionKind::kChoice;
-  type_field.doc = "what each cell's histogram counts: a registered descriptor (descriptor.h)";
-  type_field.choices = [] {
-    std::vector<std::string> names;
-    for (const DescriptorType& d : descriptor_types()) names.emplace_back(d.name);
-    return names;
-  };
-  type_field.text = [](const S& s) { return s.type; };
-  type_field.set_choice = [](S& s, const std::string& name) {
-    find_descriptor_type(name);
-    s.type = name;
-  };
   OptionTable<S> t = {
-      type_field,
+      internal::registry_choice<S, DescriptorType>(
+          "type", "what each cell's histogram counts: a registered descriptor (descriptor.h)",
+          descriptor_types, find_descriptor_type, &S::type),
       enum_option("storage", &S::storage, {HistogramStorage::kExact, HistogramStorage::kCompact},
                   parse_histogram_storage,
                   "exact: 16-bit counts in 256 bins; compact: 8-bit shares in 128 bins (10 KB "

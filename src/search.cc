@@ -98,22 +98,10 @@ namespace {
 
 OptionTable<SearchOptions> search_table() {
   using S = SearchOptions;
-  OptionField<S> mode_field;
-  mode_field.name = "mode";
-  mode_field.kind = OptionKind::kChoice;
-  mode_field.doc = "how earlier frames are searched: a registered search mode (search.h)";
-  mode_field.choices = [] {
-    std::vector<std::string> names;
-    for (const SearchMode& m : search_modes()) names.emplace_back(m.name);
-    return names;
-  };
-  mode_field.text = [](const S& s) { return s.mode; };
-  mode_field.set_choice = [](S& s, const std::string& name) {
-    check_search_mode(name);
-    s.mode = name;
-  };
   OptionTable<S> t = {
-      mode_field,
+      internal::registry_choice<S, SearchMode>(
+          "mode", "how earlier frames are searched: a registered search mode (search.h)", search_modes,
+          find_search_mode, &S::mode),
       integer_option<S, std::int64_t>("min_gap", &S::min_gap, 0, kMaxWindowFrames, "frames",
                                       "temporal window w: frame j is a candidate for query i "
                                       "only if j < i - w"),

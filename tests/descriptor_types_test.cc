@@ -39,13 +39,7 @@ void levels_codes(const GrayImage& work, const DescriptorOptions& options, GrayI
 
 void register_levels() {
   static const bool once = [] {
-    OwnOption step;
-    step.name = "step";
-    step.kind = OptionKind::kInteger;
-    step.default_value = "16";
-    step.lo = 1;
-    step.hi = 128;
-    step.doc = "gray levels per bin";
+    const OwnOption step{"step", OptionKind::kInteger, "16", 1, 128, false, {}, "", "gray levels per bin"};
     register_descriptor_type({"test-levels", "gray levels in bins of `step`", levels_codes, {step}});
     return true;
   }();

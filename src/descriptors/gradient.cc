@@ -7,22 +7,12 @@
 namespace lsgd {
 
 std::vector<OwnOption> gradient_options() {
-  OwnOption threshold;
-  threshold.name = "threshold";
-  threshold.kind = OptionKind::kReal;
-  threshold.default_value = "1.5";
-  threshold.lo = 0;
-  threshold.hi = 100;
-  threshold.lo_open = true;
-  threshold.doc = "a pixel whose |gx| + |gy| is below this times the frame's mean is flat (bin 0)";
-  OwnOption orientations;
-  orientations.name = "orientations";
-  orientations.kind = OptionKind::kInteger;
-  orientations.default_value = "32";
-  orientations.lo = 4;
-  orientations.hi = 127;
-  orientations.doc = "bins of gradient orientation over the full circle";
-  return {threshold, orientations};
+  return {
+      {"threshold", OptionKind::kReal, "1.5", 0, 100, true, {}, "",
+       "a pixel whose |gx| + |gy| is below this times the frame's mean is flat (bin 0)"},
+      {"orientations", OptionKind::kInteger, "32", 4, 127, false, {}, "",
+       "bins of gradient orientation over the full circle"},
+  };
 }
 
 void gradient_codes(const GrayImage& work, const DescriptorOptions& options, GrayImage& codes) {

@@ -39,6 +39,29 @@ const Table& current_table(Table (*build)()) {
   return tables.back();
 }
 
+// The choice among a registry's names (search.mode, descriptor.type): the
+// names listed when asked (registrations included), a value checked by
+// `find` (InvalidArgument naming the registered ones) before it is set.
+template <class S, class Entry>
+OptionField<S> registry_choice(const char* name, const char* doc, std::vector<Entry> (*entries)(),
+                               Entry (*find)(const std::string&), std::string S::*member) {
+  OptionField<S> f;
+  f.name = name;
+  f.kind = OptionKind::kChoice;
+  f.doc = doc;
+  f.choices = [entries] {
+    std::vector<std::string> names;
+    for (const Entry& e : entries()) names.emplace_back(e.name);
+    return names;
+  };
+  f.text = [member](const S& s) { return s.*member; };
+  f.set_choice = [find, member](S& s, const std::string& value) {
+    find(value);
+    s.*member = value;
+  };
+  return f;
+}
+
 // A mode or stage entry about to be registered, its own options checked
 // (checked_own_options) and their defaults made canonical: `what` ("mode",
 // "stage") with options may not be named as an option of S (section

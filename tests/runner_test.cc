@@ -7,6 +7,8 @@
 #include <unistd.h>
 
 #include <cstdio>
+#include <filesystem>
+#include <fstream>
 #include <functional>
 #include <opencv2/core.hpp>
 #include <opencv2/imgcodecs.hpp>
@@ -15,6 +17,7 @@
 #include <vector>
 
 #include "lsgd/error.h"
+#include "lsgd/io/files.h"
 #include "lsgd/io/sequence.h"
 #include "test_util.h"
 
@@ -58,6 +61,56 @@ TEST(RunDetector, StopsAtTheFirstBadFrameByDefault) {
   });
   EXPECT_NE(e.find("frame 2 (f2.png)"), std::string::npos) << e;
   EXPECT_EQ(seen, (std::vector<std::int64_t>{0, 1}));  // frames before the error were passed on
+}
+
+// A resource the system ran out of (file descriptors) is not a bad image:
+// the run stops there, naming the frame, even when bad frames are skipped
+// (under `ulimit -n 8` every image was skipped, one after the other).
+TEST(RunDetector, AResourceErrorStopsTheRunEvenWhenBadFramesAreSkipped) {
+  FrameSource source = flawed_source();
+  const auto load = source.load;
+  source.load = [load](std::int64_t i) -> cv::Mat {
+    if (i == 5) throw ResourceError("cannot read image 'f5.png': Too many open files");
+    return load(i);
+  };
+  Detector detector(options());
+  RunOptions run;
+  run.skip_bad_frames = true;
+  std::vector<std::int64_t> skipped, seen;
+  const std::string e = test::message_of<ResourceError>([&] {
+    run_detector(detector, source, [&](const Result& r, const FrameTimes&) { seen.push_back(r.frame); },
+                 run, [&](std::int64_t frame, const std::string&, const std::string&) { skipped.push_back(frame); });
+  });
+  EXPECT_NE(e.find("frame 5 (f5.png): cannot read image 'f5.png': Too many open files"), std::string::npos) << e;
+  EXPECT_NE(e.find("the run stops here, the frames before it are done"), std::string::npos) << e;
+  EXPECT_EQ(skipped, (std::vector<std::int64_t>{2}));  // the bad image before it was skipped
+  EXPECT_EQ(seen, (std::vector<std::int64_t>{0, 1, 3, 4}));
+}
+
+// io::read_file says which: no descriptor left is a ResourceError.
+TEST(RunDetector, NoFileDescriptorLeftIsAResourceError) {
+  const std::string path = std::string(LSGD_TEST_TMP) + "/runner-resource.txt";
+  std::filesystem::create_directories(LSGD_TEST_TMP);
+  std::ofstream(path) << "x";
+  rlimit before{};
+  ASSERT_EQ(::getrlimit(RLIMIT_NOFILE, &before), 0);
+  rlimit none = before;
+  none.rlim_cur = 0;  // no new descriptor; those open stay valid
+  ASSERT_EQ(::setrlimit(RLIMIT_NOFILE, &none), 0);
+  std::string message;
+  bool resource = false;
+  try {
+    io::read_file(path, "image", 100);
+  } catch (const ResourceError& e) {
+    resource = true;
+    message = e.what();
+  } catch (const Error& e) {
+    message = e.what();
+  }
+  ASSERT_EQ(::setrlimit(RLIMIT_NOFILE, &before), 0);
+  EXPECT_TRUE(resource) << message;
+  EXPECT_NE(message.find("not the file's fault"), std::string::npos) << message;
+  EXPECT_EQ(io::read_file(path, "image", 100).size(), 1u);
 }
 
 TEST(RunDetector, SkipsBadFramesAndKeepsSourceIndices) {

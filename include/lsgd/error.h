@@ -45,6 +45,14 @@ class IoError : public Error {
   using Error::Error;
 };
 
+// The system ran out of something the work needs (file descriptors,
+// memory for a read): not the input's fault, so a run stops there instead of
+// skipping the input as a bad frame.
+class ResourceError : public IoError {
+ public:
+  using IoError::IoError;
+};
+
 // A file was read but its content is malformed (config, ground truth, image).
 class FormatError : public Error {
  public:

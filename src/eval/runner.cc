@@ -19,6 +19,9 @@ namespace {
 // Re-throws `e` (an lsgd error) with the frame and its source prefixed, keeping its type.
 [[noreturn]] void rethrow_for_frame(const Error& e, std::int64_t frame, const std::string& name) {
   const std::string message = internal::concat("frame ", frame, " (", name, "): ", e.what());
+  if (dynamic_cast<const ResourceError*>(&e)) {
+    throw ResourceError(message + "; the run stops here, the frames before it are done");
+  }
   if (dynamic_cast<const IoError*>(&e)) throw IoError(message);
   if (dynamic_cast<const FormatError*>(&e)) throw FormatError(message);
   if (dynamic_cast<const InvalidArgument*>(&e)) throw InvalidArgument(message);
@@ -86,7 +89,9 @@ void skip_frame(const Error& e, const FrameSource& source, std::int64_t i, std::
                 const FrameTimes& times, const RunOptions& options, const SkipCallback& on_skip,
                 std::vector<FrameRecord>& records) {
   const std::string name = source.name ? source.name(i) : std::to_string(i);
-  if (!options.skip_bad_frames) rethrow_for_frame(e, id, name);
+  // A resource the system ran out of (file descriptors) is not a bad image:
+  // skipping would drop good frames one after the other.
+  if (!options.skip_bad_frames || dynamic_cast<const ResourceError*>(&e)) rethrow_for_frame(e, id, name);
   if (on_skip) on_skip(id, name, e.what());
   if (options.keep_records) {
     FrameRecord skipped;

@@ -68,6 +68,10 @@ std::vector<unsigned char> read_file(const std::string& path, const std::string&
   const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
   if (fd < 0) {
     const int error = errno;
+    if (error == EMFILE || error == ENFILE || error == ENOMEM) {
+      throw ResourceError(concat("cannot read ", what, " '", path, "': ", std::strerror(error),
+                                 " (the system's limit, not the file's fault)"));
+    }
     throw IoError(concat("cannot read ", what, " '", path, "': ", std::strerror(error)));
   }
   struct Close {

@@ -49,9 +49,10 @@ HistogramStorage parse_histogram_storage(const char* name) {
 
 namespace {
 
-// The intensity descriptor's codes: the gray levels themselves (what
-// segment_and_describe() counts during the segmentation; this is for
-// describe_codes(), which counts any descriptor's codes after it).
+// The intensity descriptor's codes: the gray levels themselves. The detector
+// never calls it (segment_and_describe() counts intensity during the
+// segmentation); it makes the entry complete for code that counts any
+// descriptor's codes itself.
 void intensity_codes(const GrayImage& work, const DescriptorOptions&, GrayImage& codes) { codes = work; }
 
 // The registered descriptors: a built-in one is one line here (and its file

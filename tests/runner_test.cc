@@ -89,6 +89,12 @@ TEST(RunDetector, AResourceErrorStopsTheRunEvenWhenBadFramesAreSkipped) {
 
 // io::read_file says which: no descriptor left is a ResourceError.
 TEST(RunDetector, NoFileDescriptorLeftIsAResourceError) {
+#if defined(__SANITIZE_ADDRESS__) || defined(__SANITIZE_THREAD__)
+  // The sanitizers' runtimes open files for their own checks (UBSan's vptr
+  // check reads the process's maps): with no descriptor left they report
+  // errors of their own. The runner's part is tested above without a limit.
+  GTEST_SKIP() << "needs a process without sanitizer runtimes";
+#endif
   const std::string path = std::string(LSGD_TEST_TMP) + "/runner-resource.txt";
   std::filesystem::create_directories(LSGD_TEST_TMP);
   std::ofstream(path) << "x";

@@ -1,6 +1,7 @@
 #include "lsgd/descriptor.h"
 
 #include <algorithm>
+#include <optional>
 #include <cmath>
 #include <cstring>
 #include <limits>
@@ -246,6 +247,9 @@ struct DescribeScratch::Buffers {
   std::vector<Bin> second;               // second histogram set (HistogramRows)
   std::vector<internal::LabelRun> runs;  // one row's runs of equal labels
   GrayImage codes;                       // a descriptor's codes (DescriptorType::make)
+  // The registered type last described with (a name, once registered, is
+  // never replaced: looked up once, not once a frame).
+  std::optional<DescriptorType> type;
 };
 
 DescribeScratch::DescribeScratch() : buffers_(std::make_unique<Buffers>()) {}
@@ -339,11 +343,12 @@ void segment_and_describe(Segmenter& segmenter, const GrayImage& image, Segmenta
     segment_and_describe(segmenter, image, segmentation, out, scratch);
     return;
   }
-  const DescriptorType type = find_descriptor_type(options.type);
+  std::optional<DescriptorType>& type = scratch.buffers().type;
+  if (!type || options.type != type->name) type = find_descriptor_type(options.type);
   const GrayImage& work = segmenter.working(image);
   segmenter.segment(work, segmentation);
   GrayImage& codes = scratch.buffers().codes;
-  type.make(work, options, codes);
+  type->make(work, options, codes);
   if (codes.width != work.width || codes.height != work.height ||
       codes.pixels.size() != work.pixels.size()) {
     internal::throw_invalid("descriptor ", options.type, ": its codes are ", codes.width, "x",

@@ -10,6 +10,7 @@
 #include "detector_internal.h"
 #include "internal/check.h"
 #include "internal/clock.h"
+#include "internal/hash.h"
 #include "lsgd/detector.h"
 
 namespace lsgd {
@@ -45,16 +46,10 @@ bool describing_option(const std::string& name) {
 }  // namespace
 
 std::uint64_t describing_options_key(const DetectorOptions& options) {
-  std::uint64_t h = 14695981039346656037ULL;  // FNV-1a over "name=value\n"
-  const auto add = [&h](const std::string& text) {
-    for (const char c : text) {
-      h ^= static_cast<unsigned char>(c);
-      h *= 1099511628211ULL;
-    }
-  };
+  std::uint64_t h = internal::kFnvOffset;  // FNV-1a over "name=value\n"
   for (const auto& field : DetectorOptions::fields()) {
     if (!describing_option(field.name)) continue;
-    add(field.name + "=" + field.text(options) + "\n");
+    h = internal::fnv1a(field.name + "=" + field.text(options) + "\n", h);
   }
   return h;
 }

@@ -241,8 +241,14 @@ void Database::Impl::start_writing() {
   opened = true;
 }
 
-Database Database::create(const std::string& path, const DetectorOptions& options) {
-  options.check();
+namespace {
+
+// SQLite names its companions FILE-journal, -wal and -shm: the file's name
+// must leave room for the longest.
+constexpr std::size_t kCompanionSuffix = 8;  // "-journal"
+
+// What must hold before a database is created at `path`; nothing is created.
+void check_new_database_path(const std::string& path) {
   if (path.empty()) throw InvalidArgument("the database path is empty: give a file name");
   database_file(path, true);  // a symbolic link is refused
   struct stat st;
@@ -257,21 +263,55 @@ Database Database::create(const std::string& path, const DetectorOptions& option
              "Move '", path, "-wal' and '", path, "-shm' away, or give another path "
              "(nothing was created)");
   }
-  // SQLite names its companions FILE-journal, -wal and -shm: the file's name
-  // must leave room for the longest.
-  constexpr std::size_t kCompanionSuffix = 8;  // "-journal"
-  const std::size_t slash = path.rfind('/');
-  const std::size_t name = slash == std::string::npos ? path.size() : path.size() - slash - 1;
+  const std::size_t name = name_length(path);
   if (const std::size_t limit = name_limit(path); name + kCompanionSuffix > limit) {
     io_error(path, "its name is ", name, " bytes; SQLite's companion NAME-journal would be ",
              name + kCompanionSuffix, ", over the folder's limit of ", limit,
              " bytes a name: give a name of at most ", limit - kCompanionSuffix,
              " bytes (nothing was created)");
   }
+}
+
+void remove_with_companions(const std::string& file) {
+  for (const char* suffix : {"", "-journal", "-wal", "-shm"}) ::unlink((file + suffix).c_str());
+}
+
+// The finished temporary database takes its name: link() fails when `path`
+// exists (no silent overwrite); rename() on file systems without hard links.
+// The new name is made durable.
+void publish_database(const std::string& tmp, const std::string& path) {
+  struct stat st;
+  if (::link(tmp.c_str(), path.c_str()) != 0) {
+    const int error = errno;
+    if (error == EEXIST || ::stat(path.c_str(), &st) == 0) {
+      ::unlink(tmp.c_str());
+      io_error(path, "already exists");
+    }
+    if (::rename(tmp.c_str(), path.c_str()) != 0) {
+      const int rename_error = errno;
+      ::unlink(tmp.c_str());
+      io_error(path, "cannot create (", std::strerror(error), "; ", std::strerror(rename_error),
+               ")");
+    }
+  } else {
+    ::unlink(tmp.c_str());
+  }
+  const int fd = ::open(folder_of(path).c_str(), O_RDONLY | O_DIRECTORY);
+  if (fd >= 0) {
+    ::fsync(fd);
+    ::close(fd);
+  }
+}
+
+}  // namespace
+
+Database Database::create(const std::string& path, const DetectorOptions& options) {
+  options.check();
+  check_new_database_path(path);
   const std::string tmp = temporary_beside(path, kCompanionSuffix);
   check_path_length(path, tmp);
-  for (const char* suffix : {"", "-journal", "-wal", "-shm"}) ::unlink((tmp + suffix).c_str());
-  {
+  remove_with_companions(tmp);
+  {  // a new, empty database written whole at tmp; on failure nothing is left there
     Impl impl;  // closes the temporary database on every path
     impl.path = path;
     if (sqlite3_open_v2(sqlite_file_name(tmp).c_str(), &impl.db, SQLITE_OPEN_READWRITE | SQLITE_OPEN_CREATE,
@@ -296,43 +336,20 @@ Database Database::create(const std::string& path, const DetectorOptions& option
     } catch (...) {
       sqlite3_close_v2(impl.db);
       impl.db = nullptr;
-      for (const char* suffix : {"", "-journal", "-wal", "-shm"}) ::unlink((tmp + suffix).c_str());
+      remove_with_companions(tmp);
       throw;
     }
     if (sqlite3_close(impl.db) != SQLITE_OK) io_error(path, "cannot close ", tmp);
     impl.db = nullptr;
   }
-  // link() fails when path exists (no silent overwrite); fall back to rename()
-  // on file systems without hard links.
-  if (::link(tmp.c_str(), path.c_str()) != 0) {
-    const int error = errno;
-    if (error == EEXIST || ::stat(path.c_str(), &st) == 0) {
-      ::unlink(tmp.c_str());
-      io_error(path, "already exists");
-    }
-    if (::rename(tmp.c_str(), path.c_str()) != 0) {
-      const int rename_error = errno;
-      ::unlink(tmp.c_str());
-      io_error(path, "cannot create (", std::strerror(error), "; ", std::strerror(rename_error),
-               ")");
-    }
-  } else {
-    ::unlink(tmp.c_str());
-  }
-  // Make the new name durable.
-  const std::string dir = parent_folder(path);
-  const int fd = ::open(dir.c_str(), O_RDONLY | O_DIRECTORY);
-  if (fd >= 0) {
-    ::fsync(fd);
-    ::close(fd);
-  }
+  publish_database(tmp, path);
   // A database that cannot be opened once created (no file descriptor left,
   // an I/O error) holds nothing yet: removed, so that it does not pin these
   // options for the next run at this path.
   try {
     return open(path, Mode::kReadWrite);
   } catch (...) {
-    for (const char* suffix : {"", "-journal", "-wal", "-shm"}) ::unlink((path + suffix).c_str());
+    remove_with_companions(path);
     throw;
   }
 }

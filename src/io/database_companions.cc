@@ -22,6 +22,7 @@
 
 #include "internal/numbers.h"
 #include "io/database_internal.h"
+#include "lsgd/io/files.h"
 
 #include <memory>
 
@@ -74,7 +75,7 @@ void check_rollback_journal(const std::string& path, bool creating) {
 bool companions_cannot_be_created(const std::string& path) {
   struct statvfs fs {};
   if (::statvfs(path.c_str(), &fs) == 0 && (fs.f_flag & ST_RDONLY) != 0) return true;
-  return ::access(parent_folder(path).c_str(), W_OK) != 0 && errno != ENOENT;
+  return ::access(folder_of(path).c_str(), W_OK) != 0 && errno != ENOENT;
 }
 
 std::string immutable_uri(const std::string& path) {

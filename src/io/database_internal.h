@@ -281,12 +281,6 @@ inline std::string column_text(sqlite3_stmt* stmt, int column) {
               : std::string();
 }
 
-// The folder holding `path` ("." for a bare name, "/" for a file in /).
-inline std::string parent_folder(const std::string& path) {
-  const std::size_t slash = path.find_last_of('/');
-  return slash == std::string::npos ? "." : slash == 0 ? "/" : path.substr(0, slash);
-}
-
 inline std::int64_t file_size(const std::string& path) {
   struct stat st;
   return ::stat(path.c_str(), &st) == 0 ? static_cast<std::int64_t>(st.st_size) : 0;

@@ -14,6 +14,7 @@
 
 #include "internal/check.h"
 #include "internal/file_mode.h"
+#include "internal/hash.h"
 #include "lsgd/error.h"
 #include "lsgd/limits.h"
 
@@ -178,8 +179,7 @@ void write_output_file(const std::string& path, const std::string& content,
       throw IoError(concat("cannot write ", what, " '", path, "': it is read-only (make it writable "
                            "or give another file)"));
     }
-    const std::size_t slash = path.rfind('/');
-    const std::string folder = slash == std::string::npos ? "." : slash == 0 ? "/" : path.substr(0, slash);
+    const std::string folder = folder_of(path);
     struct stat in {};
     if (::stat(folder.c_str(), &in) == 0 && !internal::mode_allows_writing(in.st_mode)) {
       throw IoError(concat("cannot write ", what, " '", path, "': its folder '", folder, "' is read-only"));
@@ -213,27 +213,29 @@ void write_output_file(const std::string& path, const std::string& content,
   }
 }
 
-std::size_t name_limit(const std::string& path) {
+std::string folder_of(const std::string& path) {
   const std::size_t slash = path.rfind('/');
-  const std::string folder = slash == std::string::npos ? "." : slash == 0 ? "/" : path.substr(0, slash);
+  return slash == std::string::npos ? "." : slash == 0 ? "/" : path.substr(0, slash);
+}
+
+std::size_t name_length(const std::string& path) {
+  const std::size_t slash = path.rfind('/');
+  return slash == std::string::npos ? path.size() : path.size() - slash - 1;
+}
+
+std::size_t name_limit(const std::string& path) {
   errno = 0;
-  const long limit = ::pathconf(folder.c_str(), _PC_NAME_MAX);
+  const long limit = ::pathconf(folder_of(path).c_str(), _PC_NAME_MAX);
   return limit > 0 ? static_cast<std::size_t>(limit) : 255;
 }
 
 std::string temporary_beside(const std::string& path, std::size_t reserve) {
   const std::string suffix = concat(".tmp-", ::getpid());
-  const std::size_t slash = path.rfind('/');
-  const std::size_t name = slash == std::string::npos ? path.size() : path.size() - slash - 1;
-  if (name + suffix.size() + reserve <= name_limit(path)) return path + suffix;
-  std::uint64_t h = 14695981039346656037ULL;  // FNV-1a of the whole path: one name per output
-  for (const char c : path) {
-    h ^= static_cast<unsigned char>(c);
-    h *= 1099511628211ULL;
-  }
+  if (name_length(path) + suffix.size() + reserve <= name_limit(path)) return path + suffix;
+  // FNV-1a of the whole path: one name per output.
   char hex[17];
-  std::snprintf(hex, sizeof hex, "%016llx", static_cast<unsigned long long>(h));
-  return path.substr(0, slash == std::string::npos ? 0 : slash + 1) + ".lsgd-" + hex + suffix;
+  std::snprintf(hex, sizeof hex, "%016llx", static_cast<unsigned long long>(internal::fnv1a(path)));
+  return path.substr(0, path.size() - name_length(path)) + ".lsgd-" + hex + suffix;
 }
 
 void throw_cannot_write(const std::string& path) {

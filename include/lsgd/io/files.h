@@ -41,6 +41,10 @@ std::vector<unsigned char> read_file(const std::string& path, const std::string&
 void write_output_file(const std::string& path, const std::string& content,
                        const std::string& what);
 
+// The folder holding `path` ("." for a bare name, "/" for a file in /).
+std::string folder_of(const std::string& path);
+// The length of the last component of `path` (its file name), in bytes.
+std::size_t name_length(const std::string& path);
 // The longest file name the folder of `path` takes (pathconf's NAME_MAX;
 // 255 when the folder does not say or does not exist yet).
 std::size_t name_limit(const std::string& path);

@@ -70,7 +70,10 @@ void bind_database_contents(DatabaseClass& database) {
                         const py::object& name, std::int64_t frame) {
              // The image's name as a path (open_sequence's str, bytes, pathlib.Path): a
              // name that is not UTF-8 is stored as its bytes, as lsgd run stores it.
-             db.get().append(d, r, session, path_of(name, "append: name"), frame);
+             // Converted first: its __fspath__ may run any Python code, close
+             // the database included, and db.get() checks it is open.
+             const std::string path = path_of(name, "append: name");
+             db.get().append(d, r, session, path, frame);
            }, py::arg("detector"), py::arg("result"), py::arg("session"), py::arg("name") = "",
            py::arg("frame") = -1, "Stores the detector's last frame (call right after process()).")
       .def("forget", [](PyDatabase& db, std::int64_t first_id, std::int64_t last_id) {

@@ -373,4 +373,15 @@ TEST_F(Files, DemoNeverWritesIntoAForeignFolder) {
                  {foreign / "notes.txt"});
 }
 
+// A folder an earlier demo wrote is its own, whatever mode wrote it (index
+// mode's results-index.csv was missing from the demo's list of its files).
+TEST_F(Files, DemoWritesAgainIntoTheFolderAnEarlierDemoWrote) {
+  const fs::path dir = kTmp / "demo-again";
+  for (int k = 0; k < 2; ++k) {
+    const CmdResult r = lsgd("demo --mode index --verify none --output " + q(dir));
+    EXPECT_EQ(r.code, 0) << "#" << k << ": " << r.err;
+  }
+  EXPECT_TRUE(fs::exists(dir / "results-index.csv"));
+}
+
 }  // namespace

@@ -222,6 +222,20 @@ def test_readable_objects_closable_database_and_did_you_mean(tmp_path):
     again.close()
     again.close()  # twice: nothing
 
+    # A name whose __fspath__ closes the database: the name is read first, so
+    # append is told the database is closed (it used a freed database before).
+    db = lsgd.Database.open(path)
+    w = lsgd.Detector(db.options)
+
+    class Closing(os.PathLike):
+        def __fspath__(self):
+            db.close()
+            return "x.pgm"
+
+    r = w.process(frames[0])
+    with pytest.raises(lsgd.InvalidArgument, match="is closed"):
+        db.append(w, r, 1, Closing())
+
     with pytest.raises(lsgd.InvalidArgument, match="did you mean 'search.min_gap'"):
         lsgd.Detector(serch={"min_gap": 5})
     with pytest.raises(lsgd.InvalidArgument, match="did you mean 'search.min_gap'"):

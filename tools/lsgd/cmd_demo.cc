@@ -46,10 +46,10 @@ void demo(const DemoArgs& args) {
   // --output DIR: a new or empty folder, or one this command wrote before.
   CommandFiles files;
   files.input(args.detector.config, "--config");
-  files.output_folder(args.output, "--output",
-                      {"images", "sequence.txt", "groundtruth.txt", "results-exhaustive.csv",
-                       "results-nodes.csv", "metrics.json"},
-                      "metrics.json");
+  // Its own files: results-MODE.csv for every registered search mode.
+  std::vector<std::string> own = {"images", "sequence.txt", "groundtruth.txt", "metrics.json"};
+  for (const std::string& mode : search_mode_list()) own.push_back("results-" + mode + ".csv");
+  files.output_folder(args.output, "--output", own, "metrics.json");
   files.check();
   eval::SyntheticOptions world_options;
   world_options.seed = args.seed;

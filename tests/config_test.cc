@@ -300,6 +300,27 @@ TEST(ParseConfig, MoreNodesThanAConfigCanHaveAreRefusedFirst) {
   EXPECT_NO_THROW(parse_config(to_yaml(DetectorOptions{}), kSource));
 }
 
+// Nesting deeper than a config can be is refused from the parser's events
+// too: 500 levels got yaml-cpp's "bad file", and with a small stack its
+// recursion overflowed first.
+TEST(ParseConfig, DeeperNestingThanAConfigCanHaveIsRefusedFirst) {
+  for (const int depth : {65, 500, 5000}) {
+    expect_error<FormatError>(std::string(static_cast<std::size_t>(depth), '[') +
+                                  std::string(static_cast<std::size_t>(depth), ']'),
+                              {kSource, "YAML nested more than 64 levels deep (line 1)"});
+    std::string maps;
+    for (int i = 0; i < depth; ++i) maps += "{a: ";
+    expect_error<FormatError>(maps + "1" + std::string(static_cast<std::size_t>(depth), '}'),
+                              {kSource, "YAML nested more than 64 levels deep"});
+  }
+  // 64 levels of sequences are no config, but not refused for their depth.
+  try {
+    parse_config(std::string(64, '[') + std::string(64, ']'), kSource);
+  } catch (const FormatError& e) {
+    EXPECT_EQ(std::string(e.what()).find("nested"), std::string::npos) << e.what();
+  }
+}
+
 // ---------------------------------------------------------------- files
 
 class LoadConfigTest : public ::testing::Test {

@@ -6,6 +6,7 @@
 #include <atomic>
 #include <exception>
 #include <mutex>
+#include <system_error>
 #include <thread>
 
 #include "internal/check.h"
@@ -102,7 +103,15 @@ void run_sweep(const std::vector<SweepCell>& cells, int jobs,
   } else {
     std::vector<std::thread> threads;
     const std::size_t n = std::min<std::size_t>(static_cast<std::size_t>(jobs), cells.size());
-    for (std::size_t t = 0; t < n; ++t) threads.emplace_back(worker);
+    // A thread that cannot be started (its stack does not fit an address-space
+    // limit, too many threads) leaves the cells to those that could: the
+    // rows are the same on any number of jobs. None at all: this thread
+    // runs them. (Unwinding with joinable threads would end the process.)
+    try {
+      for (std::size_t t = 0; t < n; ++t) threads.emplace_back(worker);
+    } catch (const std::system_error&) {
+    }
+    if (threads.empty()) worker();
     for (std::thread& t : threads) t.join();
   }
   if (error) std::rethrow_exception(error);

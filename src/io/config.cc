@@ -253,15 +253,28 @@ class DocumentCounter : public YAML::EventHandler {
   void OnSequenceStart(const YAML::Mark& at, const std::string&, YAML::anchor_t,
                        YAML::EmitterStyle::value) override {
     node(at);
+    open(at);
   }
-  void OnSequenceEnd() override {}
+  void OnSequenceEnd() override { --depth_; }
   void OnMapStart(const YAML::Mark& at, const std::string&, YAML::anchor_t,
                   YAML::EmitterStyle::value) override {
     node(at);
+    open(at);
   }
-  void OnMapEnd() override {}
+  void OnMapEnd() override { --depth_; }
 
  private:
+  // Nested deeper than a config can be: refused here, before yaml-cpp's own
+  // limit (500 levels, reported as "bad file") and before its recursion
+  // needs more stack than a small thread has.
+  static constexpr int kMaxDepth = 64;
+  void open(const YAML::Mark& at) {
+    if (++depth_ > kMaxDepth) {
+      throw FormatError(concat(source_, ": YAML nested more than ", kMaxDepth, " levels deep (line ",
+                               at.line + 1, "): a detector config is 3 levels deep; is this the right file?"));
+    }
+  }
+  int depth_ = 0;
   void node(const YAML::Mark& at) {
     if (++nodes_ > kMaxNodes) {
       throw FormatError(concat(source_, ": more than ", kMaxNodes, " YAML nodes (line ", at.line + 1,

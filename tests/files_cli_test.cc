@@ -349,6 +349,43 @@ TEST_F(Files, ASweepWhoseThreadsCannotAllStartDoesNotAbort) {
   }
 }
 
+// Standard output is an output too: appended to an input (`>> list.txt`)
+// it is refused before anything runs; closed, a command whose results go
+// there is refused; a write that fails (a full disk) is an error, exit 1.
+TEST_F(Files, StandardOutputIsCheckedLikeEveryOutput) {
+  const auto shell = [](const std::string& args, const std::string& redirect) {
+    return lsgd::test::run_command(
+        "/bin/sh", "-c \"exec '" + std::string(LSGD_CLI) + "' " + args + " " + redirect + "\"", kTmp);
+  };
+  const fs::path list = dir_ / "sequence.txt", gt = dir_ / "gt.txt";
+  const std::string list_before = slurp(list), gt_before = slurp(gt);
+  CmdResult r = shell("run --sequence " + q(list) + " --verify none", ">> " + q(list));
+  EXPECT_EQ(r.code, 1) << r.err;
+  EXPECT_NE(r.err.find("refusing to write standard output: it is the file given by --sequence"),
+            std::string::npos) << r.err;
+  r = shell("gt stats " + q(gt), ">> " + q(gt));
+  EXPECT_EQ(r.code, 1) << r.err;
+  EXPECT_NE(r.err.find("refusing to write standard output: it is the file given by SOURCE"), std::string::npos)
+      << r.err;
+  EXPECT_EQ(slurp(list), list_before);
+  EXPECT_EQ(slurp(gt), gt_before);
+
+  r = shell("run --sequence " + q(list) + " --verify none", ">&-");
+  EXPECT_EQ(r.code, 1) << r.err;
+  EXPECT_NE(r.err.find("is closed: give --output FILE (nothing was run)"), std::string::npos) << r.err;
+  for (const std::string& args : {std::string("options --yaml"), "gt stats " + q(gt)}) {
+    r = shell(args, "> /dev/full");
+    EXPECT_EQ(r.code, 1) << args;
+    EXPECT_NE(r.err.find("cannot write standard output: No space left on device"), std::string::npos) << r.err;
+    r = shell(args, ">&-");
+    EXPECT_EQ(r.code, 1) << args;
+    EXPECT_NE(r.err.find("cannot write standard output: Bad file descriptor (it is closed)"), std::string::npos)
+        << r.err;
+  }
+  r = shell("options --yaml", "> " + q(kTmp / "options.yaml"));
+  EXPECT_EQ(r.code, 0) << r.err;
+}
+
 TEST_F(Files, AKilledWriteLeavesNoTemporaryAndAClosedStderrStaysClosed) {
   const fs::path out = kTmp / "killed";
   fs::create_directories(out);

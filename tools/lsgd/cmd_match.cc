@@ -132,7 +132,7 @@ void match(const MatchArgs& args) {
   files.input(args.query, "--query");
   files.inputs(reference.images, "--reference", "reference image");
   files.inputs(query.images, "--query", "query image");
-  files.output(args.output, "--output");
+  files.output_or_stdout(args.output, "--output");
   files.check();
   if (reference.images.empty()) throw InvalidArgument("--reference " + args.reference + " holds no image");
   if (query.images.empty()) throw InvalidArgument("--query " + args.query + " holds no image");

@@ -54,7 +54,7 @@ void check_files(const RunArgs& args, const io::Sequence& sequence) {
   files.input(args.sequence, "--sequence");
   files.inputs(sequence.images, "--sequence", "input image");
   files.database(args.database, "--database", true);
-  files.output(args.output, "--output");
+  files.output_or_stdout(args.output, "--output");
   files.check();
 }
 
@@ -248,7 +248,7 @@ void run_localize(const RunArgs& args, const io::Sequence& sequence) {
   files.input(args.sequence, "--sequence");
   files.inputs(sequence.images, "--sequence", "input image");
   files.input(args.database, "--database");
-  files.output(args.output, "--output");
+  files.output_or_stdout(args.output, "--output");
   files.check();
   const io::Database db = io::Database::open(args.database, io::Database::Mode::kReadOnly);
   DetectorOptions options = args.detector.config.empty() ? db.options() : io::load_config(args.detector.config);

@@ -1,5 +1,6 @@
 #include "files.h"
 
+#include <fcntl.h>
 #include <sys/stat.h>
 #include <unistd.h>
 
@@ -238,7 +239,24 @@ void CommandFiles::output_folder(const std::string& path, const std::string& fla
   folder_markers_.push_back(marker);
 }
 
+void CommandFiles::output_or_stdout(const std::string& path, const std::string& flag) {
+  if (path.empty()) {
+    stdout_flag_ = flag;
+  } else {
+    output(path, flag);
+  }
+}
+
 void CommandFiles::check() const {
+  // lsgd's main() holds a closed descriptor 1 with /dev/null opened for
+  // reading, so that nothing else takes it and every write to it fails.
+  if (!stdout_flag_.empty()) {
+    const int flags = ::fcntl(STDOUT_FILENO, F_GETFL);
+    if (flags == -1 || (flags & O_ACCMODE) == O_RDONLY) {
+      throw IoError(concat("standard output, where the output goes without ", stdout_flag_,
+                           ", is closed: give ", stdout_flag_, " FILE (nothing was run)"));
+    }
+  }
   // Output folders first, then every output, then that no output is an input.
   for (std::size_t f = 0; f < folders_.size(); ++f) {
     check_output_folder(folders_[f].flag, folders_[f].path, folder_names_[f], folder_markers_[f]);
@@ -246,6 +264,19 @@ void CommandFiles::check() const {
   Outputs outputs;
   for (const File& out : outputs_) check_output(out.flag, out.path, outputs);
   for (const File& in : inputs_) check_not_output(in.flag, in.path, in.what, outputs);
+  // Standard output redirected into a file (`>> list.txt`): not one of the
+  // inputs either (`>` empties the file before lsgd starts; `>>` would
+  // append the command's output to what it reads).
+  struct stat out {};
+  if (::fstat(STDOUT_FILENO, &out) != 0 || !S_ISREG(out.st_mode)) return;
+  for (const File& in : inputs_) {
+    FileId id{};
+    struct stat st {};
+    if (identify(in.path, id, st) && id == FileId{out.st_dev, out.st_ino}) {
+      throw InvalidArgument(concat("refusing to write standard output: it is ", in.what, " ('", in.path,
+                                   "'); redirect it to another file (nothing was run)"));
+    }
+  }
 }
 
 }  // namespace lsgd::cli

@@ -23,6 +23,10 @@ class CommandFiles {
   void database(const std::string& path, const std::string& flag, bool also_output);
   // An output file; an empty path (standard output) is ignored.
   void output(const std::string& path, const std::string& flag);
+  // An output file whose absence (an empty path) sends the output to standard
+  // output, which must then be open for writing (a closed one is refused:
+  // the results would be lost).
+  void output_or_stdout(const std::string& path, const std::string& flag);
   // An output folder whose files the command writes; `own` lists the names
   // it writes at its top level (files or folders), `marker` the one it writes
   // last. An existing folder must be empty, or hold only those names and the
@@ -46,6 +50,7 @@ class CommandFiles {
   std::vector<File> folders_;
   std::vector<std::vector<std::string>> folder_names_;
   std::vector<std::string> folder_markers_;
+  std::string stdout_flag_;  // the flag whose output goes to standard output ("" none)
 };
 
 }  // namespace lsgd::cli

@@ -4,6 +4,8 @@
 
 #include <algorithm>
 #include <cerrno>
+#include <cstdio>
+#include <cstring>
 #include <charconv>
 #include <cstdint>
 #include <cstdlib>
@@ -135,14 +137,34 @@ std::string usage_message(CLI::App& app, const CLI::ParseError& e, int argc, cha
   return std::string(e.what()) + " (" + path_of(cmd) + " --help for the usage)";
 }
 
+// What a command printed reached standard output (a full disk, a closed
+// descriptor: an error, exit 1, not a silent loss). 0 or 1, main's exit code.
+int standard_output_written() {
+  errno = 0;
+  std::cout.flush();
+  if (std::cout && std::fflush(stdout) == 0 && !std::ferror(stdout)) return 0;
+  const int error = errno;
+  std::cerr << "lsgd: error: cannot write standard output"
+            << (error != 0 ? std::string(": ") + std::strerror(error) : std::string())
+            << (error == EBADF ? " (it is closed)" : error == ENOSPC ? " (the disk is full)" : "")
+            << "; what the command printed is lost" << std::endl;
+  return 1;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
   // Descriptors 0, 1 and 2 closed by the caller would be taken by the first
   // files opened (a CSV as fd 2 would receive every diagnostic): they are
   // held by /dev/null instead.
+  // Standard output is opened for reading: every write to it fails, so that
+  // results meant for it are not lost silently (CommandFiles refuses a
+  // command whose output would go there; main() checks what was written).
   for (int fd = 0; fd <= 2; ++fd) {
-    if (::fcntl(fd, F_GETFD) == -1 && errno == EBADF && ::open("/dev/null", O_RDWR) != fd) break;
+    if (::fcntl(fd, F_GETFD) == -1 && errno == EBADF &&
+        ::open("/dev/null", fd == STDOUT_FILENO ? O_RDONLY : O_RDWR) != fd) {
+      break;
+    }
   }
   lsgd::io::remove_temporary_files_on_signal();
   // The tool computes on the CPU: OpenCV must not load an OpenCL runtime for
@@ -195,5 +217,5 @@ int main(int argc, char** argv) {
     std::cerr << "lsgd: error: " << e.what() << std::endl;
     return 1;
   }
-  return 0;
+  return standard_output_written();
 }

@@ -135,6 +135,20 @@ std::int64_t write_results_csv(const std::vector<lsgd::Result>& results, const p
     throw lsgd::InvalidArgument("write_csv: " + std::to_string(names.size()) + " image names for " +
                                 std::to_string(results.size()) + " results (one per result)");
   }
+  // One detector's results in the order process() returned them: frames and
+  // ids increasing (a Result twice, or reversed, paired frames with the
+  // wrong images). A subset, or a resumed session's, is fine.
+  for (std::size_t i = 1; i < results.size(); ++i) {
+    const lsgd::Result& a = results[i - 1];
+    const lsgd::Result& b = results[i];
+    if (b.frame <= a.frame || b.id <= a.id) {
+      throw lsgd::InvalidArgument(
+          "write_csv: result " + std::to_string(i) + " is the detector's frame " + std::to_string(b.frame) +
+          " (id " + std::to_string(b.id) + ") after frame " + std::to_string(a.frame) + " (id " +
+          std::to_string(a.id) + "): give the Results of one detector in the order process() returned "
+          "them, each once");
+    }
+  }
   const std::string out = path_of(path);
   for (const std::string& name : names) {
     std::error_code ec;  // an output never overwrites an input

@@ -11,6 +11,7 @@
 #include <sched.h>
 #include <sys/mount.h>
 #include <sys/resource.h>
+#include <sys/stat.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -156,6 +157,24 @@ TEST(DatabaseLimits, OutOfFileDescriptorsIsSaidSo) {
 // SQLite refuses an absolute path over 504 bytes (its journal's name would
 // pass 512) with a bare "unable to open database file" and a stale errno;
 // lsgd names the length instead, and 504 bytes still open.
+// A umask that leaves the owner no write permission: the new database is
+// refused as such and nothing is left (it was created, then refused as "is
+// read-only ... make it writable to append to it").
+TEST(DatabaseLimits, AUmaskWithoutWritePermissionIsSaidSo) {
+  const std::string folder = std::string(LSGD_TEST_TMP) + "/umask";
+  fs::remove_all(folder);
+  fs::create_directories(folder);
+  const std::string path = folder + "/new.db";
+  const mode_t before = ::umask(0777);
+  const std::string e = test::message_of<IoError>([&] { Database::create(path, DetectorOptions{}); });
+  ::umask(before);
+  EXPECT_NE(e.find("database " + path + ": cannot create it: the new file's permissions (0000)"), std::string::npos)
+      << e;
+  EXPECT_NE(e.find("the umask (0777)"), std::string::npos) << e;
+  EXPECT_TRUE(fs::is_empty(folder)) << "nothing is left";
+  EXPECT_NO_THROW(Database::create(path, DetectorOptions{}));  // the usual umask
+}
+
 TEST(DatabaseLimits, APathBeyondSqlitesLimitIsSaidSo) {
   const std::string short_path = database_in_folder("long_path", 2, false);
   std::string folder = fs::path(short_path).parent_path().string();

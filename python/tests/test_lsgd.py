@@ -161,6 +161,13 @@ def test_results_match_lsgd_run_frame_for_frame(tmp_path):
     with pytest.raises(lsgd.InvalidArgument, match="is the input image"):
         lsgd.write_csv(results, [str(folder / ("%03d.pgm" % i)) for i in range(len(frames))], image)
     assert image.read_bytes() == before
+    # Results twice or reversed would pair frames with the wrong images; a subset is fine.
+    names = [str(folder / ("%03d.pgm" % i)) for i in range(10)]
+    with pytest.raises(lsgd.InvalidArgument, match="in the order process\\(\\) returned them, each once"):
+        lsgd.write_csv(results[:5] + results[:5], names, mine)
+    with pytest.raises(lsgd.InvalidArgument, match="each once"):
+        lsgd.write_csv(results[::-1][:10], names, mine)
+    assert lsgd.write_csv(results[::2][:10], names, mine) >= 0
 
 
 def test_cut_ends_the_loop_it_follows():

@@ -17,6 +17,7 @@
 #include <cmath>
 #include <cstdio>
 #include <cstring>
+#include <fstream>
 #include <limits>
 #include <map>
 #include <mutex>
@@ -276,6 +277,34 @@ void remove_with_companions(const std::string& file) {
   for (const char* suffix : {"", "-journal", "-wal", "-shm"}) ::unlink((file + suffix).c_str());
 }
 
+// The process's umask, as /proc/self/status tells it ("" when it does not:
+// umask() itself would change it for every thread while read).
+std::string umask_text() {
+  std::ifstream status("/proc/self/status");
+  for (std::string line; std::getline(status, line);) {
+    if (line.rfind("Umask:", 0) == 0) {
+      const std::size_t at = line.find_first_not_of(" \t", 6);
+      return at == std::string::npos ? "" : line.substr(at);
+    }
+  }
+  return "";
+}
+
+// A new database its owner cannot write (a umask of 0200 or more) is refused
+// as such, before it takes its name ("is read-only ... make it writable to
+// append to it" named a file the run was creating).
+void check_new_file_writable(const std::string& tmp, const std::string& path) {
+  struct stat st {};
+  if (::stat(tmp.c_str(), &st) != 0 || (st.st_mode & S_IWUSR) != 0) return;
+  remove_with_companions(tmp);
+  const std::string mask = umask_text();
+  char mode[8];
+  std::snprintf(mode, sizeof mode, "%04o", static_cast<unsigned>(st.st_mode & 07777));
+  io_error(path, "cannot create it: the new file's permissions (", mode,
+           ") do not let its owner write it; the umask", mask.empty() ? "" : " (" + mask + ")",
+           " removes the write permission (umask 022, say) (nothing was created)");
+}
+
 // The finished temporary database takes its name: link() fails when `path`
 // exists (no silent overwrite); rename() on file systems without hard links.
 // The new name is made durable.
@@ -342,6 +371,7 @@ Database Database::create(const std::string& path, const DetectorOptions& option
     if (sqlite3_close(impl.db) != SQLITE_OK) io_error(path, "cannot close ", tmp);
     impl.db = nullptr;
   }
+  check_new_file_writable(tmp, path);
   publish_database(tmp, path);
   // A database that cannot be opened once created (no file descriptor left,
   // an I/O error) holds nothing yet: removed, so that it does not pin these

@@ -176,6 +176,9 @@ TEST(EvalCli, FlagsThatWouldBeIgnoredAreErrors) {
            {seq + " --mode nodes --option search.mode=index", "both set search.mode: give one"},
            {seq + " --threshold 5 --option decision.threshold=6", "both set decision.threshold"},
            {seq + " --verify none --option verification.stages=temporal", "both set verification.stages"},
+           // Two --option of one key with different values: the first was lost.
+           {seq + " --option search.top_n=3 --option search.top_n=4",
+            "--option search.top_n=3 and --option search.top_n=4 both set search.top_n: give one"},
            {seq + " --detections " + q(dir / "d.csv"), "exactly one"},
            {"eval" + base, "exactly one"}}) {
     const CmdResult r = lsgd(args);

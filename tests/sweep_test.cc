@@ -256,6 +256,13 @@ TEST(SweepDataset, BadSpecsNameTheSpec) {
   }
 }
 
+// A dataset option given twice kept the last without a word.
+TEST(SweepDataset, AnOptionGivenTwiceIsRefused) {
+  const std::string message =
+      message_of<InvalidArgument>([] { parse_dataset_spec("c=/d,50,every=2,every=3"); });
+  EXPECT_NE(message.find("every is given twice: give it once"), std::string::npos) << message;
+}
+
 // Dataset options after the parts: lsgd eval's layout and ground-truth flags.
 TEST(SweepDataset, OptionsAfterThePartsAreEvalsDatasetFlags) {
   const auto k = parse_dataset_spec(

@@ -313,11 +313,17 @@ SweepDataset parse_dataset_spec(const std::string& spec) {
   for (const std::string& part : split(spec.substr(eq + 1), ',')) {
     (part.find('=') != std::string::npos || !options.empty() ? options : parts).push_back(part);
   }
+  std::vector<std::string> keys;
   for (const std::string& option : options) {
     const std::size_t at = option.find('=');
     if (at == std::string::npos || at == 0) {
       throw_invalid(context, ": '", option, "' after the dataset options is not KEY=VALUE");
     }
+    const std::string key = option.substr(0, at);
+    if (std::find(keys.begin(), keys.end(), key) != keys.end()) {
+      throw_invalid(context, ": ", key, " is given twice: give it once");
+    }
+    keys.push_back(key);
     try {
       set_dataset_option(d.sequence_options, d.gt_options, option.substr(0, at),
                          option.substr(at + 1));

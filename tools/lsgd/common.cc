@@ -78,12 +78,16 @@ void DetectorFlags::apply(DetectorOptions& o) const {
   const std::vector<std::pair<std::string, std::string>> set = keys();
   for (std::size_t i = 0; i < set.size(); ++i) {
     for (std::size_t k = 0; k < i; ++k) {
-      // Two --option of one key: the last wins, as on any command line; a
-      // shortcut and an --option of one key: one would be lost without a word.
-      if (set[k].first == set[i].first && set[i].second.rfind("--option", 0) != 0) {
-        throw InvalidArgument(set[k].second + " and " + set[i].second + " both set " + set[i].first +
-                              ": give one");
-      }
+      if (set[k].first != set[i].first) continue;
+      // Two --option of one key with different values, or a shortcut and an
+      // --option of one key: one would be lost without a word (the same
+      // value twice loses nothing).
+      const bool options_both = i < options.size();  // keys() lists the --option ones first
+      if (options_both && options[k] == options[i]) continue;
+      throw InvalidArgument(options_both ? "--option " + options[k] + " and --option " + options[i] +
+                                               " both set " + set[i].first + ": give one"
+                                         : set[k].second + " and " + set[i].second + " both set " +
+                                               set[i].first + ": give one");
     }
   }
   for (const std::string& setting : options) {

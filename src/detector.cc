@@ -53,10 +53,10 @@ const OptionField<DetectorOptions>& field(const std::string& key) {
     std::vector<std::string> keys;
     for (const auto& g : DetectorOptions::fields()) keys.push_back(g.name);
     const std::string guess = internal::nearest(key, keys);
-    internal::throw_invalid("unknown option '", key, "'",
+    internal::throw_invalid("unknown option '", internal::shown_value(key), "'",
                             guess.empty() ? std::string() : "; did you mean '" + guess + "'?",
                             known.empty() ? std::string(" (see lsgd options)")
-                                          : " (" + section + " has " + known + ")");
+                                          : " (" + internal::shown_value(section) + " has " + known + ")");
   }
   return *f;
 }

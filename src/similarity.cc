@@ -149,7 +149,7 @@ SimilarityMetric parse_similarity_metric(const char* name) {
        {SimilarityMetric::kReference, SimilarityMetric::kL1, SimilarityMetric::kNormalizedL1}) {
     if (std::strcmp(name, to_string(m)) == 0) return m;
   }
-  internal::throw_invalid("similarity metric '", name,
+  internal::throw_invalid("similarity metric '", internal::shown_value(name),
                           "' is unknown: expected reference, l1 or normalized_l1");
 }
 

@@ -112,27 +112,27 @@ void parse_verification_stages(const std::string& text, VerificationOptions& opt
   std::vector<std::string> named;
   if (text != "none") {
     if (text.empty() || text.back() == ',') {
-      internal::throw_invalid("verification stages '", text, "': expected none or a "
+      internal::throw_invalid("verification stages '", internal::shown_value(text), "': expected none or a "
                               "comma-separated list of ", verification_stage_names());
     }
     std::istringstream parts(text);
     for (std::string stage; std::getline(parts, stage, ',');) {
       if (stage.empty() || stage == "none") {
-        internal::throw_invalid("verification stages '", text, "': expected none or a "
+        internal::throw_invalid("verification stages '", internal::shown_value(text), "': expected none or a "
                                 "comma-separated list of ", verification_stage_names());
       }
       try {
         check_verification_stage(stage);
       } catch (const InvalidArgument& e) {
-        internal::throw_invalid(e.what(), " (in '", text, "')");
+        internal::throw_invalid(e.what(), " (in '", internal::shown_value(text), "')");
       }
       if (std::find(named.begin(), named.end(), stage) != named.end()) {
-        internal::throw_invalid("verification stages '", text, "' name '", stage, "' twice");
+        internal::throw_invalid("verification stages '", internal::shown_value(text), "' name '", internal::shown_value(stage), "' twice");
       }
       named.push_back(stage);
     }
     if (named.empty()) {
-      internal::throw_invalid("verification stages '", text, "' name no stage: use none or ",
+      internal::throw_invalid("verification stages '", internal::shown_value(text), "' name no stage: use none or ",
                               verification_stage_names());
     }
   }

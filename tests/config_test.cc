@@ -226,6 +226,21 @@ TEST(ParseConfig, InvalidEnumsAreFormatErrors) {
   expect_error<FormatError>("search:\n  mode: \"nodes\\0evil\"\n",
                             {"'nodes\\0evil' is unknown: expected one of exhaustive", "(line 2)"});
   EXPECT_STREQ(InvalidArgument(std::string("a\0b", 3)).what(), "a\\0b");
+  // Every control character is escaped, so a message stays one line (a
+  // newline forged "lsgd:" lines, ESC reached the terminal); and a name value
+  // is cut after 64 bytes as a number's is (100 KB was echoed whole).
+  EXPECT_STREQ(IoError("x\nlsgd: note: forged\x1b[31m\x7f").what(), "x\\x0alsgd: note: forged\\x1b[31m\\x7f");
+  expect_error<FormatError>("search:\n  mode: \"nodes\\nlsgd: note: forged\"\n",
+                            {"'nodes\\x0alsgd: note: forged' is unknown"});
+  DetectorOptions o;
+  for (const std::string& key : {std::string("search.mode"), std::string("descriptor.type"),
+                                 std::string("similarity.metric"), std::string("descriptor.storage"),
+                                 std::string("verification.stages"), "search." + std::string(100000, 'k')}) {
+    const std::string value(100000, 'v');
+    const std::string m = test::message_of<InvalidArgument>([&] { set_option(o, key, value); });
+    EXPECT_LT(m.size(), 1000u) << key.substr(0, 20) << ": " << m.substr(0, 200);
+    EXPECT_NE(m.find(" bytes)"), std::string::npos) << key.substr(0, 20) << ": " << m.substr(0, 200);
+  }
 }
 
 TEST(LoadConfig, ShippedConfigsLoad) {

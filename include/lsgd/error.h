@@ -8,22 +8,33 @@
 
 namespace lsgd {
 
-// Base class: catch this to handle every lsgd error. A NUL in the message
-// (a value quoted from a config or a Python str) is written as "\0": what()
-// is read up to the first NUL, which cut the rest of the message off.
+// Base class: catch this to handle every lsgd error. A message is one line:
+// a control character in it (a value quoted from a config or a Python str, a
+// file name with a newline) is written escaped, NUL as "\0" (what() is read
+// up to the first NUL, which cut the rest off), the others as "\xHH" (a
+// newline forged "lsgd: note:" lines, an escape sequence reached the
+// terminal).
 class Error : public std::runtime_error {
  public:
   explicit Error(const std::string& message) : std::runtime_error(visible(message)) {}
-  explicit Error(const char* message) : std::runtime_error(message) {}
+  explicit Error(const char* message) : std::runtime_error(visible(message)) {}
 
  private:
+  static bool control(char c) { return static_cast<unsigned char>(c) < 0x20 || c == 0x7F; }
   static std::string visible(const std::string& message) {
-    if (message.find('\0') == std::string::npos) return message;
+    bool plain = true;
+    for (const char c : message) plain = plain && !control(c);
+    if (plain) return message;
     std::string out;
     out.reserve(message.size() + 8);
     for (const char c : message) {
       if (c == '\0') {
         out += "\\0";
+      } else if (control(c)) {
+        const auto u = static_cast<unsigned char>(c);
+        out += "\\x";
+        out += "0123456789abcdef"[u >> 4];
+        out += "0123456789abcdef"[u & 15];
       } else {
         out += c;
       }

@@ -78,7 +78,7 @@ class Registry {
     for (std::size_t k = 0; k < names.size(); ++k) {
       all += (k == 0 ? "" : k + 1 == names.size() ? " or " : ", ") + names[k];
     }
-    throw_invalid(what_, " '", name, "' is unknown: expected ", all);
+    throw_invalid(what_, " '", shown_value(name), "' is unknown: expected ", all);
   }
 
   // The entry named `name`; InvalidArgument naming it and the registered
@@ -87,7 +87,7 @@ class Registry {
     for (const Entry& e : entries()) {
       if (name == e.name) return e;
     }
-    throw_invalid(what_, " '", name, "' is unknown: expected one of ", names());
+    throw_invalid(what_, " '", shown_value(name), "' is unknown: expected one of ", names());
   }
 
  private:

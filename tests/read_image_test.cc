@@ -400,6 +400,34 @@ TEST_F(SequenceTest, TruncatedPnmIsRefusedFromItsHeader) {
   }
 }
 
+// Plain (ASCII) PNM: cut short, a sample that is no number or above maxval
+// is refused from lsgd's own walk of the samples (OpenCV printed its own
+// multi-line "can't read data" or "Unexpected code" text on stderr, or
+// clipped the sample); a whole one, comments and unseparated bits included,
+// reads as OpenCV reads it.
+TEST_F(SequenceTest, PlainPnmSamplesAreCheckedBeforeDecoding) {
+  const std::pair<std::string, std::string> bad[] = {
+      {"P2\n4 4\n255\n" + std::string("1 2 3 4 5 6 7 8"), "it holds 8 of the 16 samples"},
+      {"P3\n2 2\n255\n1 2 3 4 5 6 7 8 9 10 11", "it holds 11 of the 12 samples"},
+      {"P1\n4 2\n0101 011", "it holds 7 of the 8 samples"},
+      {"P2\n2 1\n100\n5 x", "its sample 1 is not a number"},
+      {"P2\n2 1\n255\n5 99999", "its sample 1 is 99999, above its maxval 255"},
+      {"P1\n2 1\n0 2", "its sample 1 is 2, above its maxval 1"}};
+  int k = 0;
+  for (const auto& [text, expected] : bad) {
+    SCOPED_TRACE(text);
+    const std::string path = write("plain" + std::to_string(k++) + ".pnm", text);
+    expect_error<FormatError>([&] { read_image(path); }, {"image '" + path + "'", expected});
+  }
+  const std::string bits = write("bits.pbm", "P1\n# four by two\n4 2\n0101\n1 0 # end\n 1 0\n");
+  const cv::Mat m = read_image(bits);
+  ASSERT_EQ(m.cols, 4);
+  const std::string gray = write("gray.pgm", "P2 2 2 15 0 15 7 8\n");
+  const cv::Mat g = read_image(gray);
+  ASSERT_EQ(g.type(), CV_8UC1);
+  EXPECT_EQ(g.at<uchar>(0, 1), 255);
+}
+
 // A read error of the system (EIO; /proc/self/mem gives one at offset 0)
 // is an IoError naming the file and the reason, for an image, a list file
 // and a config, never the stream library's bare "basic_filebuf::underflow".

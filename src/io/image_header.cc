@@ -99,6 +99,46 @@ void read_png(const Bytes& b, ImageHeader& h) {
   }
 }
 
+// Plain (ASCII) PNM samples after the header, from byte `at`: P1 bits 0 and 1
+// (white space between them optional), P2 and P3 decimal numbers up to
+// maxval, '#' comments anywhere. A file cut short, or with a sample that is
+// no number or above maxval, is damaged, said here (OpenCV printed its own
+// "can't read data" or "Unexpected code" text on stderr, or clipped).
+void read_plain_pnm_samples(const Bytes& b, std::size_t at, char kind, ImageHeader& h) {
+  const std::int64_t need = h.width * h.height * (kind == '3' ? 3 : 1);
+  const std::int64_t maxval = kind == '1' ? 1 : h.pnm_maxval;
+  if (maxval <= 0) return;  // the decoder refuses it
+  std::int64_t have = 0;
+  while (at < b.size() && have < need) {
+    const auto c = static_cast<char>(b[at]);
+    if (c == '#') {
+      while (at < b.size() && b[at] != '\n' && b[at] != '\r') ++at;
+    } else if (std::isspace(static_cast<unsigned char>(c))) {
+      ++at;
+    } else if (c >= '0' && c <= '9') {
+      std::int64_t v = 0;
+      // A bitmap's bits need no separator: one digit is one sample.
+      do {
+        v = std::min<std::int64_t>(v * 10 + (static_cast<char>(b[at]) - '0'), 1LL << 40);
+        ++at;
+      } while (kind != '1' && at < b.size() && b[at] >= '0' && b[at] <= '9');
+      if (v > maxval) {
+        h.damage = "its sample " + std::to_string(have) + " is " + std::to_string(v) + ", above its maxval " +
+                   std::to_string(maxval);
+        return;
+      }
+      ++have;
+    } else {
+      h.damage = "its sample " + std::to_string(have) + " is not a number (byte " + std::to_string(at) + ")";
+      return;
+    }
+  }
+  if (have < need) {
+    h.damage = "it holds " + std::to_string(have) + " of the " + std::to_string(need) + " samples its " +
+               std::to_string(h.width) + " x " + std::to_string(h.height) + " pixels need (truncated)";
+  }
+}
+
 // PNM: "P1" .. "P6" then width, height (and maxval but for bitmaps), separated
 // by white space and '#' comments; "P7" (PAM): WIDTH, HEIGHT, MAXVAL lines.
 void read_pnm(const Bytes& b, ImageHeader& h) {
@@ -148,13 +188,16 @@ void read_pnm(const Bytes& b, ImageHeader& h) {
       h.pnm_maxval = static_cast<int>(std::min<std::int64_t>(number(token()), 1 << 20));
     }
   }
+  if (h.width <= 0 || h.height <= 0 || depth <= 0 || depth > 4 || h.width > (1 << 20) || h.height > (1 << 20)) {
+    return;
+  }
+  if (kind < '4') {
+    read_plain_pnm_samples(b, at, kind, h);
+    return;
+  }
   // Binary pixels (P4 bits, P5, P6, P7) start after one white-space byte: a
   // file with fewer than its pixels need is truncated, said here (OpenCV
   // printed its own "can't read data" line for it on stderr before lsgd's).
-  if (kind < '4' || h.width <= 0 || h.height <= 0 || depth <= 0 || depth > 4 ||
-      h.width > (1 << 20) || h.height > (1 << 20)) {
-    return;
-  }
   const std::int64_t sample = h.pnm_maxval > 255 ? 2 : 1;
   const std::int64_t need = kind == '4' ? h.height * ((h.width + 7) / 8) : h.width * h.height * depth * sample;
   const auto start = static_cast<std::int64_t>(std::min(at + 1, b.size()));

@@ -84,6 +84,15 @@ lsgd::Descriptor descriptor_from_arrays(py::array histograms, const py::object& 
 py::dict match_descriptors(const std::vector<lsgd::Descriptor>& reference, const std::vector<lsgd::Descriptor>& query,
                            int top_k, const std::string& metric, std::int64_t query_offset, const py::object& output) {
   std::vector<lsgd::DescriptorView> refs, queries;
+  // Every descriptor must count what the first one counts (those of unknown
+  // type, from arrays, are taken as they come).
+  const lsgd::Descriptor* known = nullptr;
+  for (const std::vector<lsgd::Descriptor>* list : {&reference, &query}) {
+    for (const lsgd::Descriptor& d : *list) {
+      if (known == nullptr && !d.type.empty()) known = &d;
+      if (known != nullptr) lsgd::check_same_type(*known, d, "match");
+    }
+  }
   for (const lsgd::Descriptor& d : reference) refs.push_back(d.view());
   for (const lsgd::Descriptor& d : query) queries.push_back(d.view());
   std::vector<lsgd::TopMatch> found;
@@ -138,6 +147,8 @@ void bind_descriptor_class(py::module_& m) {
              return out;
            }, "pixels per cell (exact; empty when compact)")
       .def_readonly("cell_pixels", &lsgd::Descriptor::cell_pixels, "mean pixels per cell (compact)")
+      .def_readonly("type", &lsgd::Descriptor::type,
+                    "what its bins count: the descriptor type and its own options (\"\" when built from arrays)")
       .def_static("from_arrays", &descriptor_from_arrays,
            py::arg("histograms"), py::arg("pixels") = py::none(), py::arg("grid"), py::arg("cell_pixels") = 0.0,
            "A descriptor from its arrays: uint16 histograms (cells x 256) with uint32 pixels per cell "
@@ -152,6 +163,7 @@ void bind_descriptor(py::module_& m) {
           if (a.grid != b.grid || a.storage != b.storage) {
             throw lsgd::InvalidArgument("the descriptors differ in grid or storage");
           }
+          lsgd::check_same_type(a, b, "similarity");
           return lsgd::similarity(a.view(), b.view(), lsgd::parse_similarity_metric(metric.c_str()));
         }, py::arg("a"), py::arg("b"), py::arg("metric") = std::string(lsgd::to_string(lsgd::SimilarityOptions{}.metric)),
         "Similarity of two descriptors (the detector's similarity.metric by default).");

@@ -45,7 +45,8 @@ HistogramStorage parse_histogram_storage(const char* name) {
   for (auto s : {HistogramStorage::kExact, HistogramStorage::kCompact}) {
     if (std::strcmp(name, to_string(s)) == 0) return s;
   }
-  internal::throw_invalid("descriptor storage '", name, "' is unknown: expected exact or compact");
+  internal::throw_invalid("descriptor storage '", internal::shown_value(name),
+                          "' is unknown: expected exact or compact");
 }
 
 namespace {
@@ -250,6 +251,7 @@ struct DescribeScratch::Buffers {
   // The registered type last described with (a name, once registered, is
   // never replaced: looked up once, not once a frame).
   std::optional<DescriptorType> type;
+  std::string identity;  // descriptor_identity() of the options it was looked up with
 };
 
 DescribeScratch::DescribeScratch() : buffers_(std::make_unique<Buffers>()) {}
@@ -337,14 +339,37 @@ void segment_and_describe(Segmenter& segmenter, const GrayImage& image, Segmenta
   }
 }
 
+std::string descriptor_identity(const DescriptorOptions& options) {
+  const DescriptorType type = find_descriptor_type(options.type);
+  std::string out = options.type;
+  const char* separator = " (";
+  for (const OwnOption& o : type.options) {
+    const std::string* value = options.own.find(options.type + "." + o.name);
+    out += separator + o.name + " " + (value != nullptr ? *value : o.default_value);
+    separator = ", ";
+  }
+  if (!type.options.empty()) out += ")";
+  return out;
+}
+
+void check_same_type(const Descriptor& a, const Descriptor& b, const char* what) {
+  if (a.type.empty() || b.type.empty() || a.type == b.type) return;
+  internal::throw_invalid(what, ": the descriptors count different things (", a.type, " and ", b.type,
+                          "): describe both with the same descriptor options");
+}
+
 void segment_and_describe(Segmenter& segmenter, const GrayImage& image, Segmentation& segmentation,
                           Descriptor& out, DescribeScratch& scratch, const DescriptorOptions& options) {
   if (options.type == kIntensityDescriptor) {
     segment_and_describe(segmenter, image, segmentation, out, scratch);
+    out.type = kIntensityDescriptor;
     return;
   }
   std::optional<DescriptorType>& type = scratch.buffers().type;
-  if (!type || options.type != type->name) type = find_descriptor_type(options.type);
+  if (!type || options.type != type->name) {
+    type = find_descriptor_type(options.type);
+    scratch.buffers().identity = descriptor_identity(options);
+  }
   const GrayImage& work = segmenter.working(image);
   segmenter.segment(work, segmentation);
   GrayImage& codes = scratch.buffers().codes;
@@ -356,6 +381,7 @@ void segment_and_describe(Segmenter& segmenter, const GrayImage& image, Segmenta
                             "x", work.height, " frame");
   }
   describe(codes, segmentation, out);
+  out.type = scratch.buffers().identity;
 }
 
 Descriptor describe(const GrayImage& image, const Segmentation& segmentation) {
@@ -373,6 +399,7 @@ void compact(const Descriptor& exact, Descriptor& out) {
   std::uint64_t total = 0;
   for (const Count n : exact.pixels) total += n;
   out.grid = exact.grid;
+  out.type = exact.type;
   out.storage = HistogramStorage::kCompact;
   out.hist.clear();
   out.pixels.clear();

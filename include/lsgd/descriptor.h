@@ -128,6 +128,12 @@ struct Descriptor {
   std::vector<Count> pixels;        // exact: cells; empty when compact
   std::vector<CompactBin> compact;  // compact: cells * kCompactBins; empty when exact
   double cell_pixels = 0;           // compact: mean pixels per cell
+  // What its bins count: the descriptor type and its own options, as
+  // segment_and_describe() with the descriptor options writes it
+  // ("intensity", "gradient (threshold 1.5, orientations 32)"); "" when not
+  // known (built from arrays or bytes). Descriptors that count different
+  // things are never compared (lsgd.similarity, lsgd.match).
+  std::string type;
 
   DescriptorView view() const;
   // Bytes of histogram data this storage needs for `cells` cells.
@@ -180,6 +186,11 @@ void segment_and_describe(Segmenter& segmenter, const GrayImage& image, Segmenta
 // the segmentation (describe() of the codes). The exact descriptor either way.
 void segment_and_describe(Segmenter& segmenter, const GrayImage& image, Segmentation& segmentation,
                           Descriptor& out, DescribeScratch& scratch, const DescriptorOptions& options);
+// What a descriptor of `options` counts (Descriptor::type).
+std::string descriptor_identity(const DescriptorOptions& options);
+// Throws InvalidArgument (`what` saying where) when both descriptors know
+// what they count and it differs.
+void check_same_type(const Descriptor& a, const Descriptor& b, const char* what);
 
 // Encodes an exact descriptor in compact storage (see HistogramStorage). An
 // empty cell encodes as all zeros. Throws InvalidArgument when `exact` is not

@@ -70,6 +70,22 @@ def test_the_descriptor_is_an_option_with_its_own_options():
     with pytest.raises(ValueError, match="descriptor.gradient.orientations"):
         lsgd.Detector(descriptor={"type": "gradient", "gradient": {"orientations": 500}})
 
+    # A descriptor knows what it counts: those of other descriptors (or other
+    # options of one) are never compared (they scored 0.77 against each other).
+    x, y = d.describe(frame), i.describe(frame)
+    assert (x.type, y.type) == ("gradient (threshold 1.5, orientations 16)", "intensity")
+    g32 = lsgd.Detector(descriptor={"type": "gradient"}).describe(frame)
+    for a, b in [(x, y), (x, g32)]:
+        with pytest.raises(lsgd.InvalidArgument, match="the descriptors count different things"):
+            lsgd.similarity(a, b)
+        with pytest.raises(lsgd.InvalidArgument, match="count different things"):
+            lsgd.match([a, a], [b])
+    assert lsgd.similarity(x, d.describe(frame)) == lsgd.similarity(x, x)
+    arrays = lsgd.Descriptor.from_arrays(y.histograms, y.pixels, grid=y.grid)
+    assert arrays.type == "" and lsgd.similarity(arrays, y) == lsgd.similarity(y, y)
+    c = lsgd.Detector(descriptor={"type": "gradient", "storage": "compact"}).describe(frame)
+    assert c.type.startswith("gradient")
+
 
 def test_images_gray_bgr_and_strided_give_the_same_results():
     gray = route(20, 2)

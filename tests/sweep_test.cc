@@ -126,11 +126,27 @@ TEST(SweepGrid, ValuesApplyOnTopOfTheBase) {
   base.segmentation.superpixel_size = 25;
   lsgd::parse_verification_stages("none", base.verification);
   base.search.nodes.alpha = 0.5;
+  base.search.mode = "nodes";  // where search.nodes.beta applies
   const auto points = expand_sweep({parse_sweep_axis("search.nodes.beta=0.8")}, base);
   ASSERT_EQ(points.size(), 1u);
   lsgd::DetectorOptions expected = base;
   expected.search.nodes.beta = 0.8;
   EXPECT_EQ(lsgd::io::to_yaml(points[0].options), lsgd::io::to_yaml(expected));
+}
+
+// An option that applies in no configuration of the grid gave identical
+// rows read as "it does not matter": refused, saying when it applies; one
+// that applies in some configurations is swept.
+TEST(SweepGrid, AnOptionThatAppliesNowhereIsRefused) {
+  for (const auto& [spec, when] : std::vector<std::pair<std::string, std::string>>{
+           {"search.nodes.beta=0.5,1.5", "in nodes mode"},
+           {"descriptor.gradient.threshold=0.5,5", "with the gradient descriptor"}}) {
+    const std::string m = message_of<InvalidArgument>([&] { expand_sweep({parse_sweep_axis(spec)}, {}); });
+    EXPECT_NE(m.find("has no effect in any configuration of the grid (it applies " + when + ")"),
+              std::string::npos) << m;
+  }
+  EXPECT_EQ(expand_sweep({parse_sweep_axis("search.nodes.beta=0.5,1.5"),
+                          parse_sweep_axis("search.mode=exhaustive,nodes")}, {}).size(), 4u);
 }
 
 TEST(SweepGrid, NoAxesIsTheBase) {

@@ -294,6 +294,21 @@ std::vector<SweepPoint> expand_sweep(const std::vector<SweepAxis>& axes,
       index[k] = 0;
     }
   }
+  // An option that applies in no configuration (search.nodes.beta in
+  // exhaustive mode, another descriptor's option, a disabled stage's) gives
+  // identical rows that read as "it does not matter": refused, saying when
+  // it applies.
+  for (const SweepAxis& axis : axes) {
+    const OptionField<DetectorOptions>* field = find_option(DetectorOptions::fields(), axis.key);
+    if (field == nullptr || !field->applies) continue;
+    const bool somewhere = std::any_of(points.begin(), points.end(),
+                                       [&](const SweepPoint& p) { return field->applies(p.options); });
+    if (!somewhere) {
+      throw_invalid("sweep '", axis.spec, "': ", axis.key, " has no effect in any configuration of the grid (it applies ",
+                    field->when.empty() ? "under other options" : field->when,
+                    "): set or sweep what it depends on too");
+    }
+  }
   return points;
 }
 

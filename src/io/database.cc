@@ -45,8 +45,8 @@ Database& Database::operator=(Database&& other) noexcept = default;
 namespace {
 
 // The file at `path` before anything opens it: it exists, is a regular file
-// with regular companions, has one name when written, and this user may
-// read (and write) it.
+// with regular companions (its rollback journal is checked once it is
+// open), has one name when written, and this user may read (and write) it.
 void check_file(const std::string& path, bool writable) {
   struct stat st;
   if (::stat(path.c_str(), &st) != 0) {
@@ -55,7 +55,6 @@ void check_file(const std::string& path, bool writable) {
   }
   if (!S_ISREG(st.st_mode)) io_error(path, "is not a regular file");
   check_companions(path);
-  check_rollback_journal(path, false);
   // Each name of a file has a log of its own: a writer through one name
   // would leave a log that a later open through the other replays over newer
   // frames (SQLite, "How To Corrupt An SQLite Database File", 2.6).
@@ -86,11 +85,14 @@ Database Database::open(const std::string& given, Mode mode) {
   impl->path = path;
   impl->writable = writable;
   // One writer at a time: a second one would interleave its frames with ours.
-  // The writer holds an exclusive flock on the file while open (flock locks
-  // are separate from SQLite's POSIX locks; the descriptor is closed only
-  // after SQLite's, which closing it would otherwise release).
-  impl->lock_fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
-  if (impl->lock_fd < 0) io_error(path, "cannot be opened (", std::strerror(errno), ")");
+  // The writer holds an exclusive flock on its descriptor of the file while
+  // open (flock locks are separate from SQLite's POSIX locks). The descriptor
+  // comes from the process's table of open database files
+  // (database_locks.cc), which closes it only with the file's last Database
+  // here: closing any descriptor of the file drops the process's SQLite
+  // locks on it. The header is read through it too.
+  impl->open_file();
+  check_rollback_journal(path, false, impl->lock_fd);
   const bool writer_active = impl->lock();
   const wal::WalCheck log = impl->check_log(writer_active);
   impl->open_sqlite(writer_active);
@@ -124,23 +126,6 @@ bool Database::Impl::lock() {
     ::usleep(10'000);
   }
   return false;
-}
-
-// A writer in this very process holds the lock already: say so, rather
-// than the "another process" of the flock in lock().
-void Database::Impl::register_writer() {
-  struct stat id {};
-  if (::fstat(lock_fd, &id) != 0) return;
-  const std::lock_guard<std::mutex> lock(writers_mutex());
-  const std::pair<dev_t, ino_t> key{id.st_dev, id.st_ino};
-  const auto open = writers().find(key);
-  if (open != writers().end() && open->second == ::getpid()) {
-    io_error(path, "is already open for writing in this process (close that Database first: "
-                   "C++ destroys it, Python's db.close() or a `with` block closes it)");
-  }
-  writers()[key] = ::getpid();
-  writer_key = key;
-  registered = true;
 }
 
 // Before SQLite replays the log, which it would do silently up to any damage.

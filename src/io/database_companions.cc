@@ -50,7 +50,7 @@ void check_companions(const std::string& path) {
   }
 }
 
-void check_rollback_journal(const std::string& path, bool creating) {
+void check_rollback_journal(const std::string& path, bool creating, int fd) {
   const std::string journal = path + "-journal";
   struct stat st;
   if (::stat(journal.c_str(), &st) != 0 || st.st_size == 0) return;
@@ -60,11 +60,11 @@ void check_rollback_journal(const std::string& path, bool creating) {
              "database. Move '", journal, "' away, or give another path (nothing was created)");
   }
   // The header's write and read versions (bytes 18, 19): 2 in WAL mode.
+  // Read through the Database's own descriptor: opening and closing another
+  // would drop the POSIX locks this process's connections hold on the file.
   unsigned char header[20] = {};
-  std::FILE* f = std::fopen(path.c_str(), "rb");
-  if (f == nullptr) return;  // the open names what is wrong with the file
-  const bool read = std::fread(header, 1, sizeof header, f) == sizeof header;
-  std::fclose(f);
+  if (fd < 0) return;
+  const bool read = ::pread(fd, header, sizeof header, 0) == static_cast<ssize_t>(sizeof header);
   if (!read || header[18] != 2 || header[19] != 2) return;
   io_error(path, "'", journal, "' (", st.st_size, " bytes) is a rollback journal, which a database "
            "in WAL mode never has: it was left by another database at this path, and SQLite "

@@ -339,18 +339,6 @@ inline const std::vector<std::string> kIntegerMeta = {"format_version", "width",
                                                "grid_rows",      "grid_cols", "checksum"};
 
 
-// The databases open for writing in this process, by file identity.
-inline std::mutex& writers_mutex() {
-  static std::mutex m;
-  return m;
-}
-// The process that registered each (a child made by fork() inherits the
-// table but is another process).
-inline std::map<std::pair<dev_t, ino_t>, pid_t>& writers() {
-  static std::map<std::pair<dev_t, ino_t>, pid_t> open;
-  return open;
-}
-
 // A stored frame's keys, as forget() keeps them (database_write.cc).
 struct FrameKeys {
   std::int64_t session;
@@ -379,7 +367,15 @@ struct Database::Impl {
   // whose frames before them were forgotten (SessionFrames::first_id).
   std::map<std::int64_t, std::int64_t> session_first;
   int format = kDatabaseFormatVersion;
-  int lock_fd = -1;                 // holds the writer's lock (flock) while open
+  // This Database's descriptor of the file: the writer's lock (flock) while
+  // open, the header's reads. Taken and given back through the process's
+  // table of open database files (database_locks.cc), never closed while
+  // another Database of the file is open here: closing any descriptor of a
+  // file drops every POSIX lock the process holds on it, SQLite's too.
+  int lock_fd = -1;
+  std::pair<dev_t, ino_t> file_key{0, 0};  // the file's identity (fstat of lock_fd)
+  pid_t owner = 0;  // the process whose table holds lock_fd (0: none; fork() makes another)
+  bool registered_writer = false;  // the table's writer of the file
   std::int64_t since_checkpoint = 0;
   // sqlite3_total_changes64 after the last checkpoint's own meta write (0: as
   // opened): a checkpoint with nothing written since counts no checkpoint.
@@ -392,15 +388,7 @@ struct Database::Impl {
   // Scratch of append(), reused between frames.
   std::vector<std::uint8_t> hist_bytes, pixel_bytes;
 
-  std::pair<dev_t, ino_t> writer_key{0, 0};  // registered in writers() while open for writing
-  bool registered = false;
-
   ~Impl() {
-    if (registered) {
-      const std::lock_guard<std::mutex> lock(writers_mutex());
-      const auto open = writers().find(writer_key);
-      if (open != writers().end() && open->second == ::getpid()) writers().erase(open);
-    }
     if (db && writable && opened) {
       try {
         checkpoint("closed");
@@ -410,8 +398,18 @@ struct Database::Impl {
     }
     insert = Statement();
     if (db) sqlite3_close_v2(db);
-    if (lock_fd >= 0) ::close(lock_fd);  // after SQLite's own descriptors (POSIX locks)
+    release_file();  // after SQLite's connection
   }
+
+  // The process's table of open database files (database_locks.cc).
+  // Sets lock_fd to a descriptor of the file at `path` (one a closed
+  // Database of the file left, or a new one) and counts this Database as a
+  // user of the file.
+  void open_file();
+  // Gives lock_fd back (its flock released): closed with the file's other
+  // spare descriptors when this is the file's last Database in the process,
+  // else kept for the next one.
+  void release_file() noexcept;
 
   // Records in meta that the writer is `state` ("open" or "closed") with
   // `frames` frames, then moves every committed frame from the write-ahead
@@ -477,7 +475,7 @@ struct Database::Impl {
   // Takes the lock: a writer's exclusive one (waiting for readers), a
   // reader's shared one; returns true when a writer holds it (a reader's only).
   bool lock();
-  void register_writer();  // in writers(): one writer per file in this process
+  void register_writer();  // the table's writer of the file: one per file in this process
   // Checks the write-ahead log (wal_check.h) and that it belongs to the file;
   // returns what it holds.
   wal::WalCheck check_log(bool writer_active) const;
@@ -528,7 +526,10 @@ void check_companions(const std::string& path);
 // `path` (a journal left by one deleted there); else one whose header says
 // WAL mode (which never has a rollback journal; an old file in rollback
 // mode keeps its own).
-void check_rollback_journal(const std::string& path, bool creating);
+// `fd`: a descriptor of the database file whose header is read (pread: no
+// descriptor of the file is opened and closed, which would drop the
+// process's POSIX locks on it); -1 when creating.
+void check_rollback_journal(const std::string& path, bool creating, int fd = -1);
 // True when FILE-wal and FILE-shm cannot be created beside `path`: a
 // read-only file system, or a folder this user cannot write.
 bool companions_cannot_be_created(const std::string& path);

@@ -7,6 +7,8 @@
 
 #include <filesystem>
 #include <fstream>
+#include <iterator>
+#include <utility>
 #include <string>
 #include <vector>
 
@@ -178,6 +180,43 @@ TEST_F(DetectionsTest, NamesWithNewlinesOrCarriageReturnsStayInTheirRow) {
   EXPECT_EQ(other.dropped, 0);
   EXPECT_EQ(other.other, 2);
   EXPECT_EQ(read_detections(path, 4).size(), 3u);
+}
+
+// trim() shows the rows at the cut (the last kept, the first cut; images
+// unquoted) before it cuts, and cuts nothing when the check throws: a
+// resumed run refuses another run's CSV this way (lsgd run's continue_csv).
+TEST_F(DetectionsTest, TrimShowsTheRowsAtTheCutAndCutsNothingWhenRefused) {
+  const std::string path = (dir_ / "run.csv").string();
+  {
+    CsvWriter csv(path);
+    for (int i = 0; i < 5; ++i) {
+      Result r;
+      r.frame = i;
+      csv.write(r, i == 3 ? "img,\"3\".png" : "img" + std::to_string(i) + ".png");
+    }
+  }
+  const auto slurp = [](const std::string& file) {
+    std::ifstream in(file, std::ios::binary);
+    return std::string(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
+  };
+  const std::string before = slurp(path);
+  std::vector<std::pair<std::int64_t, std::string>> seen;
+  const auto refuse = [&](std::int64_t frame, const std::string& image) {
+    seen.emplace_back(frame, image);
+    if (frame == 3) throw InvalidArgument("another run's CSV");
+  };
+  EXPECT_THROW(CsvWriter::trim(path, 2, refuse), InvalidArgument);
+  const std::vector<std::pair<std::int64_t, std::string>> expected = {{2, "img2.png"},
+                                                                       {3, "img,\"3\".png"}};
+  EXPECT_EQ(seen, expected);
+  EXPECT_EQ(slurp(path), before);  // nothing cut
+  seen.clear();
+  const CsvWriter::Trim trim =
+      CsvWriter::trim(path, 3, [&](std::int64_t f, const std::string& i) { seen.emplace_back(f, i); });
+  EXPECT_EQ(trim.dropped, 1);
+  const std::vector<std::pair<std::int64_t, std::string>> cut = {{3, "img,\"3\".png"}, {4, "img4.png"}};
+  EXPECT_EQ(seen, cut);
+  EXPECT_EQ(read_detections(path, 5).size(), 4u);
 }
 
 // Frame ids are bounded before the records are allocated.

@@ -185,7 +185,8 @@ TEST_F(RunCli, FrameIdsAreImageIndicesWhateverWasSkipped) {
 TEST_F(RunCli, ARerunContinuesTheInterruptedSessionAsIfNeverStopped) {
   ASSERT_EQ(lsgd(run_args("b.db", "b.csv")).code, 0);
   ASSERT_EQ(lsgd(run_args("a.db", "a.csv", " --last 49")).code, 0);
-  std::ofstream(kTmp / "a.csv", std::ios::app) << "50,x,-1,-1,0,1,0,-1\n51,x,-1";
+  std::ofstream(kTmp / "a.csv", std::ios::app)
+      << "50," << (dir_ / "0050.png").string() << ",-1,-1,0,1,0,-1\n51,x,-1";
   const CmdResult r = lsgd(run_args("a.db", "a.csv"));
   ASSERT_EQ(r.code, 0) << r.err;
   EXPECT_NE(r.err.find("continuing session 0 at image 50"), std::string::npos) << r.err;
@@ -289,7 +290,9 @@ TEST_F(RunCli, KilledAtAnyMomentAndRerunEqualsAnUninterruptedRun) {
 // the frames are processed again.
 TEST_F(RunCli, RowsBeyondTheOneBeingCommittedAreReportedAsLostFrames) {
   ASSERT_EQ(lsgd(run_args("a.db", "a.csv", " --last 9")).code, 0);
-  std::ofstream(kTmp / "a.csv", std::ios::app) << "10,x,-1,-1,0,1,0,-1\n11,x,-1,-1,0,1,0,-1\n";
+  std::ofstream(kTmp / "a.csv", std::ios::app) << "10," << (dir_ / "0010.png").string()
+                                               << ",-1,-1,0,1,0,-1\n11," << (dir_ / "0011.png").string()
+                                               << ",-1,-1,0,1,0,-1\n";
   const CmdResult r = lsgd(run_args("a.db", "a.csv", " --last 19"));
   EXPECT_EQ(r.code, 0) << r.err;
   EXPECT_NE(r.err.find("had rows for 2 frames after frame 9"), std::string::npos) << r.err;
@@ -537,6 +540,61 @@ TEST_F(RunCli, AForeignFileAsOutputIsNotCut) {
   EXPECT_NE(r.err.find("is not a CSV of lsgd run"), std::string::npos) << r.err;
   EXPECT_EQ(slurp(kTmp / "a.csv"), "my notes\n");
   EXPECT_EQ(database_rows(kTmp / "a.db").size(), 10u);
+}
+
+
+// Another run's CSV as --output (rows naming other images at those frame
+// ids: another database's, another sequence's) is refused before anything
+// is cut, naming the frame and both images, whether it is longer or shorter
+// than the session; a CSV whose images are spelled otherwise (a relative
+// --sequence given from another folder) is this run's and resumes.
+TEST_F(RunCli, AnotherRunsCsvIsRefusedAndLeftAsItWas) {
+  {
+    std::ofstream reversed(kTmp / "reversed.txt");
+    for (int i = kFrames - 1; i >= 0; --i) {
+      char name[32];
+      std::snprintf(name, sizeof name, "%04d.png", i);
+      reversed << (dir_ / name).string() << "\n";
+    }
+  }
+  const std::string reversed = "run --sequence " + q(kTmp / "reversed.txt") +
+                               " --min-gap 20 --database " + q(kTmp / "b.db") + " --output ";
+  ASSERT_EQ(lsgd(reversed + q(kTmp / "b.csv") + " --last 49").code, 0);
+  for (const char* last : {" --last 99", " --last 29"}) {
+    SCOPED_TRACE(last);
+    fs::remove(kTmp / "a.db");
+    ASSERT_EQ(lsgd(run_args("a.db", "a.csv", last)).code, 0);
+    const std::string before = slurp(kTmp / "a.csv");
+    const CmdResult r = lsgd(reversed + q(kTmp / "a.csv"));
+    EXPECT_EQ(r.code, 1) << r.err;
+    const int frame = last == std::string(" --last 99") ? 49 : 29;
+    const auto image = [&](int i) {
+      char name[32];
+      std::snprintf(name, sizeof name, "%04d.png", i);
+      return (dir_ / name).string();
+    };
+    for (const std::string& part :
+         {"a.csv holds another run's rows: its row of frame " + std::to_string(frame) + " names " +
+              image(frame),
+          "this run's frame " + std::to_string(frame) + " is " + image(kFrames - 1 - frame),
+          std::string("give that run's CSV as --output, or another --output")}) {
+      EXPECT_NE(r.err.find(part), std::string::npos) << part << "\n" << r.err;
+    }
+    EXPECT_EQ(slurp(kTmp / "a.csv"), before);
+    EXPECT_EQ(database_rows(kTmp / "b.db").size(), 50u);
+  }
+  // Its own CSV, the sequence spelled relatively from kTmp, resumed from elsewhere.
+  fs::remove(kTmp / "a.db");
+  fs::remove(kTmp / "a.csv");
+  const auto from_tmp = [&](const std::string& args) {
+    return lsgd::test::run_command("/bin/sh", "-c \"cd " + q(kTmp) + " && '" +
+                                                   std::string(LSGD_CLI) + "' " + args + "\"",
+                                   kTmp);
+  };
+  ASSERT_EQ(from_tmp("run --sequence street --min-gap 20 --database a.db --output a.csv --last 9").code, 0);
+  const CmdResult resumed = lsgd(run_args("a.db", "a.csv", " --last 19"));
+  EXPECT_EQ(resumed.code, 0) << resumed.err;
+  EXPECT_EQ(frame_column(kTmp / "a.csv").size(), 20u);
 }
 
 }  // namespace

@@ -55,6 +55,28 @@ constexpr int kRankingVersion = 1;  // the first with the ranking's columns
 constexpr int kStatusVersion = 2;   // ... with the status
 constexpr int kStampVersion = 3;    // ... with the frame's time stamp
 
+// The image of a row (its second field, unquoted: csv_field()).
+std::string row_image(const std::string& row) {
+  const std::size_t start = row.find(',');
+  if (start == std::string::npos) return "";
+  std::string image;
+  if (start + 1 < row.size() && row[start + 1] == '"') {
+    for (std::size_t i = start + 2; i < row.size(); ++i) {
+      if (row[i] != '"') {
+        image += row[i];
+      } else if (i + 1 < row.size() && row[i + 1] == '"') {
+        image += '"';
+        ++i;
+      } else {
+        break;
+      }
+    }
+    return image;
+  }
+  const std::size_t end = row.find(',', start + 1);
+  return row.substr(start + 1, end == std::string::npos ? std::string::npos : end - start - 1);
+}
+
 }  // namespace
 
 CsvWriter::CsvWriter(const std::string& path, Mode mode, int version)
@@ -100,7 +122,8 @@ void CsvWriter::write(const Result& r, const std::string& image) {
   loops_ += r.loop ? 1 : 0;
 }
 
-CsvWriter::Trim CsvWriter::trim(const std::string& path, std::int64_t last_frame) {
+CsvWriter::Trim CsvWriter::trim(const std::string& path, std::int64_t last_frame,
+                                const RowCheck& check) {
   std::ifstream in(path, std::ios::binary);
   if (!in) throw IoError("cannot read '" + path + "'");
   std::string line;
@@ -116,6 +139,9 @@ CsvWriter::Trim CsvWriter::trim(const std::string& path, std::int64_t last_frame
   }
   std::int64_t keep = static_cast<std::int64_t>(line.size()) + 1;  // bytes kept
   bool cutting = false;
+  std::string last_kept;               // the last row kept
+  std::int64_t first_cut = -1;         // the first complete row cut: its frame
+  std::string first_cut_row;
   while (std::getline(in, line)) {
     bool complete = !in.eof();  // the line ended with '\n'
     // A quoted image name may hold a newline (csv_field): the row goes on
@@ -135,17 +161,23 @@ CsvWriter::Trim CsvWriter::trim(const std::string& path, std::int64_t last_frame
     if (!cutting && complete && frame >= 0 && frame <= last_frame) {
       keep += static_cast<std::int64_t>(line.size()) + 1;
       trim.last_row = frame;
+      if (check) last_kept = line;
       continue;
     }
     cutting = true;
     if (!complete) {
       trim.partial = true;
     } else if (frame >= 0) {
-      ++trim.dropped;
+      if (++trim.dropped == 1 && check) {
+        first_cut = frame;
+        first_cut_row = line;
+      }
     } else {
       ++trim.other;  // not a row of lsgd run (a line added to the file)
     }
   }
+  if (check && trim.last_row >= 0) check(trim.last_row, row_image(last_kept));
+  if (check && first_cut >= 0) check(first_cut, row_image(first_cut_row));
   if (trim.dropped > 0 || trim.other > 0 || trim.partial) {
     in.close();
     std::error_code ec;

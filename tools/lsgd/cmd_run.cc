@@ -60,15 +60,52 @@ void check_files(const RunArgs& args, const io::Sequence& sequence) {
 
 const char* kNewSessionHint = "; pass --session N with a new N to store them as a new session";
 
+// True when a CSV row's `image` is `expected`, this run's spelling of the
+// image (the run writes the sequence's own): the same text or absolute path,
+// or the relative path a run from another folder wrote for that file.
+bool same_row_image(const std::string& image, const std::string& expected) {
+  if (image == expected || io::same_image(image, io::stored_image_name(expected))) return true;
+  if (image.empty() || image[0] == '/') return false;
+  fs::path tail;  // the relative path without its leading "." and ".." parts
+  for (const fs::path& part : fs::path(image).lexically_normal()) {
+    if (tail.empty() && (part == "." || part == "..")) continue;
+    tail /= part;
+  }
+  const std::string full = io::stored_image_name(expected), end = "/" + tail.string();
+  return !tail.empty() && full.size() > end.size() &&
+         full.compare(full.size() - end.size(), end.size(), end) == 0;
+}
+
 // The rows of a CSV an interrupted run of the session wrote: rows of frames
 // the database does not hold (at most the one being committed when the run
-// stopped) are cut, so the file again has one row per stored frame.
-std::unique_ptr<CsvWriter> continue_csv(const RunArgs& args, const io::SessionPlan& plan) {
+// stopped) are cut, so the file again has one row per stored frame. The rows
+// at the cut must name the images this run has at their frames (the ones
+// the database stores: plan_session() checked the session's frames against
+// the sequence); another run's CSV is refused, untouched.
+std::unique_ptr<CsvWriter> continue_csv(const RunArgs& args, const io::Sequence& sequence,
+                                        const io::SessionPlan& plan) {
   struct stat st {};
   if (args.output.empty() || ::stat(args.output.c_str(), &st) != 0 || !S_ISREG(st.st_mode)) {
     return std::make_unique<CsvWriter>(args.output);
   }
-  const CsvWriter::Trim trim = CsvWriter::trim(args.output, plan.last_stored);
+  const auto images = static_cast<std::int64_t>(sequence.images.size());
+  const auto check = [&](std::int64_t frame, const std::string& image) {
+    const std::int64_t index = frame - plan.first_id;
+    const bool ours = index >= 0 && index < images;
+    if (ours && same_row_image(image, sequence.images[static_cast<std::size_t>(index)])) return;
+    throw InvalidArgument(
+        args.output + " holds another run's rows: its row of frame " + std::to_string(frame) +
+        " names " + image + ", but " +
+        (ours ? "this run's frame " + std::to_string(frame) + " is " +
+                    sequence.images[static_cast<std::size_t>(index)] +
+                    (frame <= plan.last_stored ? " (as " + args.database + " stores it)" : "")
+              : "frame " + std::to_string(frame) + " is no image of this run (its frames are " +
+                    std::to_string(plan.first_id) + " .. " +
+                    std::to_string(plan.first_id + images - 1) + ")") +
+        ": give that run's CSV as --output, or another --output (" + args.output +
+        " was left as it was)");
+  };
+  const CsvWriter::Trim trim = CsvWriter::trim(args.output, plan.last_stored, check);
   // One row may be ahead of the database: the frame being committed when the
   // run stopped (its row is written first). More means committed frames were lost.
   if (trim.dropped > 1) {
@@ -206,7 +243,7 @@ void run_session(const RunArgs& args, const io::Sequence& sequence, bool exists,
   // A new session is another sequence: nothing continues across it.
   io::begin_session(detector, plan);
   const std::unique_ptr<CsvWriter> csv =
-      plan.resume ? continue_csv(args, plan) : std::make_unique<CsvWriter>(args.output);
+      plan.resume ? continue_csv(args, sequence, plan) : std::make_unique<CsvWriter>(args.output);
   const FrameRun run = store_frames(args, sequence, source, plan, detector, db, *csv);
   // A new session that stored nothing is an error as a new database is
   // (frames of another size than the stored ones, a list of garbage).

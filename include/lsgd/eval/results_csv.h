@@ -5,6 +5,7 @@
 
 #include <cstdint>
 #include <fstream>
+#include <functional>
 #include <memory>
 #include <ostream>
 #include <string>
@@ -51,10 +52,17 @@ class CsvWriter {
     std::int64_t last_row = -1;  // frame of the last row kept; -1: none
     int version = kCsvNewest;    // of the header: 0 none of the columns below, 1 ranked_*, 2 status, 3 stamp
   };
+  // What trim() shows its caller before it cuts anything: the frame and the
+  // image of a row (unquoted), the last row kept and then the first complete
+  // row cut, each when there is one. Whatever it throws leaves the file as it
+  // was: a resumed run refuses another run's CSV (rows naming other images
+  // at those frame ids) this way.
+  using RowCheck = std::function<void(std::int64_t frame, const std::string& image)>;
   // Cuts the rows of frames after `last_frame` (and an incomplete last line)
-  // from an existing CSV this writer wrote, in place. Throws FormatError when
-  // the file is not one (its header differs).
-  static Trim trim(const std::string& path, std::int64_t last_frame);
+  // from an existing CSV this writer wrote, in place, once `check` (when
+  // given) accepted the rows at the cut. Throws FormatError when the file is
+  // not one (its header differs).
+  static Trim trim(const std::string& path, std::int64_t last_frame, const RowCheck& check = {});
 
  private:
   std::string path_;

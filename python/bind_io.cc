@@ -31,7 +31,12 @@ struct PyDatabase {
     if (!db) throw lsgd::InvalidArgument("database " + path + " is closed");
     return *db;
   }
-  void close() { db.reset(); }
+  // Closed whatever happens; what closing finds (a replaced file) is raised.
+  void close() {
+    if (!db) return;
+    const std::unique_ptr<lsgd::io::Database> closing = std::move(db);
+    closing->close();
+  }
   std::unique_ptr<lsgd::io::Database> db;
   std::string path;
 };
@@ -102,11 +107,17 @@ void bind_database_contents(DatabaseClass& database) {
 void bind_database_handle(DatabaseClass& database) {
   database
       .def("close", &PyDatabase::close,
-           "Checkpoints and releases the file (a writer's lock included); again: nothing.")
+           "Checkpoints and releases the file (a writer's lock included); an IoError when the "
+           "file was replaced or deleted while it was written; again: nothing.")
       .def_property_readonly("closed", [](const PyDatabase& db) { return !db.db; })
       .def("__enter__", [](PyDatabase& db) -> PyDatabase& { return db; }, py::return_value_policy::reference)
-      .def("__exit__", [](PyDatabase& db, const py::object&, const py::object&, const py::object&) {
-             db.close();
+      .def("__exit__", [](PyDatabase& db, const py::object& type, const py::object&, const py::object&) {
+             // An exception already leaving the block is the one to see.
+             try {
+               db.close();
+             } catch (const lsgd::Error&) {
+               if (type.is_none()) throw;
+             }
              return false;
            })
       .def_property_readonly("path", [](const PyDatabase& db) { return fs_str(db.path); })

@@ -2,7 +2,8 @@
 // of the file in the writer's process (a reader, a refused writer, one
 // refused for a rollback journal) leaves the writer's SQLite locks in place,
 // so another program's connection never takes itself for the last one and
-// deletes the log under the writer; descriptors are reused, not piled up.
+// deletes the log under the writer; descriptors are reused, not piled up. A
+// file replaced or deleted under its writer is said, not written blindly.
 #include "lsgd/io/database.h"
 
 #include <gtest/gtest.h>
@@ -184,6 +185,48 @@ TEST(DatabaseLocks, FramesCommittedBeforeAKillSurviveAnotherConnection) {
   for (const int fd : {to_parent[0], to_parent[1], to_child[0], to_child[1]}) ::close(fd);
   const Database after = Database::open(path, Database::Mode::kReadOnly);
   EXPECT_EQ(after.frames(), 16) << after.note();
+}
+
+// A database file replaced (mv other.db FILE) or deleted while a writer has
+// it open: the writer's frames go to a file no name reaches. Said at the
+// next checkpoint (every 32 frames), before save_index() and forget() write,
+// and at close(), naming the file; the file now at the path is not written.
+TEST(DatabaseLocks, AFileReplacedUnderTheWriterIsAnIoError) {
+  const std::string path = temp_path("replaced"), other = temp_path("replacing");
+  const DetectorOptions o = options(kExhaustiveSearch, "none");
+  Database writer = Database::create(path, o);
+  Detector d(o);
+  run(d, 0, 10, &writer);
+  { Database created = Database::create(other, o); }
+  ASSERT_EQ(::rename(other.c_str(), path.c_str()), 0);
+  const auto replaced = [&](const std::string& message) {
+    for (const std::string& part : {"database " + path + ": was replaced while this writer had it open",
+                                   std::string("run again to store the frames")}) {
+      EXPECT_NE(message.find(part), std::string::npos) << part << "\n" << message;
+    }
+  };
+  replaced(message_of<IoError>([&] { writer.save_index(d); }));
+  replaced(message_of<IoError>([&] { writer.forget(0, 0); }));
+  run(d, 10, 31, &writer);  // no checkpoint yet
+  // The 32nd frame is committed, then its checkpoint finds the file replaced.
+  replaced(message_of<IoError>([&] { run(d, 31, 32, &writer); }));
+  replaced(message_of<IoError>([&] { writer.close(); }));
+  EXPECT_NO_THROW(writer.close());  // closed: nothing
+  EXPECT_EQ(writer.frames(), 32);
+  EXPECT_NE(message_of<InvalidArgument>([&] { writer.frame_ids(); }).find("is closed"), std::string::npos);
+  EXPECT_EQ(Database::open(path, Database::Mode::kReadOnly).frames(), 0);  // the other one, as it was
+  // Deleted under the writer.
+  const std::string deleted = temp_path("deleted");
+  Database gone = Database::create(deleted, o);
+  ASSERT_EQ(::unlink(deleted.c_str()), 0);
+  const std::string message = message_of<IoError>([&] { gone.close(); });
+  EXPECT_NE(message.find("was deleted or moved away while this writer had it open"), std::string::npos)
+      << message;
+  // A file left in place closes without a word.
+  const std::string kept = temp_path("kept");
+  Database fine = Database::create(kept, o);
+  EXPECT_NO_THROW(fine.close());
+  EXPECT_NO_THROW(Database::open(kept));
 }
 
 }  // namespace

@@ -242,6 +242,32 @@ def test_readable_objects_closable_database_and_did_you_mean(tmp_path):
         lsgd.Detector(search={"min_gapp": 5})
 
 
+def test_close_says_the_file_was_replaced_under_the_writer(tmp_path):
+    # mv other.db map.db while a writer has map.db open: its frames are in a
+    # file no name reaches. close() (and the end of a with block) says so; an
+    # exception already leaving the block is the one raised.
+    frames = route(20, 1)
+    path, other = str(tmp_path / "map.db"), str(tmp_path / "other.db")
+    lsgd.Database.create(other).close()
+    db = lsgd.Database.create(path)
+    d = lsgd.Detector(db.options)
+    for f in frames[:3]:
+        db.append(d, d.process(f), session=0)
+    os.replace(other, path)
+    with pytest.raises(lsgd.IoError, match="was replaced while this writer had it open"):
+        db.close()
+    assert db.closed
+    db.close()  # twice: nothing
+    with pytest.raises(lsgd.IoError, match="was replaced"):
+        with lsgd.Database.open(path):
+            os.replace(path, path + ".moved")
+            lsgd.Database.create(path).close()
+    with pytest.raises(KeyError):
+        with lsgd.Database.open(path):
+            os.replace(path, path + ".moved")
+            raise KeyError("the block's own error")
+
+
 def test_callers_ids_and_stamps(tmp_path):
     frames = route(20, 3)
     d = lsgd.Detector(search={"min_gap": 5})

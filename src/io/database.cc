@@ -17,6 +17,7 @@
 #include <cmath>
 #include <cstdio>
 #include <cstring>
+#include <exception>
 #include <fstream>
 #include <limits>
 #include <map>
@@ -41,6 +42,27 @@ Database::~Database() = default;
 Database::Database(Database&& other) noexcept = default;
 Database& Database::operator=(Database&& other) noexcept = default;
 
+void Database::close() {
+  if (impl_) impl_->close_file(true);
+}
+
+void Database::Impl::close_file(bool report) {
+  std::exception_ptr error;
+  if (db && writable && opened) {
+    opened = false;
+    try {
+      checkpoint("closed");
+      check_same_file();
+    } catch (...) {
+      error = std::current_exception();
+    }
+  }
+  insert = Statement();
+  if (db) sqlite3_close_v2(db);
+  db = nullptr;
+  release_file();  // after SQLite's connection
+  if (report && error) std::rethrow_exception(error);
+}
 
 namespace {
 
@@ -378,6 +400,7 @@ const std::string& Database::note() const { return impl_->note; }
 
 std::vector<std::int64_t> Database::frame_ids() const {
   const Impl& m = *impl_;
+  m.check_open();
   std::vector<std::int64_t> ids;
   ids.reserve(static_cast<std::size_t>(m.frames));
   Statement stmt(m.db, m.path,
@@ -391,6 +414,7 @@ std::vector<std::int64_t> Database::frame_ids() const {
 
 SessionFrames Database::session_frames(std::int64_t session) const {
   const Impl& m = *impl_;
+  m.check_open();
   SessionFrames out;
   out.session = session;
   const std::string column = frame_column(m.format);
@@ -428,6 +452,7 @@ void Database::verify() const {
 
 DatabaseInfo Database::info() const {
   const Impl& m = *impl_;
+  m.check_open();
   exec_write(m.db, m.path, "BEGIN");  // one snapshot, even beside a writer
   struct EndRead {
     sqlite3* db;

@@ -388,17 +388,15 @@ struct Database::Impl {
   // Scratch of append(), reused between frames.
   std::vector<std::uint8_t> hist_bytes, pixel_bytes;
 
-  ~Impl() {
-    if (db && writable && opened) {
-      try {
-        checkpoint("closed");
-      } catch (...) {
-        // The frames stay committed in the write-ahead log; the next open replays it.
-      }
-    }
-    insert = Statement();
-    if (db) sqlite3_close_v2(db);
-    release_file();  // after SQLite's connection
+  ~Impl() { close_file(false); }
+
+  // Closes the connection and gives the descriptor back (the destructor,
+  // Database::close()). A writer checkpoints first (and checks that its
+  // path still names its file): `report` throws what went wrong, once all
+  // is closed; else the frames stay committed in the log for the next open.
+  void close_file(bool report);
+  void check_open() const {
+    if (!db) internal::throw_invalid("database ", path, " is closed");
   }
 
   // The process's table of open database files (database_locks.cc).
@@ -410,6 +408,10 @@ struct Database::Impl {
   // spare descriptors when this is the file's last Database in the process,
   // else kept for the next one.
   void release_file() noexcept;
+  // IoError when `path` no longer names the file this Database opened (it
+  // was replaced, moved or deleted): the frames written went to a file that
+  // path does not reach.
+  void check_same_file() const;
 
   // Records in meta that the writer is `state` ("open" or "closed") with
   // `frames` frames, then moves every committed frame from the write-ahead

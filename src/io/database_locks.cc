@@ -117,4 +117,22 @@ void Database::Impl::release_file() noexcept {
   files().erase(at);
 }
 
+void Database::Impl::check_same_file() const {
+  struct stat own {}, now {};
+  if (lock_fd < 0 || ::fstat(lock_fd, &own) != 0) return;
+  if (::stat(path.c_str(), &now) == 0) {
+    if (now.st_dev == own.st_dev && now.st_ino == own.st_ino) return;
+    io_error(path, "was replaced while this writer had it open (the path names another file "
+             "now): the ", frames, " frames it holds are not in the file at that path but in the "
+             "replaced one, which no name reaches any more. Nothing was written to the file now "
+             "at the path; run again to store the frames (into another database path if that "
+             "file is to stay)");
+  }
+  if (errno != ENOENT && errno != ENOTDIR) return;  // (a folder made unreadable: no verdict)
+  io_error(path, "was deleted or moved away while this writer had it open: the ", frames,
+           " frames it holds are not at that path (a moved file has them, without the log "
+           "'", path, "-wal' that SQLite keeps by this name). Put the file back, or run again "
+           "to store the frames");
+}
+
 }  // namespace lsgd::io

@@ -251,6 +251,7 @@ std::vector<std::uint8_t> legacy_state(const RowBytes& row, const char* search) 
 
 void Database::restore(Detector& detector, IndexUse index) const {
   Impl& m = *impl_;
+  m.check_open();
   if (detector.size() != 0) {
     internal::throw_invalid("database ", m.path, ": restore needs a new detector, this one holds ",
                             detector.size(), " frames");

@@ -151,6 +151,7 @@ std::int64_t Database::Impl::check_append(const Detector& detector, const Result
 void Database::append(const Detector& detector, const Result& result, std::int64_t session,
                       const std::string& name, std::int64_t frame) {
   Impl& m = *impl_;
+  m.check_open();
   m.check_writable();
   m.check_session(session);
   frame = m.check_append(detector, result, name, frame);
@@ -190,11 +191,15 @@ void Database::append(const Detector& detector, const Result& result, std::int64
   m.last_session = session;
   m.last_frame = frame;
   m.sessions.insert(session);
-  if (++m.since_checkpoint >= kCheckpointFrames) m.checkpoint("open");
+  if (++m.since_checkpoint >= kCheckpointFrames) {
+    m.checkpoint("open");
+    m.check_same_file();  // every 32 frames: a file replaced under the writer is said
+  }
 }
 
 void Database::append_all(const Detector& detector, std::int64_t session) {
   Impl& m = *impl_;
+  m.check_open();
   m.check_writable();
   m.check_session(session);
   if (detector.size() < m.frames) {
@@ -236,6 +241,7 @@ void Database::append_all(const Detector& detector, std::int64_t session) {
   m.last_session = session;
   m.sessions.insert(session);
   m.checkpoint("open");
+  m.check_same_file();
 }
 
 namespace {
@@ -267,6 +273,7 @@ FirstIds kept_first_ids(const std::map<std::int64_t, std::int64_t>& first_ids,
 
 std::int64_t Database::forget(std::int64_t first_id, std::int64_t last_id) {
   Impl& m = *impl_;
+  m.check_open();
   m.check_writable();
   if (first_id > last_id) {
     internal::throw_invalid("database ", m.path, ": forget: the first id ", first_id,
@@ -276,6 +283,7 @@ std::int64_t Database::forget(std::int64_t first_id, std::int64_t last_id) {
     internal::throw_invalid("database ", m.path, ": forget: ids ", first_id, " .. ", last_id,
                             " are outside the frame ids 0 .. ", kMaxFrameId);
   }
+  m.check_same_file();  // before rewriting: the file at the path is the one to change
   std::vector<FrameKeys> rows = m.read_keys();
   const auto from = std::find_if(rows.begin(), rows.end(), [&](const FrameKeys& r) { return r.id >= first_id; });
   const auto to = std::find_if(from, rows.end(), [&](const FrameKeys& r) { return r.id > last_id; });
@@ -355,6 +363,7 @@ void Database::Impl::rewrite_from(std::int64_t dense, const Detector& detector,
 
 std::int64_t Database::forget_session(std::int64_t session) {
   Impl& m = *impl_;
+  m.check_open();
   m.check_writable();
   if (m.sessions.count(session) == 0) {
     std::string known;
@@ -369,12 +378,14 @@ std::int64_t Database::forget_session(std::int64_t session) {
 
 std::int64_t Database::save_index(const Detector& detector) {
   Impl& m = *impl_;
+  m.check_open();
   m.check_writable();
   if (detector.size() != m.frames) {
     internal::throw_invalid("database ", m.path, ": save_index needs the detector of the stored ",
                             m.frames, " frames; this one holds ", detector.size());
   }
   check_compatible(detector.options());
+  m.check_same_file();
   std::vector<std::uint8_t> bytes;
   const std::int64_t covered = detector.save_index(bytes);
   const std::string mode = detector.search().name();

@@ -144,6 +144,7 @@ void db_forget(const DbForgetArgs& args) {
                               : "ids " + std::to_string(first) + " .. " + std::to_string(last);
   }
   const io::DatabaseInfo info = db.info();
+  db.close();  // its last checkpoint, and that the path still names the file changed
   if (forgotten == 0) {
     std::cout << args.path << ": no frame has " << what << ": nothing forgotten\n";
     return;

@@ -12,6 +12,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <cstring>
 #include <filesystem>
 #include <iostream>
 #include <memory>
@@ -209,11 +210,14 @@ FrameRun store_frames(const RunArgs& args, const io::Sequence& sequence,
           csv.write(r, image);
           db.append(detector, r, plan.session, io::stored_image_name(image), r.frame);
         });
-  } catch (...) {
+  } catch (const std::exception& error) {
     try {
       save_index(db, detector);
     } catch (const std::exception& e) {
-      std::cerr << "lsgd: note: the search index was not saved (" << e.what() << ")\n";
+      // (The same error again, a file replaced under the run: said once, by the error.)
+      if (std::strcmp(e.what(), error.what()) != 0) {
+        std::cerr << "lsgd: note: the search index was not saved (" << e.what() << ")\n";
+      }
     }
     throw;
   }
@@ -248,6 +252,7 @@ void run_session(const RunArgs& args, const io::Sequence& sequence, bool exists,
   // A new session that stored nothing is an error as a new database is
   // (frames of another size than the stored ones, a list of garbage).
   if (run.processed == 0 && !plan.resume) throw_no_frame(run.skipped, run.first_error);
+  db.close();  // its last checkpoint, and that the path still names the file written
   std::cerr << "processed " << run.processed << " frames"
             << (run.skipped > 0 ? " (" + std::to_string(run.skipped) + " skipped)"
                                 : std::string())

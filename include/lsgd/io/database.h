@@ -53,7 +53,10 @@
 // damaged log that would silently lose a commit is a FormatError), and the
 // writer moves the log into the file every 32 frames and when it closes, so
 // a writer that ends (normally or by an error) leaves every frame in the file
-// itself.
+// itself. At those checkpoints, before save_index() and forget() write, and
+// in close(), the writer checks that its path still names the file it
+// writes: a file replaced (mv other.db FILE) or deleted under it is an
+// IoError naming it, not frames silently written to a file no name reaches.
 //
 // Errors: a missing or unwritable file is IoError; a file that is not SQLite,
 // is truncated, damaged (SQLite's quick_check, the checksums, blob sizes, ids,
@@ -148,6 +151,14 @@ class Database {
   static Database open(const std::string& path, Mode mode = Mode::kReadWrite);
 
   ~Database();
+  // Closes the file now, as the destructor does, but with what the
+  // destructor can only swallow thrown: a writer's last checkpoint failing,
+  // or IoError when its path no longer names the file it wrote (replaced,
+  // moved or deleted meanwhile: the frames are not there). Closed in every
+  // case; afterwards path(), options(), frames(), last_session(),
+  // last_frame() and note() still answer, and every other call is an
+  // InvalidArgument saying it is closed. Again: nothing.
+  void close();
   Database(Database&& other) noexcept;
   Database& operator=(Database&& other) noexcept;
   Database(const Database&) = delete;

@@ -95,6 +95,10 @@ py::dict match_descriptors(const std::vector<lsgd::Descriptor>& reference, const
   }
   for (const lsgd::Descriptor& d : reference) refs.push_back(d.view());
   for (const lsgd::Descriptor& d : query) queries.push_back(d.view());
+  // The output is checked before the matching: a folder that cannot take it
+  // lost the results after the work (lsgd match checks its outputs first).
+  const std::string out = output.is_none() ? std::string() : path_of(output, "output");
+  if (!out.empty()) lsgd::io::check_output_file(out, "matches CSV");
   std::vector<lsgd::TopMatch> found;
   {
     py::gil_scoped_release release;
@@ -102,7 +106,7 @@ py::dict match_descriptors(const std::vector<lsgd::Descriptor>& reference, const
                               lsgd::parse_similarity_metric(metric.c_str()), query_offset);
   }
   if (!output.is_none()) {  // the CSV lsgd match writes, whole or not at all
-    lsgd::io::write_output_file(path_of(output, "output"), lsgd::eval::match_csv(found), "matches CSV");
+    lsgd::io::write_output_file(out, lsgd::eval::match_csv(found), "matches CSV");
   }
   const auto n = static_cast<py::ssize_t>(found.size());
   py::array_t<std::int64_t> q(n), j(n), rank(n);

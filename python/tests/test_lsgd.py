@@ -418,6 +418,11 @@ def test_match_one_traverse_against_another(tmp_path):
         lsgd.match(refs, queries, output=str(locked / "m.csv"))
     assert not (locked / "m.csv").exists()
     locked.chmod(0o755)
+    # An output that cannot be written is refused before the matching (a
+    # folder, or a missing folder, lost the results after the work).
+    for bad, message in [(tmp_path, "it is a folder"), (tmp_path / "no" / "m.csv", "does not exist")]:
+        with pytest.raises(lsgd.IoError, match=message):
+            lsgd.match(refs, queries, output=str(bad))
 
 
 def test_describe_to_numpy_and_back():

@@ -167,6 +167,29 @@ void remove_temporary_files_on_signal() {
   }
 }
 
+void check_output_file(const std::string& path, const std::string& what) {
+  struct stat st {};
+  const bool exists = ::stat(path.c_str(), &st) == 0;
+  if (exists && S_ISDIR(st.st_mode)) {
+    throw IoError(concat("cannot write ", what, " '", path, "': it is a folder (give a file name)"));
+  }
+  if (exists && !S_ISREG(st.st_mode)) return;  // a device or pipe: written in place
+  // As write_output_file() refuses them (a read-only file or folder, even
+  // for root: internal/file_mode.h).
+  if (exists && (::access(path.c_str(), W_OK) != 0 || !internal::mode_allows_writing(st.st_mode))) {
+    throw IoError(concat("cannot write ", what, " '", path, "': it is read-only (make it writable "
+                         "or give another file)"));
+  }
+  const std::string folder = folder_of(path);
+  struct stat in {};
+  if (::stat(folder.c_str(), &in) != 0 || !S_ISDIR(in.st_mode)) {
+    throw IoError(concat("cannot write ", what, " '", path, "': its folder '", folder, "' does not exist"));
+  }
+  if (!internal::mode_allows_writing(in.st_mode) || ::access(folder.c_str(), W_OK) != 0) {
+    throw IoError(concat("cannot write ", what, " '", path, "': its folder '", folder, "' is read-only"));
+  }
+}
+
 void write_output_file(const std::string& path, const std::string& content,
                        const std::string& what) {
   struct stat st {};

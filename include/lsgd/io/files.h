@@ -40,6 +40,11 @@ std::vector<unsigned char> read_file(const std::string& path, const std::string&
 
 void write_output_file(const std::string& path, const std::string& content,
                        const std::string& what);
+// What write_output_file() checks before it writes, for callers that can
+// check before their work: IoError naming `what` and the file when `path` is
+// a folder, a read-only file, or in a folder that is missing or read-only
+// (a device or a pipe passes: it is written in place).
+void check_output_file(const std::string& path, const std::string& what);
 
 // The folder holding `path` ("." for a bare name, "/" for a file in /).
 std::string folder_of(const std::string& path);

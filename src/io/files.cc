@@ -174,8 +174,7 @@ void check_output_file(const std::string& path, const std::string& what) {
     throw IoError(concat("cannot write ", what, " '", path, "': it is a folder (give a file name)"));
   }
   if (exists && !S_ISREG(st.st_mode)) return;  // a device or pipe: written in place
-  // As write_output_file() refuses them (a read-only file or folder, even
-  // for root: internal/file_mode.h).
+  // A read-only file or folder is refused even for root (internal/file_mode.h).
   if (exists && (::access(path.c_str(), W_OK) != 0 || !internal::mode_allows_writing(st.st_mode))) {
     throw IoError(concat("cannot write ", what, " '", path, "': it is read-only (make it writable "
                          "or give another file)"));
@@ -194,20 +193,11 @@ void write_output_file(const std::string& path, const std::string& content,
                        const std::string& what) {
   struct stat st {};
   const bool exists = ::stat(path.c_str(), &st) == 0;
-  const bool stream = exists && !S_ISREG(st.st_mode);
-  if (!stream) {
-    // A read-only file, or one in a read-only folder, is not replaced: not
-    // even by root (internal/file_mode.h), nor by the rename below.
-    if (exists && (::access(path.c_str(), W_OK) != 0 || !internal::mode_allows_writing(st.st_mode))) {
-      throw IoError(concat("cannot write ", what, " '", path, "': it is read-only (make it writable "
-                           "or give another file)"));
-    }
-    const std::string folder = folder_of(path);
-    struct stat in {};
-    if (::stat(folder.c_str(), &in) == 0 && !internal::mode_allows_writing(in.st_mode)) {
-      throw IoError(concat("cannot write ", what, " '", path, "': its folder '", folder, "' is read-only"));
-    }
-  }
+  const bool stream = exists && !S_ISREG(st.st_mode) && !S_ISDIR(st.st_mode);
+  // A folder, a read-only file or one in a read-only or missing folder is
+  // refused before anything is written (not even root replaces a read-only
+  // file, nor does the rename below).
+  if (!stream) check_output_file(path, what);
   if (stream) {  // a device or pipe: written in place, never replaced
     const int fd = ::open(path.c_str(), O_WRONLY | O_CLOEXEC);
     if (fd < 0) throw IoError(concat("cannot write ", what, " '", path, "': ", std::strerror(errno)));

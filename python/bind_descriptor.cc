@@ -83,16 +83,8 @@ lsgd::Descriptor descriptor_from_arrays(py::array histograms, const py::object& 
 
 py::dict match_descriptors(const std::vector<lsgd::Descriptor>& reference, const std::vector<lsgd::Descriptor>& query,
                            int top_k, const std::string& metric, std::int64_t query_offset, const py::object& output) {
+  // Views carry what each descriptor counts: match_top_k refuses a mix.
   std::vector<lsgd::DescriptorView> refs, queries;
-  // Every descriptor must count what the first one counts (those of unknown
-  // type, from arrays, are taken as they come).
-  const lsgd::Descriptor* known = nullptr;
-  for (const std::vector<lsgd::Descriptor>* list : {&reference, &query}) {
-    for (const lsgd::Descriptor& d : *list) {
-      if (known == nullptr && !d.type.empty()) known = &d;
-      if (known != nullptr) lsgd::check_same_type(*known, d, "match");
-    }
-  }
   for (const lsgd::Descriptor& d : reference) refs.push_back(d.view());
   for (const lsgd::Descriptor& d : query) queries.push_back(d.view());
   // The output is checked before the matching: a folder that cannot take it
@@ -167,7 +159,6 @@ void bind_descriptor(py::module_& m) {
           if (a.grid != b.grid || a.storage != b.storage) {
             throw lsgd::InvalidArgument("the descriptors differ in grid or storage");
           }
-          lsgd::check_same_type(a, b, "similarity");
           return lsgd::similarity(a.view(), b.view(), lsgd::parse_similarity_metric(metric.c_str()));
         }, py::arg("a"), py::arg("b"), py::arg("metric") = std::string(lsgd::to_string(lsgd::SimilarityOptions{}.metric)),
         "Similarity of two descriptors (the detector's similarity.metric by default).");

@@ -136,6 +136,7 @@ void DescriptorOptions::check() const {
 DescriptorView Descriptor::view() const {
   DescriptorView v;
   v.cells = grid.cells();
+  v.type = type.empty() ? nullptr : type.c_str();
   if (storage == HistogramStorage::kCompact) {
     v.compact = compact.data();
     v.cell_pixels = cell_pixels;
@@ -350,12 +351,6 @@ std::string descriptor_identity(const DescriptorOptions& options) {
   }
   if (!type.options.empty()) out += ")";
   return out;
-}
-
-void check_same_type(const Descriptor& a, const Descriptor& b, const char* what) {
-  if (a.type.empty() || b.type.empty() || a.type == b.type) return;
-  internal::throw_invalid(what, ": the descriptors count different things (", a.type, " and ", b.type,
-                          "): describe both with the same descriptor options");
 }
 
 void segment_and_describe(Segmenter& segmenter, const GrayImage& image, Segmentation& segmentation,

@@ -119,7 +119,23 @@ double compact_l1_similarity(const DescriptorView& a, const DescriptorView& b) {
   return std::max(0.0, score);  // rounding can add a little mass
 }
 
+// The type a view knows (DescriptorView::type), or nullptr.
+const char* known_type(const DescriptorView& v) {
+  return v.type != nullptr && *v.type != '\0' ? v.type : nullptr;
+}
+
+// Throws InvalidArgument when both views know what they count and it differs
+// (a gradient descriptor scored against an intensity one gave 0.77).
+void check_same_type(const DescriptorView& a, const DescriptorView& b, const char* what) {
+  const char* ta = known_type(a);
+  const char* tb = known_type(b);
+  if (ta == nullptr || tb == nullptr || ta == tb || std::strcmp(ta, tb) == 0) return;
+  internal::throw_invalid(what, ": the descriptors count different things (", ta, " and ", tb,
+                          "): describe both with the same descriptor options");
+}
+
 void check_comparable(const DescriptorView& a, const DescriptorView& b, const char* what) {
+  check_same_type(a, b, what);
   if (a.cells != b.cells || a.cells <= 0) {
     internal::throw_invalid(what, ": descriptors have ", a.cells, " and ", b.cells,
                             " cells; frames must have the same size and superpixel_size");
@@ -228,6 +244,16 @@ std::vector<TopMatch> match_top_k(const std::vector<DescriptorView>& reference,
   if (query_offset < 0 || query_offset > kMaxFrameId - static_cast<std::int64_t>(queries.size())) {
     internal::throw_invalid("match: query_offset ", query_offset, " must be in [0, ", kMaxFrameId,
                             " - the ", queries.size(), " queries]");
+  }
+  // Every descriptor counts what the first that knows it counts (views of
+  // unknown type, from arrays, are taken as they come): a query compared only
+  // with each reference would let a reference mix two kinds.
+  const DescriptorView* known = nullptr;
+  for (const std::vector<DescriptorView>* list : {&reference, &queries}) {
+    for (const DescriptorView& v : *list) {
+      if (known == nullptr && known_type(v) != nullptr) known = &v;
+      if (known != nullptr) check_same_type(*known, v, "match");
+    }
   }
   const std::size_t k = std::min(static_cast<std::size_t>(top_k), reference.size());
   std::vector<TopMatch> out;

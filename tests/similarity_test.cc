@@ -380,5 +380,36 @@ TEST(MatchTopK, BestFirstTiesByIndexScoresInSigma) {
   EXPECT_THROW(match_top_k(r, {other.view()}, 1, SimilarityMetric::kReference), InvalidArgument);
 }
 
+// Descriptors that count different things (Descriptor::type) are refused by
+// the C++ functions over views too, as by Python's lsgd.similarity and
+// lsgd.match: the view carries the type (issue 35, seventh pass; only
+// Python checked it, so C++ callers scored gradient against intensity).
+TEST(MatchTopK, DescriptorsThatCountDifferentThingsAreRefused) {
+  Descriptor intensity = random_descriptor(8, 1);
+  Descriptor gradient = random_descriptor(8, 2);
+  Descriptor unknown = random_descriptor(8, 3);  // built by hand: taken as it comes
+  intensity.type = "intensity";
+  gradient.type = "gradient (threshold 1.5, orientations 32)";
+  EXPECT_STREQ(intensity.view().type, "intensity");
+  EXPECT_EQ(unknown.view().type, nullptr);
+  for (const SimilarityMetric metric : kMetrics) {
+    const std::string m = message_of<InvalidArgument>([&] { similarity(intensity.view(), gradient.view(), metric); });
+    EXPECT_NE(m.find("count different things (intensity and gradient (threshold 1.5"), std::string::npos) << m;
+    EXPECT_NO_THROW(similarity(intensity.view(), unknown.view(), metric));
+    double out[2];
+    const DescriptorView frames[2] = {unknown.view(), gradient.view()};
+    EXPECT_THROW(similarities(intensity.view(), frames, 2, metric, out), InvalidArgument);
+  }
+  // A reference mixing two kinds is refused even for a query of unknown
+  // type, which each reference alone would accept.
+  const std::vector<DescriptorView> mixed = {intensity.view(), gradient.view()};
+  const std::string m = message_of<InvalidArgument>([&] { match_top_k(mixed, {unknown.view()}, 1, SimilarityMetric::kReference); });
+  EXPECT_NE(m.find("match: the descriptors count different things"), std::string::npos) << m;
+  EXPECT_THROW(match_top_k({intensity.view()}, {gradient.view()}, 1, SimilarityMetric::kReference),
+               InvalidArgument);
+  EXPECT_EQ(match_top_k({intensity.view(), unknown.view()}, {intensity.view()}, 2, SimilarityMetric::kReference)
+                .size(), 2u);
+}
+
 }  // namespace
 }  // namespace lsgd

@@ -115,6 +115,10 @@ struct DescriptorView {
   // compact: mean pixels per cell (image pixels / cells), which turns compact
   // L1 distances back into pixel counts.
   double cell_pixels = 0;
+  // What the bins count (Descriptor::type, kept by Descriptor::view()):
+  // nullptr or "" when not known (a stored frame's view, arrays). similarity(),
+  // similarities() and match_top_k() refuse views that both know it and differ.
+  const char* type = nullptr;
 
   HistogramStorage storage() const {
     return compact != nullptr ? HistogramStorage::kCompact : HistogramStorage::kExact;
@@ -132,7 +136,8 @@ struct Descriptor {
   // segment_and_describe() with the descriptor options writes it
   // ("intensity", "gradient (threshold 1.5, orientations 32)"); "" when not
   // known (built from arrays or bytes). Descriptors that count different
-  // things are never compared (lsgd.similarity, lsgd.match).
+  // things are never compared (similarity(), match_top_k() and their Python
+  // forms refuse them: view() carries it).
   std::string type;
 
   DescriptorView view() const;
@@ -188,9 +193,6 @@ void segment_and_describe(Segmenter& segmenter, const GrayImage& image, Segmenta
                           Descriptor& out, DescribeScratch& scratch, const DescriptorOptions& options);
 // What a descriptor of `options` counts (Descriptor::type).
 std::string descriptor_identity(const DescriptorOptions& options);
-// Throws InvalidArgument (`what` saying where) when both descriptors know
-// what they count and it differs.
-void check_same_type(const Descriptor& a, const Descriptor& b, const char* what);
 
 // Encodes an exact descriptor in compact storage (see HistogramStorage). An
 // empty cell encodes as all zeros. Throws InvalidArgument when `exact` is not

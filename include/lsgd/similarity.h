@@ -39,7 +39,8 @@ struct SimilarityOptions {
 
 // Per-cell L1 by a SIMD kernel chosen at run time (identical to the scalar
 // reference, see src/internal/kernels.h). Both descriptors must have the same number of
-// cells and the same storage (throws InvalidArgument otherwise).
+// cells and the same storage, and count the same thing when both views know
+// it (DescriptorView::type; throws InvalidArgument otherwise).
 //
 // Compact descriptors (HistogramStorage::kCompact): the per-cell L1 is the sum
 // of absolute differences of the 8-bit bins, in units of 1/kCompactMass of a
@@ -73,7 +74,8 @@ struct TopMatch {
 // best first, equal similarities by lower index; queries in order.
 // InvalidArgument for top_k outside [1, kMaxTopK], a query_offset that is
 // negative or puts a query id beyond kMaxFrameId, an empty reference or
-// descriptors that do not match (grid, storage).
+// descriptors that do not match (grid, storage, or what they count: every
+// view that knows its type must name the first one's).
 constexpr int kMaxTopK = 1000;
 std::vector<TopMatch> match_top_k(const std::vector<DescriptorView>& reference,
                                   const std::vector<DescriptorView>& queries, int top_k,

@@ -1,5 +1,6 @@
 #include "lsgd/io/files.h"
 #include "lsgd/eval/detections.h"
+#include "lsgd/eval/results_csv.h"
 
 #include <algorithm>
 #include <cctype>
@@ -45,29 +46,7 @@ std::vector<std::string> split_fields(const std::string& record) {
     }
     return fields;
   }
-  std::string field;
-  bool quoted = false;
-  for (std::size_t i = 0; i < record.size(); ++i) {
-    const char c = record[i];
-    if (quoted) {
-      if (c == '"' && i + 1 < record.size() && record[i + 1] == '"') {
-        field += '"';
-        ++i;
-      } else if (c == '"') {
-        quoted = false;
-      } else {
-        field += c;
-      }
-    } else if (c == '"') {
-      quoted = true;
-    } else if (c == ',') {
-      fields.push_back(trim(field));
-      field.clear();
-    } else {
-      field += c;
-    }
-  }
-  fields.push_back(trim(field));
+  for (std::string& field : csv_fields(record)) fields.push_back(trim(field));
   return fields;
 }
 

@@ -38,6 +38,28 @@ std::string csv_field(const std::string& text) {
   return out + "\"";
 }
 
+std::vector<std::string> csv_fields(const std::string& record) {
+  std::vector<std::string> fields;
+  std::string field;
+  bool quoted = false;
+  for (std::size_t i = 0; i < record.size(); ++i) {
+    const char c = record[i];
+    if (quoted && c == '"' && i + 1 < record.size() && record[i + 1] == '"') {
+      field += '"';
+      ++i;
+    } else if (c == '"') {
+      quoted = !quoted;
+    } else if (c == ',' && !quoted) {
+      fields.push_back(std::move(field));
+      field.clear();
+    } else {
+      field += c;
+    }
+  }
+  fields.push_back(std::move(field));
+  return fields;
+}
+
 namespace {
 
 // The headers of the CSV's versions, oldest first; a run resumes in the
@@ -57,24 +79,8 @@ constexpr int kStampVersion = 3;    // ... with the frame's time stamp
 
 // The image of a row (its second field, unquoted: csv_field()).
 std::string row_image(const std::string& row) {
-  const std::size_t start = row.find(',');
-  if (start == std::string::npos) return "";
-  std::string image;
-  if (start + 1 < row.size() && row[start + 1] == '"') {
-    for (std::size_t i = start + 2; i < row.size(); ++i) {
-      if (row[i] != '"') {
-        image += row[i];
-      } else if (i + 1 < row.size() && row[i + 1] == '"') {
-        image += '"';
-        ++i;
-      } else {
-        break;
-      }
-    }
-    return image;
-  }
-  const std::size_t end = row.find(',', start + 1);
-  return row.substr(start + 1, end == std::string::npos ? std::string::npos : end - start - 1);
+  const std::vector<std::string> fields = csv_fields(row);
+  return fields.size() > 1 ? fields[1] : std::string();
 }
 
 }  // namespace

@@ -19,6 +19,12 @@ namespace lsgd::eval {
 // `text` as one CSV field: quoted (quotes doubled) when it holds a comma, a
 // quote or a line break, else as it is.
 std::string csv_field(const std::string& text);
+// The fields of one CSV record, the inverse of csv_field(): split at the
+// commas outside quotes, quoted text unquoted (a doubled quote is one), every
+// byte kept as it is (readers that allow spaces around numbers trim them).
+// The one reader of quoted fields: lsgd run's rows (a resumed run's check
+// of their images) and detections files (eval::read_detections).
+std::vector<std::string> csv_fields(const std::string& record);
 
 // The CSV of `lsgd match` and Python's lsgd.match(output=): a header, then
 // query,match,score,similarity,rank per match, in the order given.

@@ -108,6 +108,35 @@ TEST_F(Files, AnOutputIsNeverAnInput) {
   expect_refused(eval + " --json " + q(soft), "given by --gt", {gt});
 }
 
+// The list a sequence was read from is an input whatever names it: a
+// dataset folder's sequence.txt (run, eval, match and sweep were given the
+// folder, and `--output FOLDER/sequence.txt` replaced the list with the
+// CSV), and a KITTI sequence's times.txt (issue 35, seventh pass).
+TEST_F(Files, TheListInsideADatasetFolderIsAnInput) {
+  const fs::path seq = dir_ / "sequence.txt", gt = dir_ / "gt.txt";
+  expect_refused("run --sequence " + q(dir_) + " --output " + q(seq), "a file the sequence of --sequence was read from",
+                 {seq});
+  expect_refused("eval --sequence " + q(dir_) + " --gt " + q(gt) + " --min-gap 5 --json " + q(seq),
+                 "a file the sequence of --sequence was read from", {seq});
+  expect_refused("match --reference " + q(dir_) + " --query " + q(dir_ / "images") + " --output " + q(seq),
+                 "a file the sequence of --reference was read from", {seq});
+  expect_refused("sweep --dataset s=" + dir_.string() + "," + gt.string() + ",5 --csv " + q(seq),
+                 "a file the sequence of --dataset s was read from", {seq});
+  // KITTI: the frames' times.
+  const fs::path kitti = kTmp / "kitti" / "sequences" / "00";
+  fs::create_directories(kitti / "image_0");
+  std::ofstream times(kitti / "times.txt");
+  for (int i = 0; i < 12; ++i) {
+    fs::copy_file(dir_ / "images" / (std::to_string(1000 + i) + ".png"),
+                  kitti / "image_0" / (std::string(i < 10 ? "00000" : "0000") + std::to_string(i) + ".png"),
+                  fs::copy_options::overwrite_existing);
+    times << i * 0.1 << "\n";
+  }
+  times.close();
+  expect_refused("run --sequence " + q(kitti) + " --output " + q(kitti / "times.txt"),
+                 "a file the sequence of --sequence was read from", {kitti / "times.txt"});
+}
+
 // An image a list names that does not exist yet is no output either, by
 // spelling: through a missing folder and '..', or a link to the output to
 // be. (A missing image is looked at by its name first: a list of 200,000

@@ -18,7 +18,7 @@ namespace lsgd::eval {
 SweepData open_sweep_dataset(const SweepDataset& spec) {
   Dataset opened = open_dataset(spec.sequence, spec.sequence_options, spec.ground_truth, spec.gt_options);
   SweepData d{spec, sequence_source(opened.frames), std::move(opened.gt), 0,
-              std::move(opened.all.images)};
+              std::move(opened.all)};
   for (std::int64_t q = 0; q < d.gt.frames(); ++q) d.positives += d.gt.has_loop(q, spec.min_gap);
   return d;
 }

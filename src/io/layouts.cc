@@ -177,6 +177,7 @@ Sequence open_kitti(const std::string& path, const SequenceOptions& options) {
   sequence.images = list_images(folder.string());
   check_kitti_names(sequence.images, folder);
   sequence.stamps = read_timestamps(times);
+  sequence.files = {times.string()};
   const auto stamps = static_cast<std::int64_t>(sequence.stamps.size());
   const auto frames = static_cast<std::int64_t>(sequence.images.size());
   if (stamps != frames) {
@@ -380,6 +381,7 @@ Sequence subsample(const Sequence& sequence, const FrameSelection& selection) {
   const auto kept = selection.kept(static_cast<std::int64_t>(sequence.images.size()));
   Sequence out;
   out.source = sequence.source;
+  out.files = sequence.files;
   out.images.reserve(kept.size());
   for (std::int64_t i : kept) out.images.push_back(sequence.images[static_cast<std::size_t>(i)]);
   if (!sequence.stamps.empty()) {

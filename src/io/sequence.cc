@@ -411,6 +411,7 @@ Sequence open_sequence(const std::string& path) {
         concat("sequence '", path, "' is a single image; give a folder of images or a list file"));
   } else if (fs::is_regular_file(status)) {
     sequence.images = read_image_list(path);
+    sequence.files = {path};
   } else {
     throw IoError(concat("sequence '", path, "' is neither a folder nor a regular file"));
   }

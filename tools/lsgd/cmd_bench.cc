@@ -213,7 +213,7 @@ void distractors_command(const BenchArgs& args) {
   files.input(args.sequence, "--sequence");
   files.input(args.gt, "--gt");
   if (!args.sequence.empty()) {  // the JSON may not land on one of the images read
-    files.inputs(io::open_sequence(args.sequence, d.layout).images, "--sequence", "input image");
+    files.sequence(io::open_sequence(args.sequence, d.layout), "--sequence", "input image");
   }
   files.output(args.json, "--json");
   files.check();

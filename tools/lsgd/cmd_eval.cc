@@ -200,11 +200,11 @@ eval::ReportInput report_input(const EvalArgs& args, const eval::Metrics& metric
 }
 
 // Nothing the command writes may be something it reads.
-void check_files(const EvalArgs& args, const std::vector<std::string>& images) {
+void check_files(const EvalArgs& args, const io::Sequence& sequence) {
   CommandFiles files;
   files.input(args.detector.config, "--config");
   files.input(args.sequence, "--sequence");
-  files.inputs(images, "--sequence", "input image");
+  files.sequence(sequence, "--sequence", "input image");
   files.input(args.detections, "--detections");
   files.input(args.gt, "--gt");
   files.input(args.poses, "--poses");
@@ -279,7 +279,7 @@ void evaluate_sequence(const EvalArgs& args, const io::SequenceOptions& options)
   const io::Layout layout = dataset.layout;
   const io::Sequence& sequence = dataset.frames;
   const eval::GroundTruth& gt = dataset.gt;
-  check_files(args, dataset.all.images);
+  check_files(args, dataset.all);
   // Every --compare file is read now: a bad one fails before the (long) run.
   for (const std::string& file : compared_files(args)) eval::read_detections(file, gt.frames());
   const std::vector<eval::Pose> poses = report_poses(args, gt);  // --poses, the same

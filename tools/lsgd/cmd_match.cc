@@ -130,8 +130,8 @@ void match(const MatchArgs& args) {
   files.input(args.detector.config, "--config");
   files.input(args.reference, "--reference");
   files.input(args.query, "--query");
-  files.inputs(reference.images, "--reference", "reference image");
-  files.inputs(query.images, "--query", "query image");
+  files.sequence(reference, "--reference", "reference image");
+  files.sequence(query, "--query", "query image");
   files.output_or_stdout(args.output, "--output");
   files.check();
   if (reference.images.empty()) throw InvalidArgument("--reference " + args.reference + " holds no image");

@@ -53,7 +53,7 @@ void check_files(const RunArgs& args, const io::Sequence& sequence) {
   CommandFiles files;
   files.input(args.detector.config, "--config");
   files.input(args.sequence, "--sequence");
-  files.inputs(sequence.images, "--sequence", "input image");
+  files.sequence(sequence, "--sequence", "input image");
   files.database(args.database, "--database", true);
   files.output_or_stdout(args.output, "--output");
   files.check();
@@ -288,7 +288,7 @@ void run_localize(const RunArgs& args, const io::Sequence& sequence) {
   CommandFiles files;
   files.input(args.detector.config, "--config");
   files.input(args.sequence, "--sequence");
-  files.inputs(sequence.images, "--sequence", "input image");
+  files.sequence(sequence, "--sequence", "input image");
   files.input(args.database, "--database");
   files.output_or_stdout(args.output, "--output");
   files.check();

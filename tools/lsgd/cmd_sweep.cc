@@ -308,7 +308,7 @@ void sweep(const SweepArgs& args) {
   files.input(args.detector.config, "--config");
   for (const Dataset& d : datasets) {
     files.input(d.spec.sequence, "--dataset " + d.spec.name);
-    files.inputs(d.images, "--dataset " + d.spec.name, "input image");
+    files.sequence(d.all, "--dataset " + d.spec.name, "input image");
     files.input(d.spec.ground_truth, "--dataset " + d.spec.name);
   }
   files.output(args.csv, "--csv");

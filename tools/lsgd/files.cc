@@ -211,6 +211,14 @@ void CommandFiles::inputs(const std::vector<std::string>& paths, const std::stri
   }
 }
 
+void CommandFiles::sequence(const io::Sequence& sequence, const std::string& flag,
+                            const std::string& what) {
+  inputs(sequence.images, flag, what);
+  for (const std::string& file : sequence.files) {
+    inputs_.push_back({file, flag, concat("a file the sequence of ", flag, " was read from")});
+  }
+}
+
 void CommandFiles::database(const std::string& path, const std::string& flag, bool also_output) {
   if (path.empty()) return;
   inputs_.push_back({path, flag, "the database given by " + flag});

@@ -8,6 +8,8 @@
 #include <string>
 #include <vector>
 
+#include "lsgd/io/sequence.h"
+
 namespace lsgd::cli {
 
 class CommandFiles {
@@ -18,6 +20,10 @@ class CommandFiles {
   // Many inputs of one flag, e.g. the images of --sequence ("input image").
   void inputs(const std::vector<std::string>& paths, const std::string& flag,
               const std::string& what);
+  // The images of a sequence and the files it was read from (its list file,
+  // a dataset folder's sequence.txt, KITTI's times.txt: io::Sequence::files),
+  // `what` naming an image ("input image").
+  void sequence(const io::Sequence& sequence, const std::string& flag, const std::string& what);
   // A detector database read (and maybe appended to): the file and its
   // SQLite companions (-wal, -shm, -journal), which hold committed frames.
   void database(const std::string& path, const std::string& flag, bool also_output);

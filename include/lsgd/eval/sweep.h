@@ -95,7 +95,7 @@ struct SweepData {
   FrameSource source;
   GroundTruth gt;
   std::int64_t positives = 0;       // queries with a loop outside the window
-  std::vector<std::string> images;  // every image of its layout (inputs no output may overwrite)
+  io::Sequence all;  // every image of its layout and its list (inputs no output may overwrite)
 };
 // Opens spec's sequence and ground truth (eval::open_dataset: every layout
 // and format lsgd eval reads); the errors name the file.

@@ -30,6 +30,10 @@ void check_input_file(const std::string& path, const std::string& what,
 struct Sequence {
   std::string source;               // the folder or list file it was opened from
   std::vector<std::string> images;  // image paths in frame order
+  // The files besides the images that it was read from (a list file, a
+  // dataset folder's sequence.txt, KITTI's times.txt): inputs, which no
+  // output of a command may replace.
+  std::vector<std::string> files;
   // Each image's time stamp in seconds when the layout gives them (KITTI's
   // times.txt), else empty: lsgd run passes them to Detector::process and
   // writes them in its CSV's stamp column.

@@ -237,6 +237,38 @@ TEST_F(DetectionsTest, CsvFieldsReadBackWhatCsvFieldWrote) {
   EXPECT_EQ(at(read_detections(path, 5), 3).reported.frame, 1);
 }
 
+// A CSV written row by row has one writer: a second CsvWriter (another
+// lsgd run or eval given the same --output) is refused before it truncates
+// anything; two runs interleaved their rows, both exiting 0 (issue 35,
+// seventh pass). trim() waits for no one either.
+TEST_F(DetectionsTest, ASecondWriterOfTheSameCsvIsRefusedAndChangesNothing) {
+  const std::string path = (dir_ / "run.csv").string();
+  const auto slurp = [](const std::string& file) {
+    std::ifstream in(file, std::ios::binary);
+    return std::string(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
+  };
+  {
+    CsvWriter first(path);
+    Result r;
+    r.frame = 0;
+    first.write(r, "a.png");
+    const std::string before = slurp(path);
+    const std::string m = test::message_of<IoError>([&] { CsvWriter second(path); });
+    EXPECT_NE(m.find("another process is writing it"), std::string::npos) << m;
+    EXPECT_NE(m.find(path), std::string::npos) << m;
+    EXPECT_THROW(CsvWriter(path, CsvWriter::kAppend), IoError);
+    EXPECT_THROW(CsvWriter::trim(path, 0), IoError);
+    EXPECT_EQ(slurp(path), before);
+    r.frame = 1;
+    first.write(r, "b.png");
+  }
+  EXPECT_EQ(read_detections(path, 2).size(), 2u);
+  CsvWriter again(path);  // the first one is gone: its lock with it
+  // Devices are not locked: two writers may share /dev/null.
+  CsvWriter null1("/dev/null");
+  CsvWriter null2("/dev/null");
+}
+
 // Frame ids are bounded before the records are allocated.
 TEST_F(DetectionsTest, HugeFrameIdsAreFormatErrors) {
   expect_line_error("10000000000,0,0.5\n", 1, "implausibly large");

@@ -137,6 +137,25 @@ TEST_F(Files, TheListInsideADatasetFolderIsAnInput) {
                  "a file the sequence of --sequence was read from", {kitti / "times.txt"});
 }
 
+// lsgd sweep --json is written whole at the end; it was opened (emptied) as
+// the sweep started, so an interrupted sweep left a 0-byte file where the
+// previous sweep's JSON was (issue 35, seventh pass).
+TEST_F(Files, AnInterruptedSweepLeavesTheJsonItWouldHaveReplaced) {
+  const fs::path json = kTmp / "old.json", csv = kTmp / "table.csv";
+  std::ofstream(json) << "{\"earlier\": 1}\n";
+  fs::remove(csv);
+  // The CSV's header is written after every output is opened: the sweep is
+  // stopped then, 40 cells before its end.
+  const std::string sweep = "'" + std::string(LSGD_CLI) + "' sweep --dataset s=" + (dir_ / "sequence.txt").string() +
+                            "," + (dir_ / "gt.txt").string() + ",5 --set decision.threshold=1:40:1 --csv " +
+                            q(csv) + " --json " + q(json) + " >/dev/null 2>&1";
+  const std::string script = sweep + " & pid=$!; while [ ! -s " + q(csv) +
+                             " ] && kill -0 $pid 2>/dev/null; do sleep 0.05; done; kill -TERM $pid; wait $pid";
+  EXPECT_NE(std::system(script.c_str()), 0);
+  EXPECT_TRUE(fs::exists(csv));
+  EXPECT_EQ(slurp(json), "{\"earlier\": 1}\n");
+}
+
 // An image a list names that does not exist yet is no output either, by
 // spelling: through a missing folder and '..', or a link to the output to
 // be. (A missing image is looked at by its name first: a list of 200,000

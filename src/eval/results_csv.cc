@@ -91,6 +91,7 @@ CsvWriter::CsvWriter(const std::string& path, Mode mode, int version)
     throw InvalidArgument("CsvWriter: version " + std::to_string(version) + " of the CSV does not exist");
   }
   if (!path.empty()) {
+    lock_ = io::OutputLock(path, "CSV");  // before the file is truncated
     file_ = std::make_unique<std::ofstream>(
         path, mode == kAppend ? std::ios::out | std::ios::app : std::ios::out | std::ios::trunc);
     if (!*file_) throw_cannot_write(path);
@@ -130,6 +131,7 @@ void CsvWriter::write(const Result& r, const std::string& image) {
 
 CsvWriter::Trim CsvWriter::trim(const std::string& path, std::int64_t last_frame,
                                 const RowCheck& check) {
+  const io::OutputLock lock(path, "CSV");  // no other writer cuts or adds rows meanwhile
   std::ifstream in(path, std::ios::binary);
   if (!in) throw IoError("cannot read '" + path + "'");
   std::string line;

@@ -1,6 +1,7 @@
 #include "lsgd/io/files.h"
 
 #include <fcntl.h>
+#include <sys/file.h>
 #include <sys/stat.h>
 #include <unistd.h>
 
@@ -187,6 +188,41 @@ void check_output_file(const std::string& path, const std::string& what) {
   if (!internal::mode_allows_writing(in.st_mode) || ::access(folder.c_str(), W_OK) != 0) {
     throw IoError(concat("cannot write ", what, " '", path, "': its folder '", folder, "' is read-only"));
   }
+}
+
+OutputLock::OutputLock(const std::string& path, const std::string& what) {
+  // O_NONBLOCK: a FIFO without a reader is not waited for here (ENXIO).
+  const int fd = ::open(path.c_str(), O_WRONLY | O_CREAT | O_NONBLOCK | O_CLOEXEC, 0666);
+  if (fd < 0) return;
+  struct stat st {};
+  if (::fstat(fd, &st) != 0 || !S_ISREG(st.st_mode)) {
+    ::close(fd);
+    return;
+  }
+  if (::flock(fd, LOCK_EX | LOCK_NB) != 0) {
+    const int error = errno;
+    ::close(fd);
+    if (error != EWOULDBLOCK) return;  // no locks here (ENOLCK): written as before
+    throw IoError(concat("cannot write ", what, " '", path, "': another process is writing it "
+                         "(two commands given one output would mix their rows); give another "
+                         "file, or wait for that one to end"));
+  }
+  fd_ = fd;
+}
+
+OutputLock::~OutputLock() {
+  if (fd_ >= 0) ::close(fd_);
+}
+
+OutputLock::OutputLock(OutputLock&& other) noexcept : fd_(other.fd_) { other.fd_ = -1; }
+
+OutputLock& OutputLock::operator=(OutputLock&& other) noexcept {
+  if (this != &other) {
+    if (fd_ >= 0) ::close(fd_);
+    fd_ = other.fd_;
+    other.fd_ = -1;
+  }
+  return *this;
 }
 
 void write_output_file(const std::string& path, const std::string& content,

@@ -157,13 +157,6 @@ void match(const MatchArgs& args) {
   std::vector<DescriptorView> views;
   for (const Descriptor& d : refs.descriptors) views.push_back(d.view());
 
-  std::unique_ptr<std::ofstream> file;
-  std::ostream* out = &std::cout;
-  if (!args.output.empty()) {
-    file = std::make_unique<std::ofstream>(args.output, std::ios::trunc);
-    if (!*file) throw_cannot_write(args.output);
-    out = file.get();
-  }
   const auto k = static_cast<std::size_t>(
       std::min<std::int64_t>(args.top_k, static_cast<std::int64_t>(refs.descriptors.size())));
   std::vector<DescriptorView> query_views;
@@ -175,9 +168,16 @@ void match(const MatchArgs& args) {
     m.query = offset + queries.index[static_cast<std::size_t>(m.query)];
     m.match = refs.index[static_cast<std::size_t>(m.match)];
   }
-  *out << eval::match_csv(rows);
-  out->flush();
-  if (!*out) throw IoError("error while writing " + (args.output.empty() ? std::string("standard output") : "'" + args.output + "'"));
+  // Written whole (a temporary file renamed over it), as lsgd.match writes
+  // it: a second lsgd match given the same --output, or an interrupted one,
+  // cannot leave rows of two runs or half a table.
+  if (!args.output.empty()) {
+    io::write_output_file(args.output, eval::match_csv(rows), "matches CSV");
+  } else {
+    std::cout << eval::match_csv(rows);
+    std::cout.flush();
+    if (!std::cout) throw IoError("error while writing standard output");
+  }
   std::cerr << "matched " << queries.descriptors.size() << " query images against " << refs.descriptors.size()
             << " reference images (" << width << "x" << height << "), top " << k << " each, in "
             << std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count() << " s"

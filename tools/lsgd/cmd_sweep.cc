@@ -57,9 +57,13 @@ std::string fixed(double value, int decimals) {
 
 using eval::csv_field;
 
-std::ofstream open_output(const std::string& path) {
-  std::ofstream out(path);
-  if (!out) throw_cannot_write(path);
+// A table written row by row: held against a second writer (io::OutputLock)
+// before it is truncated.
+std::unique_ptr<std::ofstream> open_output(const std::string& path, const std::string& what,
+                                           std::vector<io::OutputLock>& locks) {
+  locks.emplace_back(path, what);
+  auto out = std::make_unique<std::ofstream>(path);
+  if (!*out) throw_cannot_write(path);
   return out;
 }
 
@@ -75,11 +79,12 @@ class SweepOutput {
         datasets_(datasets),
         cells_(cells),
         rows_(cells.size()) {
-    if (!args.csv.empty()) csv_ = std::make_unique<std::ofstream>(open_output(args.csv));
-    if (!args.markdown.empty()) {
-      markdown_ = std::make_unique<std::ofstream>(open_output(args.markdown));
-    }
-    if (!args.json.empty()) open_output(args.json);  // fail now, not after the runs
+    if (!args.csv.empty()) csv_ = open_output(args.csv, "--csv", locks_);
+    if (!args.markdown.empty()) markdown_ = open_output(args.markdown, "--markdown", locks_);
+    // Checked now, not after the runs, and written whole at the end: opening
+    // it here emptied a previous sweep's JSON, lost when this one failed or
+    // was interrupted.
+    if (!args.json.empty()) io::check_output_file(args.json, "--json");
   }
 
   void write_headers(const DetectorOptions& base) {
@@ -239,6 +244,7 @@ class SweepOutput {
   std::vector<Row> rows_;
   std::size_t next_ = 0;  // first row not yet written
   std::mutex mutex_;
+  std::vector<io::OutputLock> locks_;  // declared first: released after the files close
   std::unique_ptr<std::ofstream> csv_;
   std::unique_ptr<std::ofstream> markdown_;
 };

@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "lsgd/detector.h"
+#include "lsgd/io/files.h"
 #include "lsgd/similarity.h"
 
 namespace lsgd::eval {
@@ -74,6 +75,7 @@ class CsvWriter {
   std::string path_;
   int version_ = kCsvNewest;
   std::int64_t loops_ = 0;
+  io::OutputLock lock_;  // no second writer of the file while this one lives
   std::unique_ptr<std::ofstream> file_;
   std::ostream* out_;
 };

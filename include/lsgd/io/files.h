@@ -46,6 +46,30 @@ void write_output_file(const std::string& path, const std::string& content,
 // (a device or a pipe passes: it is written in place).
 void check_output_file(const std::string& path, const std::string& what);
 
+// A file a command writes row by row as it works (lsgd run's and eval's CSV,
+// lsgd sweep's tables), held against a second writer for as long as this
+// object lives: an exclusive flock(2) taken before anything is truncated, so
+// two commands given one output no longer interleave their rows (each
+// truncated the file and wrote at its own offset; both exited 0). Only a
+// regular file (or a new path, created here) is locked: a device, a pipe or
+// standard output may have many writers. IoError naming `what` and the file
+// when another writer (another process, or another OutputLock in this one)
+// holds it, nothing changed; a file that cannot be opened here is left to
+// the writer's own open, which says why.
+class OutputLock {
+ public:
+  OutputLock() = default;
+  OutputLock(const std::string& path, const std::string& what);
+  ~OutputLock();
+  OutputLock(OutputLock&& other) noexcept;
+  OutputLock& operator=(OutputLock&& other) noexcept;
+  OutputLock(const OutputLock&) = delete;
+  OutputLock& operator=(const OutputLock&) = delete;
+
+ private:
+  int fd_ = -1;
+};
+
 // The folder holding `path` ("." for a bare name, "/" for a file in /).
 std::string folder_of(const std::string& path);
 // The length of the last component of `path` (its file name), in bytes.

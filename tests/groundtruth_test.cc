@@ -9,6 +9,7 @@
 #include <unistd.h>
 
 #include "lsgd/error.h"
+#include "lsgd/eval/gt_formats.h"
 #include "test_util.h"
 
 namespace fs = std::filesystem;
@@ -109,6 +110,42 @@ TEST(WritePairs, RoundTrips) {
   EXPECT_EQ(back.pairs(), 3);
   for (std::int64_t q = 0; q < 20; ++q) EXPECT_EQ(back.matches(q), gt.matches(q));
   EXPECT_THROW(lsgd::eval::write_pairs(gt, "/nonexistent/lsgd/out.txt"), lsgd::IoError);
+}
+
+// A pairs file lsgd wrote carries its counts in its header, and a file that
+// disagrees with them is refused: cut short at a line's end (a partial copy)
+// it was read as a smaller ground truth, its true loops scored false, exit 0
+// (issue 35, seventh pass); gt convert and gt stats took the frame count
+// from the last pair instead of the header.
+TEST(ReadPairs, ACutOrForeignFileDisagreesWithItsHeader) {
+  GroundTruth gt(30);
+  gt.add(10, 2);
+  gt.add(19, 0);
+  gt.add(12, 11);
+  const fs::path p = kTmp / "whole.txt";
+  fs::create_directories(p.parent_path());
+  lsgd::eval::write_pairs(gt, p.string());
+  std::ifstream in(p);
+  std::string header, first;
+  std::getline(in, header);
+  std::getline(in, first);
+  EXPECT_EQ(lsgd::eval::pairs_header(header).frames, 30);
+  EXPECT_EQ(lsgd::eval::pairs_header(header).pairs, 3);
+  EXPECT_EQ(lsgd::eval::pairs_header("# source x frames=3 pairs=1").frames, -1);  // not lsgd's
+  const fs::path cut = write_file("cut.txt", header + "\n" + first + "\n");
+  const std::string m = lsgd::test::message_of<lsgd::FormatError>(
+      [&] { lsgd::eval::read_pairs(cut.string(), 30); });
+  EXPECT_NE(m.find("holds 1 pairs but its header says pairs=3"), std::string::npos) << m;
+  EXPECT_NE(m.find(cut.string()), std::string::npos) << m;
+  const std::string other = lsgd::test::message_of<lsgd::FormatError>(
+      [&] { lsgd::eval::read_pairs(p.string(), 31); });
+  EXPECT_NE(other.find(p.string() + ":1: the header says frames=30 but the sequence has 31"),
+            std::string::npos) << other;
+  // Without a frame count the header gives it (frames after the last loop).
+  EXPECT_EQ(lsgd::eval::load_groundtruth(p.string()).frames(), 30);
+  EXPECT_EQ(lsgd::eval::load_groundtruth(p.string()).pairs(), 3);
+  // A file without lsgd's header is read as before.
+  EXPECT_EQ(lsgd::eval::read_pairs(write_file("plain.txt", first + "\n").string(), 30).pairs(), 1);
 }
 
 // Every published pairs file in ../shared parses (their ids fit their matrices).

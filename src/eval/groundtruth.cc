@@ -2,6 +2,8 @@
 #include "lsgd/eval/groundtruth.h"
 
 #include <algorithm>
+#include <charconv>
+#include <cstring>
 #include <fstream>
 #include <sstream>
 
@@ -67,6 +69,32 @@ bool GroundTruth::has_loop(std::int64_t q, std::int64_t min_gap) const {
   return !list.empty() && list.front() < q - min_gap;
 }
 
+namespace {
+
+constexpr const char* kPairsHeader = "# lsgd pairs: ";
+
+// The number after `key` ("frames=") in `line`, or -1.
+std::int64_t header_count(const std::string& line, const char* key) {
+  const std::size_t at = line.find(key);
+  if (at == std::string::npos) return -1;
+  const char* begin = line.data() + at + std::strlen(key);
+  std::int64_t value = -1;
+  const auto [end, ec] = std::from_chars(begin, line.data() + line.size(), value);
+  return ec == std::errc() && end != begin && value >= 0 ? value : -1;
+}
+
+}  // namespace
+
+PairsHeader pairs_header(const std::string& line) {
+  PairsHeader header;
+  if (line.rfind(kPairsHeader, 0) != 0) return header;
+  // Up to the first ';': the comment after it is free text.
+  const std::string counts = line.substr(0, line.find(';'));
+  header.frames = header_count(counts, " frames=");
+  header.pairs = header_count(counts, " pairs=");
+  return header;
+}
+
 GroundTruth read_pairs(const std::string& path, std::int64_t frames) {
   io::check_input_file(path, "ground-truth file");
   std::ifstream in(path, std::ios::binary);
@@ -74,7 +102,15 @@ GroundTruth read_pairs(const std::string& path, std::int64_t frames) {
   io::skip_utf8_bom(in);
   GroundTruth gt(frames);
   std::string line;
+  PairsHeader header;
   for (std::int64_t number = 1; io::read_line(in, line, path, number); ++number) {
+    if (number == 1) {
+      header = pairs_header(line);
+      if (header.frames >= 0 && header.frames != frames) {
+        throw FormatError(concat(path, ":1: the header says frames=", header.frames, " but the sequence has ",
+                                 frames, " frames (does the ground truth belong to this sequence?)"));
+      }
+    }
     const auto first = line.find_first_not_of(" \t\r");
     if (first == std::string::npos || line[first] == '#') continue;
     std::istringstream fields(line);
@@ -92,6 +128,11 @@ GroundTruth read_pairs(const std::string& path, std::int64_t frames) {
     gt.add(q, m);
   }
   if (in.bad()) throw IoError(concat("error while reading '", path, "'"));
+  if (header.pairs >= 0 && header.pairs != gt.pairs()) {
+    throw FormatError(concat(path, ": holds ", gt.pairs(), " pairs but its header says pairs=", header.pairs,
+                             ": cut short or edited? (lsgd wrote the header with the file; write the file "
+                             "again, or delete the header line to take the pairs as they are)"));
+  }
   return gt;
 }
 

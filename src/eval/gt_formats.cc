@@ -126,6 +126,10 @@ GroundTruth read_pairs_counted(const std::string& path, std::int64_t frames) {
   long long max_id = -1;
   std::string line;
   for (std::int64_t number = 1; io::read_line(in, line, path, number); ++number) {
+    // The header write_pairs() wrote holds the count: frames after the last
+    // loop have no pair to count them.
+    const PairsHeader header = number == 1 ? pairs_header(line) : PairsHeader{};
+    if (header.frames >= 0 && header.frames <= kMaxFrames) return read_pairs(path, header.frames);
     const auto fields = fields_of(line);
     long long a = 0, b = 0;
     if (fields.size() == 2 && parse_int(fields[0], a) && parse_int(fields[1], b)) {

@@ -45,10 +45,22 @@ class GroundTruth {
 // Reads the pairs text format: one "q m" pair of 0-based frame ids per line;
 // blank lines and lines starting with '#' are ignored. Throws IoError when the
 // file cannot be opened and FormatError naming the file and line for a
-// malformed line or an id outside [0, frames).
+// malformed line or an id outside [0, frames). A file that starts with the
+// header write_pairs() writes must agree with it: another frame count than
+// `frames`, or another number of pairs than it holds (a file cut short at a
+// line's end read as a smaller ground truth, scoring true loops false), is a
+// FormatError naming the file and both counts.
 GroundTruth read_pairs(const std::string& path, std::int64_t frames);
 
-// Writes the pairs text format ("q m" with q > m, sorted), with a comment line.
+// Writes the pairs text format ("q m" with q > m, sorted) after a header
+// line "# lsgd pairs: frames=N pairs=M; ..." that read_pairs() checks.
 void write_pairs(const GroundTruth& gt, const std::string& path);
+
+// The counts of write_pairs()'s header when `line` is one (-1 otherwise).
+struct PairsHeader {
+  std::int64_t frames = -1;
+  std::int64_t pairs = -1;
+};
+PairsHeader pairs_header(const std::string& line);
 
 }  // namespace lsgd::eval

@@ -259,6 +259,46 @@ TEST(Cli, EmptyValuesAreRefusedNamingTheFlag) {
   }
 }
 
+// Values and keys the user typed are shown cut, on one line, in every
+// message that echoes them (internal::shown_value), and an input file that
+// cannot be reached says why rather than CLI11's "File does not exist"
+// (issue 35, seventh pass).
+TEST(Cli, MessagesShowLongValuesCutAndSayWhyAFileCannotBeRead) {
+  const std::string big(300, 'x');
+  const std::pair<std::string, std::string> cases[] = {
+      {"options --option search.min_gap=1" + big + " --option search.min_gap=2", "both set search.min_gap"},
+      {"options --option search.min_gap" + big, "expected KEY=VALUE"},
+      {"sweep --dataset a=s.txt,g.txt,5,every=" + big, "not an integer"},
+      {"sweep --dataset a=s.txt,g.txt,5," + big + "=1," + big + "=2", "unknown dataset option"},
+      {"sweep --dataset a=s.txt,g.txt,5,every=2,x" + big, "after the dataset options is not KEY=VALUE"},
+      {"match --reference r --query q --option " + big + "=1", "has no effect on lsgd match"},
+  };
+  for (const auto& [args, expected] : cases) {
+    const CmdResult r = lsgd(args);
+    EXPECT_EQ(r.code, 1) << args;
+    EXPECT_NE(r.err.find(expected), std::string::npos) << r.err;
+    EXPECT_NE(r.err.find("bytes)"), std::string::npos) << r.err;
+    EXPECT_LT(r.err.size(), 600u) << r.err;
+    EXPECT_EQ(lines_of(r.err), 1) << r.err;
+  }
+  fs::create_directories(kTmp);
+  const fs::path loop = kTmp / "loop-a";
+  fs::remove(loop);
+  fs::remove(kTmp / "loop-b");
+  fs::create_symlink(kTmp / "loop-b", loop);
+  fs::create_symlink(loop, kTmp / "loop-b");
+  for (const std::string& args : {"options --config '" + loop.string() + "'",
+                                  "eval --detections '" + loop.string() + "' --gt '" + loop.string() +
+                                      "' --min-gap 1 --json j.json"}) {
+    const CmdResult r = lsgd(args);
+    EXPECT_EQ(r.code, 1) << args;
+    EXPECT_NE(r.err.find("cannot be accessed: Too many levels of symbolic links"), std::string::npos) << r.err;
+    EXPECT_EQ(r.err.find("does not exist"), std::string::npos) << r.err;
+  }
+  EXPECT_NE(lsgd("options --config '" + (kTmp / "none.yaml").string() + "'").err.find("does not exist"),
+            std::string::npos);
+}
+
 TEST(Cli, MissingSequenceFailsWithOneLineNamingIt) {
   const CmdResult r = lsgd("run --sequence /nonexistent/lsgd-seq");
   EXPECT_NE(r.code, 0);

@@ -57,7 +57,7 @@ template <typename T>
 T parse_integer(const std::string& key, const std::string& value) {
   T v{};
   if (!internal::parses_as(value, v)) {
-    internal::throw_invalid("dataset option ", key, "=", value, ": not an integer");
+    internal::throw_invalid("dataset option ", internal::shown_value(key), "=", internal::shown_value(value), ": not an integer");
   }
   return v;
 }
@@ -88,14 +88,14 @@ void set_dataset_option(io::SequenceOptions& sequence, GroundTruthOptions& gt,
     } else if (key == "subsample-match") {
       gt.match = parse_subsample_match(value);
     } else {
-      internal::throw_invalid("unknown dataset option '", key,
+      internal::throw_invalid("unknown dataset option '", internal::shown_value(key),
                               "' (known: layout, kitti-sequence, camera, side, first, last, every, "
                               "gt-format, gt-rows, subsample-match)");
     }
   } catch (const InvalidArgument& e) {
     const std::string message = e.what();
     if (message.find(key) != std::string::npos) throw;
-    internal::throw_invalid("dataset option ", key, "=", value, ": ", message);
+    internal::throw_invalid("dataset option ", internal::shown_value(key), "=", internal::shown_value(value), ": ", message);
   }
 }
 

@@ -16,6 +16,7 @@ namespace {
 
 using internal::concat;
 using internal::throw_invalid;
+using internal::shown_value;
 
 constexpr std::size_t kMaxAxisValues = 10'000;
 // Every configuration is a whole run of each dataset (seconds to minutes), and
@@ -51,7 +52,7 @@ void check_scalar(const std::string& value, const std::string& context) {
   if (value.empty()) throw_invalid(context, ": empty value");
   for (char c : value) {
     if (!is_word_char(c) && c != '.' && c != '+' && c != '-' && c != ',') {
-      throw_invalid(context, ": value '", value, "' holds '", std::string(1, c),
+      throw_invalid(context, ": value '", shown_value(value), "' holds '", std::string(1, c),
                     "' (allowed: letters, digits and . _ + - ,)");
     }
   }
@@ -61,7 +62,7 @@ void check_key(const std::string& key, const std::string& context) {
   for (const std::string& part : split(key, '.')) {
     bool ok = !part.empty();
     for (char c : part) ok = ok && is_word_char(c);
-    if (!ok) throw_invalid(context, ": '", key, "' is not a dotted option name like search.mode");
+    if (!ok) throw_invalid(context, ": '", shown_value(key), "' is not a dotted option name like search.mode");
   }
 }
 
@@ -112,13 +113,13 @@ std::string format_decimal(std::int64_t scaled, int decimals) {
 void expand_range(const std::string& item, const std::string& context,
                   std::vector<std::string>& values) {
   const std::vector<std::string> parts = split(item, ':');
-  if (parts.size() != 3) throw_invalid(context, ": range '", item, "' must be a:b:step");
+  if (parts.size() != 3) throw_invalid(context, ": range '", shown_value(item), "' must be a:b:step");
   std::string digits[3];
   int places[3] = {0, 0, 0};
   int decimals = 0;
   for (int k = 0; k < 3; ++k) {
     if (!parse_decimal(trim(parts[k]), digits[k], places[k])) {
-      throw_invalid(context, ": range '", item, "': '", trim(parts[k]),
+      throw_invalid(context, ": range '", shown_value(item), "': '", shown_value(trim(parts[k])),
                     "' is not a decimal number with at most ", kMaxDecimals, " decimals");
     }
     decimals = std::max(decimals, places[k]);
@@ -126,15 +127,15 @@ void expand_range(const std::string& item, const std::string& context,
   std::int64_t a = 0, b = 0, step = 0;
   if (!rescale(digits[0], places[0], decimals, a) || !rescale(digits[1], places[1], decimals, b) ||
       !rescale(digits[2], places[2], decimals, step)) {
-    throw_invalid(context, ": range '", item, "' has a number too large");
+    throw_invalid(context, ": range '", shown_value(item), "' has a number too large");
   }
-  if (step == 0) throw_invalid(context, ": range '", item, "' has a zero step");
+  if (step == 0) throw_invalid(context, ": range '", shown_value(item), "' has a zero step");
   if ((b - a) != 0 && ((b - a) > 0) != (step > 0)) {
-    throw_invalid(context, ": range '", item, "' is empty: the step goes away from the end");
+    throw_invalid(context, ": range '", shown_value(item), "' is empty: the step goes away from the end");
   }
   const std::int64_t count = (b - a) / step + 1;
   if (count > static_cast<std::int64_t>(kMaxAxisValues)) {
-    throw_invalid(context, ": range '", item, "' has ", count, " values (at most ", kMaxAxisValues,
+    throw_invalid(context, ": range '", shown_value(item), "' has ", count, " values (at most ", kMaxAxisValues,
                   ")");
   }
   for (std::int64_t i = 0; i < count; ++i) values.push_back(format_decimal(a + i * step, decimals));
@@ -196,7 +197,7 @@ DetectorOptions parse_as_argument(const std::string& yaml, const std::string& so
 }  // namespace
 
 SweepAxis parse_sweep_axis(const std::string& spec) {
-  const std::string context = concat("sweep '", spec, "'");
+  const std::string context = concat("sweep '", shown_value(spec), "'");
   const std::size_t eq = spec.find('=');
   if (eq == std::string::npos) throw_invalid(context, ": expected KEY=VALUES");
   SweepAxis axis;
@@ -227,7 +228,7 @@ std::string sweep_yaml(const std::vector<std::string>& keys,
   }
   YamlNode root;
   for (std::size_t i = 0; i < keys.size(); ++i) {
-    const std::string context = concat("sweep key '", keys[i], "'");
+    const std::string context = concat("sweep key '", shown_value(keys[i]), "'");
     check_key(keys[i], context);
     check_scalar(values[i], context);
     insert(root, keys[i], values[i]);
@@ -258,11 +259,11 @@ std::vector<SweepPoint> expand_sweep(const std::vector<SweepAxis>& axes,
   for (const SweepAxis& axis : axes) {
     for (std::size_t k = 0; k < keys.size(); ++k) {
       if (keys[k] == axis.key) {
-        throw_invalid("sweep '", axis.spec, "': key '", axis.key, "' is already swept by '",
-                      axes[k].spec, "'");
+        throw_invalid("sweep '", shown_value(axis.spec), "': key '", axis.key, "' is already swept by '",
+                      shown_value(axes[k].spec), "'");
       }
     }
-    if (axis.values.empty()) throw_invalid("sweep '", axis.spec, "': no values");
+    if (axis.values.empty()) throw_invalid("sweep '", shown_value(axis.spec), "': no values");
     // sweep_cells() gives each dataset its own window: a swept one would be
     // dropped without a word.
     if (axis.key == "search.min_gap") {
@@ -304,7 +305,7 @@ std::vector<SweepPoint> expand_sweep(const std::vector<SweepAxis>& axes,
     const bool somewhere = std::any_of(points.begin(), points.end(),
                                        [&](const SweepPoint& p) { return field->applies(p.options); });
     if (!somewhere) {
-      throw_invalid("sweep '", axis.spec, "': ", axis.key, " has no effect in any configuration of the grid (it applies ",
+      throw_invalid("sweep '", shown_value(axis.spec), "': ", axis.key, " has no effect in any configuration of the grid (it applies ",
                     field->when.empty() ? "under other options" : field->when,
                     "): set or sweep what it depends on too");
     }
@@ -313,7 +314,7 @@ std::vector<SweepPoint> expand_sweep(const std::vector<SweepAxis>& axes,
 }
 
 SweepDataset parse_dataset_spec(const std::string& spec) {
-  const std::string context = concat("dataset '", spec, "'");
+  const std::string context = concat("dataset '", shown_value(spec), "'");
   const std::size_t eq = spec.find('=');
   if (eq == std::string::npos) {
     throw_invalid(context, ": expected NAME=SEQUENCE,GT,MIN_GAP or NAME=DIR,MIN_GAP");
@@ -322,7 +323,7 @@ SweepDataset parse_dataset_spec(const std::string& spec) {
   d.name = spec.substr(0, eq);
   bool name_ok = !d.name.empty();
   for (char c : d.name) name_ok = name_ok && (is_word_char(c) || c == '.' || c == '-');
-  if (!name_ok) throw_invalid(context, ": name '", d.name, "' must be letters, digits, . _ -");
+  if (!name_ok) throw_invalid(context, ": name '", shown_value(d.name), "' must be letters, digits, . _ -");
   std::vector<std::string> parts;
   std::vector<std::string> options;  // KEY=VALUE after the positional parts
   for (const std::string& part : split(spec.substr(eq + 1), ',')) {
@@ -332,11 +333,11 @@ SweepDataset parse_dataset_spec(const std::string& spec) {
   for (const std::string& option : options) {
     const std::size_t at = option.find('=');
     if (at == std::string::npos || at == 0) {
-      throw_invalid(context, ": '", option, "' after the dataset options is not KEY=VALUE");
+      throw_invalid(context, ": '", shown_value(option), "' after the dataset options is not KEY=VALUE");
     }
     const std::string key = option.substr(0, at);
     if (std::find(keys.begin(), keys.end(), key) != keys.end()) {
-      throw_invalid(context, ": ", key, " is given twice: give it once");
+      throw_invalid(context, ": ", shown_value(key), " is given twice: give it once");
     }
     keys.push_back(key);
     try {

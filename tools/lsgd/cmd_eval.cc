@@ -372,14 +372,12 @@ void register_eval(CLI::App& app) {
   cmd->add_option("--detections", args->detections,
                   "score this CSV instead of running the detector: query,match,score per line "
                   "(match -1: no loop) or the CSV of `lsgd run`")
-      ->check(CLI::ExistingFile)
-      ->check(kNonEmptyPath);
+      ->check(kExistingFile);
   cmd->add_option("--gt", args->gt,
                   "ground truth: pairs text ('q m' per line, 0-based), MATLAB .mat loop matrix, "
                   "KITTI poses or LSGDDN loopinf (detected from the file)")
       ->required()
-      ->check(CLI::ExistingFile)
-      ->check(kNonEmptyPath);
+      ->check(kExistingFile);
   cmd->add_option("--gt-format", args->gt_format, [] {
         std::string help = "auto (default: by content)";
         for (const eval::GtFormatType& t : eval::gt_format_types()) {
@@ -396,8 +394,7 @@ void register_eval(CLI::App& app) {
   cmd->add_option("--poses", args->poses,
                   "KITTI poses file (12 or 13 columns) of the evaluated frames: draws the "
                   "trajectory and the loops found in the --report")
-      ->check(CLI::ExistingFile)
-      ->check(kNonEmptyPath);
+      ->check(kExistingFile);
   cmd->add_option("--compare", args->compare,
                   "[NAME=]CSV: another system's detections on the same frames (the formats "
                   "--detections reads), scored by the same evaluator; drawn on the --report's "

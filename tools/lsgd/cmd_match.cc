@@ -26,6 +26,7 @@
 #include <vector>
 
 #include "commands.h"
+#include "internal/check.h"
 #include "common.h"
 #include "files.h"
 #include "lsgd/detector.h"
@@ -116,7 +117,7 @@ void check_flags(const DetectorFlags& flags) {
     const std::string key = o.substr(0, o.find('='));
     if (key.rfind("segmentation.", 0) != 0 && key.rfind("descriptor.", 0) != 0 &&
         key.rfind("similarity.", 0) != 0) {
-      refuse("--option " + key);
+      refuse("--option " + internal::shown_value(key));
     }
   }
 }

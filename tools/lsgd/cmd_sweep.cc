@@ -19,6 +19,7 @@
 #include <opencv2/core.hpp>
 
 #include "commands.h"
+#include "internal/check.h"
 #include "common.h"
 #include "files.h"
 #include "lsgd/error.h"
@@ -288,7 +289,7 @@ void sweep(const SweepArgs& args) {
     keys.push_back(axes.back().key);
     for (const auto& [key, flag] : fixed) {  // the swept values would replace it without a word
       if (key == axes.back().key) {
-        throw InvalidArgument("--set " + spec + " sweeps " + key + ", which " + flag +
+        throw InvalidArgument("--set " + internal::shown_value(spec) + " sweeps " + key + ", which " + internal::shown_value(flag) +
                               " also sets: give one");
       }
     }
@@ -305,7 +306,7 @@ void sweep(const SweepArgs& args) {
     datasets.push_back(eval::open_sweep_dataset(eval::parse_dataset_spec(spec)));
     for (std::size_t i = 0; i + 1 < datasets.size(); ++i) {
       if (datasets[i].spec.name == datasets.back().spec.name) {
-        throw InvalidArgument("--dataset " + spec + ": the name '" + datasets[i].spec.name +
+        throw InvalidArgument("--dataset " + internal::shown_value(spec) + ": the name '" + internal::shown_value(datasets[i].spec.name) +
                               "' is used twice");
       }
     }

@@ -1,5 +1,6 @@
 #include "common.h"
 
+#include <sys/stat.h>
 #include <unistd.h>
 
 #include <algorithm>
@@ -17,6 +18,7 @@
 #include <CLI/CLI.hpp>
 
 #include "bench_support.h"
+#include "internal/check.h"
 #include "internal/clock.h"
 #include "lsgd/io/files.h"
 #include "lsgd/error.h"
@@ -29,8 +31,7 @@ using internal::now_ns;
 
 void DetectorFlags::add_to(CLI::App& command) {
   command.add_option("--config", config, "YAML detector configuration (unknown keys are errors)")
-      ->check(CLI::ExistingFile)
-      ->check(kNonEmptyPath);
+      ->check(kExistingFile);
   const DetectorOptions defaults;
   command.add_option("--mode", mode,
                      "search mode (default " + defaults.search.mode + "; overrides search.mode)")
@@ -63,7 +64,8 @@ std::vector<std::pair<std::string, std::string>> DetectorFlags::keys() const {
   for (const std::string& setting : options) {
     const std::size_t eq = setting.find('=');
     if (eq == std::string::npos) {
-      throw InvalidArgument("--option " + setting + ": expected KEY=VALUE (keys: lsgd options)");
+      throw InvalidArgument("--option " + internal::shown_value(setting) +
+                            ": expected KEY=VALUE (keys: lsgd options)");
     }
     out.emplace_back(setting.substr(0, eq), "--option " + setting.substr(0, eq));
   }
@@ -84,10 +86,15 @@ void DetectorFlags::apply(DetectorOptions& o) const {
       // value twice loses nothing).
       const bool options_both = i < options.size();  // keys() lists the --option ones first
       if (options_both && options[k] == options[i]) continue;
-      throw InvalidArgument(options_both ? "--option " + options[k] + " and --option " + options[i] +
-                                               " both set " + set[i].first + ": give one"
-                                         : set[k].second + " and " + set[i].second + " both set " +
-                                               set[i].first + ": give one");
+      // Values, and keys, are shown as every option message shows them: one
+      // line, cut after 64 bytes (internal::shown_value).
+      const std::string key = internal::shown_value(set[i].first);
+      throw InvalidArgument(options_both ? "--option " + internal::shown_value(options[k]) +
+                                               " and --option " + internal::shown_value(options[i]) +
+                                               " both set " + key + ": give one"
+                                         : internal::shown_value(set[k].second) + " and " +
+                                               internal::shown_value(set[i].second) + " both set " +
+                                               key + ": give one");
     }
   }
   for (const std::string& setting : options) {
@@ -209,7 +216,22 @@ void Progress::update(std::int64_t done, double ms_per_frame) {
 
 const CLI::Validator kNonEmptyPath(
     [](std::string& value) { return value.empty() ? std::string("an empty file name") : ""; },
-    "");  // no name in the help: ExistingFile already says FILE where it applies
+    "");  // no name in the help: kExistingFile already says FILE where it applies
+
+const CLI::Validator kExistingFile(
+    [](std::string& value) {
+      if (value.empty()) return std::string("an empty file name");
+      // Devices and pipes pass: the reader refuses them itself, naming them.
+      struct stat st {};
+      if (::stat(value.c_str(), &st) != 0) {
+        const int error = errno;
+        return internal::concat("file '", value, "' ",
+                      error == ENOENT ? std::string("does not exist")
+                                      : internal::concat("cannot be accessed: ", std::strerror(error)));
+      }
+      return S_ISDIR(st.st_mode) ? internal::concat("file '", value, "' is a folder") : std::string();
+    },
+    "FILE");
 
 const CLI::Validator kFrameCount(
     [](std::string& value) {

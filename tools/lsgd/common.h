@@ -96,6 +96,10 @@ using eval::CsvWriter;
 // A CLI11 check for file arguments: an empty name ('') is an error, not
 // "no file".
 extern const CLI::Validator kNonEmptyPath;
+// A CLI11 check for input files (--config, --gt, ...): the system's reason,
+// naming the file (a link loop, a permission, a name too long), where
+// CLI::ExistingFile said "File does not exist" for all but a folder.
+extern const CLI::Validator kExistingFile;
 // A CLI11 check for --frames N: a frame count in [1, kMaxFrames], said in
 // those words (CLI::PositiveNumber printed its bound as 309 digits).
 extern const CLI::Validator kFrameCount;

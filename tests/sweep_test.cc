@@ -149,6 +149,19 @@ TEST(SweepGrid, AnOptionThatAppliesNowhereIsRefused) {
                           parse_sweep_axis("search.mode=exhaustive,nodes")}, {}).size(), 4u);
 }
 
+// A value given twice, or two spellings of one value, ran the same
+// configuration twice and printed identical rows (issue 35, seventh pass).
+TEST(SweepGrid, AValueGivenTwiceIsRefused) {
+  for (const std::string spec : {"decision.threshold=5,5", "decision.threshold=5,5.0",
+                                 "decision.threshold=4:6:1,5", "search.mode=index,nodes,index"}) {
+    const std::string m = message_of<InvalidArgument>([&] { expand_sweep({parse_sweep_axis(spec)}, {}); });
+    EXPECT_NE(m.find("(the same configuration twice, identical rows): give each value once"),
+              std::string::npos) << m;
+    EXPECT_NE(m.find("sweep '" + spec + "'"), std::string::npos) << m;
+  }
+  EXPECT_EQ(expand_sweep({parse_sweep_axis("decision.threshold=5,5.5")}, {}).size(), 2u);
+}
+
 TEST(SweepGrid, NoAxesIsTheBase) {
   lsgd::DetectorOptions base;
   base.segmentation.superpixel_size = 17;

@@ -4,6 +4,7 @@
 #include <charconv>
 #include <cstdlib>
 #include <filesystem>
+#include <map>
 #include <string>
 #include <vector>
 
@@ -267,12 +268,23 @@ std::vector<SweepPoint> expand_sweep(const std::vector<SweepAxis>& axes,
     // sweep_cells() gives each dataset its own window: a swept one would be
     // dropped without a word.
     if (axis.key == "search.min_gap") {
-      throw_invalid("sweep '", axis.spec, "': the window is set per dataset, by its spec "
+      throw_invalid("sweep '", shown_value(axis.spec), "': the window is set per dataset, by its spec "
                     "NAME=...,MIN_GAP (lsgd sweep --dataset), not swept");
     }
+    // A value given twice, or twice spelt ("5,5.0"), ran the same
+    // configuration twice: identical rows, as if the grid had more points.
+    const OptionField<DetectorOptions>* field = find_option(DetectorOptions::fields(), axis.key);
+    std::map<std::string, std::string> seen;  // the option's text -> the value that set it
     for (const std::string& value : axis.values) {
-      parse_as_argument(sweep_yaml({axis.key}, {value}),
-                        concat("sweep '", axis.spec, "' (value ", value, ")"), base);
+      const DetectorOptions o = parse_as_argument(
+          sweep_yaml({axis.key}, {value}), concat("sweep '", shown_value(axis.spec), "' (value ", shown_value(value), ")"), base);
+      const std::string text = field != nullptr ? field->text(o) : value;
+      const auto [at, fresh] = seen.emplace(text, value);
+      if (!fresh) {
+        throw_invalid("sweep '", shown_value(axis.spec), "': the values '", shown_value(at->second), "' and '",
+                      shown_value(value), "' both set ", axis.key, " = ", shown_value(text),
+                      " (the same configuration twice, identical rows): give each value once");
+      }
     }
     keys.push_back(axis.key);
     total *= axis.values.size();

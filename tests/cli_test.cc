@@ -299,6 +299,29 @@ TEST(Cli, MessagesShowLongValuesCutAndSayWhyAFileCannotBeRead) {
             std::string::npos);
 }
 
+// --compare NAME=CSV with a NAME beyond the file name limit ended in the
+// file system library's exception ("filesystem error: status: File name too
+// long"); an unknown command or option and a bad --frames echoed the value
+// whole (issue 35, seventh pass).
+TEST(Cli, ACompareNameBeyondTheNameLimitAndUnknownWordsAreSaidPlainly) {
+  const std::string big(300, 'x');
+  fs::create_directories(kTmp);
+  std::ofstream(kTmp / "gt.txt") << "3 1\n";
+  std::ofstream(kTmp / "det.csv") << "query,match,score\n3,1,5\n";
+  const std::string eval = "eval --detections '" + (kTmp / "det.csv").string() + "' --gt '" +
+                           (kTmp / "gt.txt").string() + "' --min-gap 0 --json '" + (kTmp / "j.json").string() + "'";
+  CmdResult r = lsgd(eval + " --compare " + big + "='" + (kTmp / "none.csv").string() + "'");
+  EXPECT_EQ(r.code, 1);
+  EXPECT_EQ(r.err.find("filesystem error"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("none.csv"), std::string::npos) << r.err;
+  for (const std::string& args : {big, "run --" + big, "db " + big, eval + " --frames " + big}) {
+    r = lsgd(args);
+    EXPECT_EQ(r.code, 1) << args;
+    EXPECT_NE(r.err.find("... (30"), std::string::npos) << r.err;
+    EXPECT_LT(r.err.size(), 400u) << r.err;
+  }
+}
+
 TEST(Cli, MissingSequenceFailsWithOneLineNamingIt) {
   const CmdResult r = lsgd("run --sequence /nonexistent/lsgd-seq");
   EXPECT_NE(r.code, 0);

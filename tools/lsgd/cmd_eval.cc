@@ -12,6 +12,7 @@
 #include <memory>
 #include <optional>
 #include <sstream>
+#include <system_error>
 
 #include "commands.h"
 #include "common.h"
@@ -105,7 +106,11 @@ struct CompareSpec {
 };
 CompareSpec parse_compare(const std::string& spec) {
   const std::size_t eq = spec.find('=');
-  if (eq != std::string::npos && eq > 0 && !std::filesystem::exists(spec)) {
+  // error_code: a spec that is no path the system takes (a NAME= beyond the
+  // name limit) is NAME=CSV, not the file system's exception ("filesystem
+  // error: status: File name too long").
+  std::error_code ec;
+  if (eq != std::string::npos && eq > 0 && !std::filesystem::exists(spec, ec)) {
     return {spec.substr(0, eq), spec.substr(eq + 1)};
   }
   return {std::filesystem::path(spec).stem().string(), spec};

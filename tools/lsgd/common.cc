@@ -243,7 +243,7 @@ const CLI::Validator kFrameCount(
         used = 0;
       }
       if (used == 0 || used != value.size() || n < 1 || n > kMaxFrames) {
-        return "'" + value + "' is not a frame count from 1 to " + std::to_string(kMaxFrames);
+        return "'" + internal::shown_value(value) + "' is not a frame count from 1 to " + std::to_string(kMaxFrames);
       }
       return std::string();
     },

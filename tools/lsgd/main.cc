@@ -20,6 +20,7 @@
 
 #include "commands.h"
 #include "common.h"
+#include "internal/check.h"
 #include "internal/names.h"
 #include "lsgd/error.h"
 #include "lsgd/io/files.h"
@@ -27,6 +28,7 @@
 namespace {
 
 using lsgd::internal::nearest;
+using lsgd::internal::shown_value;
 
 // The subcommand the arguments selected, deepest first ("gt convert"); the
 // app itself when none was.
@@ -112,7 +114,7 @@ std::string usage_message(CLI::App& app, const CLI::ParseError& e, int argc, cha
     std::vector<std::string> names;
     for (const CLI::App* sub : app.get_subcommands({})) names.push_back(sub->get_name());
     const std::string guess = nearest(argv[1], names);
-    return "unknown command '" + std::string(argv[1]) + "'" +
+    return "unknown command '" + shown_value(argv[1]) + "'" +
            (guess.empty() ? "" : "; did you mean '" + guess + "'?") + " (lsgd --help lists them)";
   }
   std::vector<std::string> subnames;
@@ -125,12 +127,12 @@ std::string usage_message(CLI::App& app, const CLI::ParseError& e, int argc, cha
     if (extra.rfind("--", 0) == 0) {
       const std::string word = extra.substr(0, extra.find('='));
       const std::string guess = nearest(word, options);
-      return "unknown option " + word + " for " + path_of(cmd) +
+      return "unknown option " + shown_value(word) + " for " + path_of(cmd) +
              (guess.empty() ? "" : "; did you mean " + guess + "?") + " (" + path_of(cmd) + " --help lists them)";
     }
     if (!subnames.empty()) {
       const std::string guess = nearest(extra, subnames);
-      return "unknown command '" + extra + "' for " + path_of(cmd) +
+      return "unknown command '" + shown_value(extra) + "' for " + path_of(cmd) +
              (guess.empty() ? "" : "; did you mean '" + guess + "'?");
     }
   }

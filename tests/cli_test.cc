@@ -301,8 +301,9 @@ TEST(Cli, MessagesShowLongValuesCutAndSayWhyAFileCannotBeRead) {
 
 // --compare NAME=CSV with a NAME beyond the file name limit ended in the
 // file system library's exception ("filesystem error: status: File name too
-// long"); an unknown command or option and a bad --frames echoed the value
-// whole (issue 35, seventh pass).
+// long"); an unknown command or option, a bad --frames, a name not among an
+// option's choices (CLI11's IsMember) and a number CLI11 could not convert
+// echoed the value whole (issue 35, seventh pass).
 TEST(Cli, ACompareNameBeyondTheNameLimitAndUnknownWordsAreSaidPlainly) {
   const std::string big(300, 'x');
   fs::create_directories(kTmp);
@@ -314,7 +315,9 @@ TEST(Cli, ACompareNameBeyondTheNameLimitAndUnknownWordsAreSaidPlainly) {
   EXPECT_EQ(r.code, 1);
   EXPECT_EQ(r.err.find("filesystem error"), std::string::npos) << r.err;
   EXPECT_NE(r.err.find("none.csv"), std::string::npos) << r.err;
-  for (const std::string& args : {big, "run --" + big, "db " + big, eval + " --frames " + big}) {
+  for (const std::string& args : {big, "run --" + big, "db " + big, eval + " --frames " + big,
+                                  "run --sequence s --layout " + big, "run --sequence s --mode " + big,
+                                  eval + " --protocol " + big, "run --sequence s --threshold " + big}) {
     r = lsgd(args);
     EXPECT_EQ(r.code, 1) << args;
     EXPECT_NE(r.err.find("... (30"), std::string::npos) << r.err;

@@ -390,7 +390,7 @@ void register_eval(CLI::App& app) {
         }
         return help + "; `lsgd gt convert` takes the KITTI poses' distances";
       }())
-      ->check(CLI::IsMember(eval::gt_format_names()));
+      ->check(one_of(eval::gt_format_names()));
   cmd->add_option("--report", args->report,
                   "write a self-contained HTML report here (PR curve, trajectory with --poses or "
                   "scores over the run, example loops as thumbnails, similarity matrix with "
@@ -416,7 +416,7 @@ void register_eval(CLI::App& app) {
   cmd->add_option("--protocol", args->protocol,
                   "strict (default) or lsgddn-reference: the LSGDDN authors' lenient evaluator, "
                   "only to compare with their paper")
-      ->check(CLI::IsMember({"strict", "lsgddn-reference"}));
+      ->check(one_of({"strict", "lsgddn-reference"}));
   cmd->add_option("--tolerance", args->tolerance,
                   "lsgddn-reference: a report j is correct when |j - g| < T for a ground-truth "
                   "loop g (default 50)")
@@ -424,11 +424,11 @@ void register_eval(CLI::App& app) {
   cmd->add_option("--subsample-match", args->subsample_match,
                   "with --every/--first/--last: exact (frames a, b match iff the kept images "
                   "match; default) or block (iff any frames of their blocks of K match)")
-      ->check(CLI::IsMember({"exact", "block"}));
+      ->check(one_of({"exact", "block"}));
   cmd->add_option("--gt-rows", args->gt_rows,
                   "FAB-MAP ground truth: one row per left/right pair (default; City Centre's "
                   "1237 rows) or per image (New College's 2146 rows)")
-      ->check(CLI::IsMember({"pair", "image"}));
+      ->check(one_of({"pair", "image"}));
   args->detector.add_to(*cmd);
   args->layout.add_to(*cmd);
   cmd->get_option("--min-gap")

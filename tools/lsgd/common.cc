@@ -35,7 +35,7 @@ void DetectorFlags::add_to(CLI::App& command) {
   const DetectorOptions defaults;
   command.add_option("--mode", mode,
                      "search mode (default " + defaults.search.mode + "; overrides search.mode)")
-      ->check(CLI::IsMember(search_mode_list()));
+      ->check(one_of(search_mode_list()));
   command.add_option("--min-gap", min_gap,
                      "temporal window in frames: only frames j < i - W are candidates (default " +
                          option_text(defaults, "search.min_gap") + "; overrides search.min_gap)");
@@ -128,7 +128,7 @@ void SequenceFlags::add_to(CLI::App& command, bool skips) {
         }
         return help;
       }())
-      ->check(CLI::IsMember(io::layout_names()));
+      ->check(one_of(io::layout_names()));
   command.add_option("--kitti-sequence", kitti_sequence,
                      "KITTI: PATH is the dataset root and the frames are sequences/NN");
   command.add_option("--camera", camera, "KITTI: image_0 (default, gray left) .. image_3")
@@ -137,7 +137,7 @@ void SequenceFlags::add_to(CLI::App& command, bool skips) {
       .add_option("--side", side,
                   "FAB-MAP: left (files 1, 3, 5, ...; default), right (2, 4, 6, ...) or "
                   "both (every file)")
-      ->check(CLI::IsMember({"left", "right", "both"}));
+      ->check(one_of({"left", "right", "both"}));
   command.add_option("--first", first, "first frame kept (0-based, before --every)");
   command.add_option("--last", last, "last frame that may be kept (0-based, inclusive)");
   command.add_option("--every", every,
@@ -248,6 +248,17 @@ const CLI::Validator kFrameCount(
       return std::string();
     },
     "");
+
+CLI::Validator one_of(const std::vector<std::string>& names) {
+  std::string all;
+  for (const std::string& n : names) all += (all.empty() ? "" : ",") + n;
+  return CLI::Validator(
+      [names, all](std::string& value) {
+        if (std::find(names.begin(), names.end(), value) != names.end()) return std::string();
+        return internal::shown_value(value) + " not in {" + all + "}";
+      },
+      "{" + all + "}");
+}
 
 std::vector<std::string> search_mode_list() {
   std::vector<std::string> names;

@@ -103,6 +103,9 @@ extern const CLI::Validator kExistingFile;
 // A CLI11 check for --frames N: a frame count in [1, kMaxFrames], said in
 // those words (CLI::PositiveNumber printed its bound as 309 digits).
 extern const CLI::Validator kFrameCount;
+// CLI::IsMember's check and help ("TEXT:{a,b}") with the value shown cut
+// (internal::shown_value): IsMember echoed a 300-byte value whole.
+CLI::Validator one_of(const std::vector<std::string>& names);
 
 // The registered search modes' names (lsgd::search_modes()), for --mode.
 std::vector<std::string> search_mode_list();

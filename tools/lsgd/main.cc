@@ -136,7 +136,13 @@ std::string usage_message(CLI::App& app, const CLI::ParseError& e, int argc, cha
              (guess.empty() ? "" : "; did you mean '" + guess + "'?");
     }
   }
-  return std::string(e.what()) + " (" + path_of(cmd) + " --help for the usage)";
+  std::string what = e.what();
+  // CLI11's "Could not convert: --threshold = VALUE" echoes the value whole.
+  const std::size_t at = what.find(" = ");
+  if (dynamic_cast<const CLI::ConversionError*>(&e) != nullptr && at != std::string::npos) {
+    what = what.substr(0, at + 3) + shown_value(what.substr(at + 3));
+  }
+  return what + " (" + path_of(cmd) + " --help for the usage)";
 }
 
 // What a command printed reached standard output (a full disk, a closed

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdlib>
 #include <limits>
 
 #include "internal/check.h"
@@ -50,6 +51,10 @@ const OptionTable<DecisionOptions>& DecisionOptions::fields() {
                     "no loop is continued across a frame whose place signature leapt this far (block "
                     "contrast) from the 8 frames before it: a scene cut as it happens (needs "
                     "verification.temporal.place_cut; 0: off)"),
+        real_option("contradiction", &S::contradiction, 0.0, 1000.0, false, "sigma",
+                    "a continuation is none when the candidate ranked first lies elsewhere (more than "
+                    "16 frames from the loop's window), with at least its inliers, and the query looks "
+                    "more like it by this much, single frame (0: off)"),
         integer_option("continuity_gap", &S::continuity_gap, 0, 100, "frames",
                        "a loop is continued after at most this many frames that declared none (after more "
                        "than one, by the candidate ranked first only)"),
@@ -172,6 +177,7 @@ double LoopDecision::rank(const DecisionQuery& q, const Candidate& best,
   }
   const bool tracked = out.ranking.confirmed && !confirms.empty();
   track_.record(q.frame, tracked ? best.frame : -1, static_cast<int>(support), tracked && tracking, 0);
+  first_support_ = support;
   return support;
 }
 
@@ -279,6 +285,35 @@ bool LoopDecision::continues(const DecisionQuery& q, const Window& w, const Cand
   if (w.long_gap && !(w.first != nullptr && c.frame == w.first->frame)) return false;
   return w.open && state_.continues(q.frame, c.frame, q.tolerance, options_.continuity_gap) &&
          c.frame <= w.end && !unlike(w, c.frame);
+}
+
+// The ranking's first candidate, elsewhere in the map, explains the query
+// better than the continuation: as much geometric support and a clearly
+// higher single-frame score. A true continuation's ranking's first is the
+// same stretch a few frames off, or scores no more than about 1 sigma above it.
+bool LoopDecision::contradicted(const DecisionQuery& q, const Window& w, const Candidate& c, double support,
+                                std::string& why) const {
+  const double margin = options_.contradiction;
+  if (margin <= 0 || w.first == nullptr || !q.single_frame || support < 0 || first_support_ < support) {
+    return false;
+  }
+  const std::int64_t f = w.first->frame;
+  if (f == c.frame || (f >= w.held - kElsewhereFrames && f <= w.end + kElsewhereFrames)) return false;
+  // Two visits of one place: the later of the two frames declared a loop to
+  // the earlier (a place passed three times: the ranking may prefer the
+  // first visit while the loop follows the second).
+  const std::int64_t later = std::max(f, c.frame), earlier = std::min(f, c.frame);
+  for (std::int64_t k = std::max<std::int64_t>(later - 2, 0);
+       k <= later + 2 && k < static_cast<std::int64_t>(history_.size()); ++k) {
+    const std::int64_t loop = history_[static_cast<std::size_t>(k)].frame;
+    if (loop >= 0 && std::abs(loop - earlier) <= kElsewhereFrames) return false;
+  }
+  const double first_z = q.single_frame(f), z = q.single_frame(c.frame);
+  if (!(first_z - z >= margin)) return false;  // NaN: no contradiction
+  why = internal::concat("contradicted: the candidate ranked first, frame ", f, ", lies elsewhere, has ",
+                         first_support_, " inliers against ", support, " and scores ", first_z - z,
+                         " sigma more for the query, single frame (decision.contradiction ", margin, ")");
+  return true;
 }
 
 // The best-scored frame that continues the held loop, outside the temporal
@@ -495,6 +530,13 @@ void LoopDecision::examine(const DecisionQuery& q, const std::vector<Verificatio
     const Confirmation confirmed = confirm(q, c, continuing, is_first, out);
     if (is_first) verdict = {confirmed.support, !confirmed.accepted};
     if (!confirmed.accepted) continue;
+    // A continuation the ranking contradicts continues nothing, and without
+    // its continuity it cannot be a loop (its bar was the relaxed one).
+    std::string why;
+    if (continuing && contradicted(q, w, c, confirmed.support, why)) {
+      out.verdicts.push_back({c.frame, name(), false, std::move(why), 0});
+      continue;
+    }
     // What it scores with its support: strong_bonus needs strong_inliers.
     const bool strong_enough = confirmed.support >= d.strong_inliers || long_track(q);
     const double scored = strong_enough ? score : score - strong(q, w, c);

@@ -45,6 +45,10 @@ TEST(DecisionOptions, RangesNameTheField) {
   d.leap = std::nan("");
   EXPECT_THROW(d.check(), InvalidArgument);
   d = {};
+  d.contradiction = -1;
+  EXPECT_NE(test::message_of<InvalidArgument>([&] { d.check(); }).find("decision.contradiction"),
+            std::string::npos);
+  d = {};
   d.continuity_inliers = 0;
   EXPECT_THROW(d.check(), InvalidArgument);
   d.continuity_inliers = 1.5;
@@ -229,6 +233,57 @@ TEST(LoopDecision, ContinuesOverAGapOfFrames) {
     if (continues) {
       EXPECT_EQ(decision->continuity().held.query, frame);
     }
+  }
+}
+
+// decision.contradiction: a continuation confirmed on its relaxed bar is none
+// when the candidate appearance ranks first lies elsewhere in the map, has at
+// least its support and scores `contradiction` sigma more for the query,
+// single frame; nearer, with less support, a smaller margin, no single-frame
+// score, or the option off, the loop continues.
+TEST(LoopDecision, AContinuationTheRankingContradictsIsNone) {
+  // 0: contradicted, 1: contradiction 0 (off, the default), 2: the first with fewer
+  // inliers, 3: a margin of 1.5 only, 4: the first within 16 frames of the
+  // window, 5: no single-frame score for the first, 6: a 1.5 margin with
+  // contradiction 1.5
+  for (const int variant : {0, 1, 2, 3, 4, 5, 6}) {
+    SCOPED_TRACE(testing::Message() << "variant " << variant);
+    DecisionOptions d;
+    d.contradiction = variant == 1 ? 0.0 : variant == 6 ? 1.5 : 2.0;  // off by default
+    LoopDecision decision(d);
+    const std::int64_t first = variant == 4 ? 29 : 80;  // the window is 10 .. 13
+    FixedSupport stage(std::map<std::int64_t, int>{{10, 60}, {11, 13}, {first, variant == 2 ? 12 : 13}});
+    DecisionQuery q = sequence_query(true);
+    std::vector<Candidate> candidates = {{10, 4.0}};  // a first loop: 4 + 3.5 + 1.5
+    q.appearance = [&](std::int64_t j) {
+      for (const Candidate& c : candidates) {
+        if (c.frame == j) return c.score;
+      }
+      return 0.0;
+    };
+    const double margin = variant == 3 || variant == 6 ? 1.5 : 2.5;
+    q.single_frame = [&](std::int64_t j) {
+      if (j == first) return variant == 5 ? std::nan("") : 0.5 + margin;
+      return j == 11 ? 0.5 : 0.0;
+    };
+    q.frame = 50;
+    q.candidates = &candidates;
+    ASSERT_TRUE(decision.decide(q, {&stage}).loop);
+    // Frame 51: 11 continues the loop (13 inliers, 0.2 of 60 needed: 2 +
+    // 3.5 + 2.5); the ranking's first is `first`, 13 inliers, no first loop.
+    candidates = {{first, 2.5}, {11, 2.0}};
+    q.frame = 51;
+    const Decision out = decision.decide(q, {&stage});
+    const bool contradicted = variant == 0 || variant == 6;
+    EXPECT_EQ(out.loop, !contradicted);
+    if (!contradicted) {
+      EXPECT_EQ(out.best.frame, 11);
+      EXPECT_TRUE(out.evidence.continues);
+    }
+    const bool said = std::any_of(out.verdicts.begin(), out.verdicts.end(), [](const StageVerdict& v) {
+      return v.reason.find("contradicted") != std::string::npos;
+    });
+    EXPECT_EQ(said, contradicted);
   }
 }
 

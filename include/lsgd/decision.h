@@ -35,6 +35,9 @@
 // map found (DecisionQuery::places, lsgd/places.h): a loop is continued only
 // while its run of loops began in the query's place and its frame j stays in
 // the place it was in; past a cut a loop must be found again, as a first one.
+// Nor is a loop continued where the ranking contradicts it: its first
+// candidate, elsewhere in the map, explains the query clearly better
+// (DecisionOptions::contradiction).
 //
 // Continuity: the geometric check of a continuing candidate passes with
 // `continuity_inliers` times the inliers its loop has had so far (an average
@@ -142,9 +145,32 @@ struct DecisionOptions {
   // a loop was in progress 1.71 or more (docs/results.md, "A loop in
   // progress is not carried into the next place").
   double leap = 1.25;
+  // A continuation the ranking contradicts is none: the candidate appearance
+  // ranks first lies elsewhere in the map (more than kElsewhereFrames from
+  // the loop's window), its geometric support is at least the
+  // continuation's, and the query looks more like it than like the
+  // continuation by this much, single frame. The revisit has left the
+  // loop's track (a track that fell behind its revisit, or walks along a
+  // stay's copies while the query moves on), and the relaxed bar of a
+  // continuation (continuity_inliers) would carry it on. Sigma, [0, 1000]
+  // Not when the later of the two frames declared a loop to the earlier
+  // (two visits of one place). (0: off.) Off by default: at 2 it removes
+  // 7-17 false loops from a held camera, a blurred revisit and maps at
+  // 64 x 32, but costs lip6-outdoor alone at 64 x 32 six of its 503 true
+  // loops, whose continuations run along the ground truth band's edge with
+  // the same scores (docs/results.md, "A continuation the ranking
+  // contradicts"); for a map that must not take a false loop at that price.
+  double contradiction = 0.0;
   void check() const;
   static const OptionTable<DecisionOptions>& fields();  // lsgd/options.h
 };
+
+// A ranking's first candidate further than this from a loop's window (its
+// frames held .. end) lies elsewhere in the map (DecisionOptions::contradiction);
+// nearer, it is the same stretch aligned a few frames off (a revisit's true
+// continuations have their ranking's first within 9 frames on every sequence
+// measured). The temporal stage's default sequence length.
+constexpr std::int64_t kElsewhereFrames = 16;
 
 // The most frames between a candidate and its query that decide whether it
 // is a stay (DecisionOptions::stay_z), the middle one first.
@@ -367,6 +393,11 @@ class LoopDecision final : public Stateful {
   // kStayBetweenSupport of `support` (a verdict says so).
   bool sees_the_frames_between(const DecisionQuery& q, std::int64_t frame, double support, Decision& out);
   bool continues(const DecisionQuery& q, const Window& w, const Candidate& c) const;
+  // Whether continuation `c`, confirmed with `support`, is contradicted by
+  // the ranking's first candidate (DecisionOptions::contradiction); the
+  // reason goes into `why`.
+  bool contradicted(const DecisionQuery& q, const Window& w, const Candidate& c, double support,
+                    std::string& why) const;
   Candidate continuation(const DecisionQuery& q, const Window& w) const;
   void gate_continuation(const DecisionQuery& q, const std::vector<VerificationStage*>& stages,
                          std::size_t n, Candidate& c, Decision& out) const;
@@ -402,6 +433,7 @@ class LoopDecision final : public Stateful {
   std::vector<VerificationStage*> confirms_;  // the confirming stages of this frame
   std::vector<StageCheck> first_checks_;      // their verdicts on the best candidate (ranking)
   bool first_tracks_ = false;  // the best candidate tracks the ranking's track (rank())
+  double first_support_ = -1;  // the best candidate's support as its stages gave it (rank())
 };
 
 }  // namespace lsgd

@@ -103,6 +103,7 @@ std::string verification_stages(const VerificationOptions& options);
 struct StageVerdict {
   std::int64_t candidate = -1;
   std::string stage;  // "temporal" or "geometric"; "decision" for a stay (DecisionOptions::stay_z)
+                      // or a contradicted continuation (DecisionOptions::contradiction)
   bool accepted = false;
   std::string reason;  // e.g. "3 of 3 previous queries agree" or "12 inliers < 20"
   double ms = 0;

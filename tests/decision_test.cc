@@ -191,12 +191,7 @@ TEST(LoopDecision, ContinuesOverAGapOfFrames) {
     std::vector<Candidate> candidates = {{10, 4.0}};  // a first loop: 4 + 3.5 + 1.5
     // Only the query's own candidate looks like it (the rest of the window
     // cannot reach the threshold: 0 + 3.5 + 2.5).
-    q.appearance = [&](std::int64_t j) {
-      for (const Candidate& c : candidates) {
-        if (c.frame == j) return c.score;
-      }
-      return 0.0;
-    };
+    q.appearance = test::scores_of(candidates);
     q.single_frame = [](std::int64_t) { return 0.0; };
     q.frame = 50;
     q.candidates = &candidates;
@@ -255,12 +250,7 @@ TEST(LoopDecision, AContinuationTheRankingContradictsIsNone) {
     FixedSupport stage(std::map<std::int64_t, int>{{10, 60}, {11, 13}, {first, variant == 2 ? 12 : 13}});
     DecisionQuery q = sequence_query(true);
     std::vector<Candidate> candidates = {{10, 4.0}};  // a first loop: 4 + 3.5 + 1.5
-    q.appearance = [&](std::int64_t j) {
-      for (const Candidate& c : candidates) {
-        if (c.frame == j) return c.score;
-      }
-      return 0.0;
-    };
+    q.appearance = test::scores_of(candidates);
     const double margin = variant == 3 || variant == 6 ? 1.5 : 2.5;
     q.single_frame = [&](std::int64_t j) {
       if (j == first) return variant == 5 ? std::nan("") : 0.5 + margin;
@@ -284,6 +274,42 @@ TEST(LoopDecision, AContinuationTheRankingContradictsIsNone) {
       return v.reason.find("contradicted") != std::string::npos;
     });
     EXPECT_EQ(said, contradicted);
+  }
+}
+
+// A place passed three times: the ranking's first is the first visit (40),
+// the loop follows the second (100, 101). The continuation is not
+// contradicted when the later of the two frames declared a loop to the
+// earlier (frame 100 to 40); without that loop it is.
+TEST(LoopDecision, TwoVisitsOfOnePlaceDoNotContradictEachOther) {
+  for (const bool linked : {true, false}) {
+    SCOPED_TRACE(testing::Message() << "linked " << linked);
+    DecisionOptions d;
+    d.contradiction = 2.0;
+    LoopDecision decision(d);
+    FixedSupport stage(std::map<std::int64_t, int>{{40, 13}, {41, 60}, {100, 60}, {101, 13}});
+    DecisionQuery q = sequence_query(true);
+    std::vector<Candidate> candidates;
+    q.appearance = test::scores_of(candidates);
+    q.single_frame = [](std::int64_t j) { return j == 40 ? 3.0 : 0.5; };
+    q.candidates = &candidates;
+    // Frame 100 closes a loop to the first visit (41 with `linked`, 13
+    // frames from 40's window of one; else 1, too far to link them).
+    candidates = {{linked ? 41 : 1, 4.0}};
+    q.frame = 100;
+    FixedSupport first_visit(std::map<std::int64_t, int>{{41, 60}, {1, 60}});
+    ASSERT_TRUE(decision.decide(q, {&first_visit}).loop);
+    candidates = {{100, 4.0}};
+    q.frame = 150;
+    ASSERT_TRUE(decision.decide(q, {&stage}).loop);
+    candidates = {{40, 2.5}, {101, 2.0}};  // 40: elsewhere, 13 inliers, 2.5 sigma more
+    q.frame = 151;
+    const Decision out = decision.decide(q, {&stage});
+    EXPECT_EQ(out.loop, linked);
+    if (linked) {
+      EXPECT_EQ(out.best.frame, 101);
+      EXPECT_TRUE(out.evidence.continues);
+    }
   }
 }
 

@@ -4,6 +4,7 @@
 
 #include <cmath>
 #include <cstdint>
+#include <functional>
 #include <map>
 #include <string>
 #include <utility>
@@ -42,6 +43,17 @@ inline DecisionQuery sequence_query(bool continuity) {
   q.tolerance = 2;
   q.min_gap = 5;
   return q;
+}
+
+// Appearance as the query's candidates score it (0 for any other frame);
+// `candidates` is read at each call, so a test may change it between queries.
+inline std::function<double(std::int64_t)> scores_of(const std::vector<Candidate>& candidates) {
+  return [&candidates](std::int64_t j) {
+    for (const Candidate& c : candidates) {
+      if (c.frame == j) return c.score;
+    }
+    return 0.0;
+  };
 }
 
 inline Decision decide_one(LoopDecision& decision, FixedSupport& stage, std::int64_t frame,

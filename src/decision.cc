@@ -177,7 +177,6 @@ double LoopDecision::rank(const DecisionQuery& q, const Candidate& best,
   }
   const bool tracked = out.ranking.confirmed && !confirms.empty();
   track_.record(q.frame, tracked ? best.frame : -1, static_cast<int>(support), tracked && tracking, 0);
-  first_support_ = support;
   return support;
 }
 
@@ -292,9 +291,9 @@ bool LoopDecision::continues(const DecisionQuery& q, const Window& w, const Cand
 // higher single-frame score. A true continuation's ranking's first is the
 // same stretch a few frames off, or scores no more than about 1 sigma above it.
 bool LoopDecision::contradicted(const DecisionQuery& q, const Window& w, const Candidate& c, double support,
-                                std::string& why) const {
+                                double first_support, std::string& why) const {
   const double margin = options_.contradiction;
-  if (margin <= 0 || w.first == nullptr || !q.single_frame || support < 0 || first_support_ < support) {
+  if (margin <= 0 || w.first == nullptr || !q.single_frame || support < 0 || first_support < support) {
     return false;
   }
   const std::int64_t f = w.first->frame;
@@ -311,7 +310,7 @@ bool LoopDecision::contradicted(const DecisionQuery& q, const Window& w, const C
   const double first_z = q.single_frame(f), z = q.single_frame(c.frame);
   if (!(first_z - z >= margin)) return false;  // NaN: no contradiction
   why = internal::concat("contradicted: the candidate ranked first, frame ", f, ", lies elsewhere, has ",
-                         first_support_, " inliers against ", support, " and scores ", first_z - z,
+                         first_support, " inliers against ", support, " and scores ", first_z - z,
                          " sigma more for the query, single frame (decision.contradiction ", margin, ")");
   return true;
 }
@@ -533,7 +532,7 @@ void LoopDecision::examine(const DecisionQuery& q, const std::vector<Verificatio
     // A continuation the ranking contradicts continues nothing, and without
     // its continuity it cannot be a loop (its bar was the relaxed one).
     std::string why;
-    if (continuing && contradicted(q, w, c, confirmed.support, why)) {
+    if (continuing && contradicted(q, w, c, confirmed.support, verdict.support, why)) {
       out.verdicts.push_back({c.frame, name(), false, std::move(why), 0});
       continue;
     }

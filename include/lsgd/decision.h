@@ -152,9 +152,9 @@ struct DecisionOptions {
   // continuation by this much, single frame. The revisit has left the
   // loop's track (a track that fell behind its revisit, or walks along a
   // stay's copies while the query moves on), and the relaxed bar of a
-  // continuation (continuity_inliers) would carry it on. Sigma, [0, 1000]
-  // Not when the later of the two frames declared a loop to the earlier
-  // (two visits of one place). (0: off.) Off by default: at 2 it removes
+  // continuation (continuity_inliers) would carry it on. Not when the later
+  // of the two frames declared a loop to the earlier (two visits of one
+  // place). Sigma, [0, 1000] (0: off). Off by default: at 2 it removes
   // 7-17 false loops from a held camera, a blurred revisit and maps at
   // 64 x 32, but costs lip6-outdoor alone at 64 x 32 six of its 503 true
   // loops, whose continuations run along the ground truth band's edge with
@@ -394,10 +394,10 @@ class LoopDecision final : public Stateful {
   bool sees_the_frames_between(const DecisionQuery& q, std::int64_t frame, double support, Decision& out);
   bool continues(const DecisionQuery& q, const Window& w, const Candidate& c) const;
   // Whether continuation `c`, confirmed with `support`, is contradicted by
-  // the ranking's first candidate (DecisionOptions::contradiction); the
-  // reason goes into `why`.
+  // the ranking's first candidate, which its stages gave `first_support`
+  // (DecisionOptions::contradiction); the reason goes into `why`.
   bool contradicted(const DecisionQuery& q, const Window& w, const Candidate& c, double support,
-                    std::string& why) const;
+                    double first_support, std::string& why) const;
   Candidate continuation(const DecisionQuery& q, const Window& w) const;
   void gate_continuation(const DecisionQuery& q, const std::vector<VerificationStage*>& stages,
                          std::size_t n, Candidate& c, Decision& out) const;
@@ -433,7 +433,6 @@ class LoopDecision final : public Stateful {
   std::vector<VerificationStage*> confirms_;  // the confirming stages of this frame
   std::vector<StageCheck> first_checks_;      // their verdicts on the best candidate (ranking)
   bool first_tracks_ = false;  // the best candidate tracks the ranking's track (rank())
-  double first_support_ = -1;  // the best candidate's support as its stages gave it (rank())
 };
 
 }  // namespace lsgd

@@ -115,7 +115,7 @@ TEST(ReadMatV4, SparseMatricesInEitherByteOrderAndEveryValueType) {
 TEST(ReadMatV4, ZerosAndTheUpperTriangleAsInDenseFiles) {
   std::vector<Triplet> t = pair_triplets();
   t.push_back({5, 20, 0});  // a stored zero is no loop
-  t.push_back({3, 13, 2});  // the upper triangle (13, 3 transposed: already a pair)
+  t.push_back({3, 13, 1});  // the upper triangle (13, 3 transposed: already a pair)
   const fs::path p = write_file("v4zeros.mat", V4Writer{}.sparse("gt", t, kN, kN));
   EXPECT_EQ(pairs_of(lsgd::eval::read_mat(p.string())), kPairs);
   // No nonzero at all: an empty ground truth of its size.
@@ -153,6 +153,8 @@ TEST(ReadMatV4, SizesAndIndicesThatDisagreeAreFormatErrors) {
       {"a fractional index", w.sparse("gt", {{2.5, 1, 1}}, kN, kN), "outside"},
       {"a NaN index", w.sparse("gt", {{nan, 1, 1}}, kN, kN), "outside"},
       {"a NaN value", w.sparse("gt", {{2, 1, nan}}, kN, kN), "NaN"},
+      {"a value -1", w.sparse("gt", {{2, 1, -1}}, kN, kN), "(2, 1) is -1"},
+      {"a value 0.5", w.sparse("gt", {{3, 1, 0.5}}, kN, kN), "(3, 1) is 0.5"},
       {"a NaN size", w.sparse("gt", {}, nan, nan), "not two whole numbers"},
       {"a negative size", w.sparse("gt", {}, -4, -4), "not two whole numbers"},
       // A size matio would allocate a column index for (8 GB): refused first.

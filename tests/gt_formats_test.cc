@@ -57,10 +57,10 @@ TEST(ReadMat, LowerUpperAndFullLogicalGiveTheSamePairs) {
 
 TEST(ReadMat, EveryNumericClassCompressedOrNot) {
   auto d = dense<double>(kN, kPairs, Layout::kLower, 1.0);
-  auto f = dense<float>(kN, kPairs, Layout::kUpper, 0.5f);
-  auto i8 = dense<std::int8_t>(kN, kPairs, Layout::kLower, -1);
-  auto u16 = dense<std::uint16_t>(kN, kPairs, Layout::kFull, 7);
-  auto i32 = dense<std::int32_t>(kN, kPairs, Layout::kLower, 3);
+  auto f = dense<float>(kN, kPairs, Layout::kUpper, 1.0f);
+  auto i8 = dense<std::int8_t>(kN, kPairs, Layout::kLower, 1);
+  auto u16 = dense<std::uint16_t>(kN, kPairs, Layout::kFull, 1);
+  auto i32 = dense<std::int32_t>(kN, kPairs, Layout::kLower, 1);
   auto u64 = dense<std::uint64_t>(kN, kPairs, Layout::kUpper, 1);
   const std::vector<MatVarSpec> specs = {
       {"d", MAT_C_DOUBLE, MAT_T_DOUBLE, kN, kN, d.data()},
@@ -174,6 +174,59 @@ TEST(ReadMat, RejectsNonSquareComplexAndNaN) {
   ASSERT_TRUE(write_mat(p, {{"GT", MAT_C_DOUBLE, MAT_T_DOUBLE, kN, kN, d.data()}}));
   const std::string e = message_of<lsgd::FormatError>([&] { lsgd::eval::read_mat(p.string()); });
   EXPECT_TRUE(contains(e, "NaN") && contains(e, "(21, 4)")) << e;
+}
+
+// A loop matrix holds 0 or 1. A matrix of distances, scores, counts or soft
+// labels (-1, 0.5, 7) was read as loops wherever it was nonzero: refused,
+// naming the entry and its value, in every class, compressed or not, dense
+// (the 1-byte fast path too) or sparse.
+TEST(ReadMat, EntriesOtherThanZeroOrOneAreRefused) {
+  const std::size_t at = 3 * kN + 20;  // GT(21, 4), 1-based
+  auto f = dense<float>(kN, kPairs, Layout::kLower);
+  f[at] = 0.5f;
+  auto i8 = dense<std::int8_t>(kN, kPairs, Layout::kLower);
+  i8[at] = -1;
+  auto u8 = dense<std::uint8_t>(kN, kPairs, Layout::kLower);
+  u8[at] = 255;
+  auto u16 = dense<std::uint16_t>(kN, kPairs, Layout::kLower);
+  u16[at] = 7;
+  auto d = dense<double>(kN, kPairs, Layout::kLower);
+  d[at] = 2.0;
+  struct Case {
+    MatVarSpec spec;
+    const char* value;
+  };
+  const std::vector<Case> cases = {
+      {{"GT", MAT_C_SINGLE, MAT_T_SINGLE, kN, kN, f.data()}, "is 0.5"},
+      {{"GT", MAT_C_INT8, MAT_T_INT8, kN, kN, i8.data()}, "is -1"},
+      {{"GT", MAT_C_UINT8, MAT_T_UINT8, kN, kN, u8.data()}, "is 255"},
+      {{"GT", MAT_C_UINT16, MAT_T_UINT16, kN, kN, u16.data()}, "is 7"},
+      {{"GT", MAT_C_DOUBLE, MAT_T_DOUBLE, kN, kN, d.data()}, "is 2"},
+  };
+  const fs::path p = kTmp / "values.mat";
+  for (auto z : {MAT_COMPRESSION_NONE, MAT_COMPRESSION_ZLIB}) {
+    for (const Case& c : cases) {
+      SCOPED_TRACE(std::string(c.value) + (z == MAT_COMPRESSION_ZLIB ? " compressed" : ""));
+      ASSERT_TRUE(write_mat(p, {c.spec}, MAT_FT_MAT5, z));
+      const std::string e = message_of<lsgd::FormatError>([&] { lsgd::eval::read_mat(p.string()); });
+      EXPECT_TRUE(contains(e, p.string()) && contains(e, "(21, 4)") && contains(e, c.value) &&
+                  contains(e, "0 (no loop) or 1 (a loop)"))
+          << e;
+    }
+  }
+  // Sparse: the stored values are checked as the dense ones.
+  std::vector<mat_uint32_t> ir = {5}, jc(kN + 1, 1);
+  jc[0] = 0;
+  std::vector<double> values = {-1.0};
+  mat_sparse_t sparse{};
+  sparse.nzmax = sparse.nir = sparse.ndata = 1;
+  sparse.ir = ir.data();
+  sparse.jc = jc.data();
+  sparse.njc = static_cast<mat_uint32_t>(jc.size());
+  sparse.data = values.data();
+  ASSERT_TRUE(write_mat(p, {{"GT", MAT_C_SPARSE, MAT_T_DOUBLE, kN, kN, &sparse}}));
+  const std::string e = message_of<lsgd::FormatError>([&] { lsgd::eval::read_mat(p.string()); });
+  EXPECT_TRUE(contains(e, "(6, 1)") && contains(e, "is -1")) << e;
 }
 
 TEST(ReadMat, DiagonalIsIgnored) {

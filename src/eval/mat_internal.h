@@ -128,15 +128,23 @@ bool with_value_type(std::uint32_t type, F&& f) {
   }
 }
 
-// True when GT(r, c) = v is a loop; a NaN entry is a FormatError.
+// True when GT(r, c) = v is a loop: 1 is one, 0 is none. Any other value (a
+// NaN, -1, 0.5, 7) is a FormatError naming the entry: a matrix of distances,
+// scores, counts or soft labels is no loop matrix, and taking every nonzero
+// entry for a loop would score against a ground truth nobody meant.
 template <typename T>
 bool is_loop_value(T v, std::size_t r, std::size_t c, const std::string& path) {
+  if (v == T(0)) return false;
+  if (v == T(1)) return true;
+  std::string value;
   if constexpr (std::is_floating_point_v<T>) {
-    if (std::isnan(v)) {
-      throw FormatError(concat("'", path, "': entry (", r + 1, ", ", c + 1, ") is NaN"));
-    }
+    value = std::isnan(v) ? std::string("NaN") : concat(static_cast<double>(v));
+  } else {
+    value = concat(+v);  // a 1-byte type as a number, not a character
   }
-  return v != T(0);
+  throw FormatError(concat("'", path, "': entry (", r + 1, ", ", c + 1, ") is ", value,
+                           ": a loop matrix holds 0 (no loop) or 1 (a loop); make it one "
+                           "(in MATLAB, when every nonzero entry is a loop: GT = double(GT ~= 0)) or give the loops as pairs"));
 }
 
 // Adds the loop GT(k % n, k / n) for each nonzero values[i], k = k0 + i

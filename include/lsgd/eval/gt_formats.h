@@ -7,7 +7,7 @@
 // ../shared/docs/evaluation.md describes where each comes from):
 //   pairs        "q m" per line, 0-based, '#' comments (read_pairs)
 //   mat          MATLAB N x N loop matrix (v4, v5 or v7.3 through matio):
-//                nonzero GT(r, c) = loop between frames r and c
+//                GT(r, c) = 1: a loop between frames r and c (entries 0 or 1)
 //   kitti-poses  KITTI odometry poses, one row-major 3x4 matrix per line
 //                (12 columns, or 13 with a leading timestamp)
 //   loopinf      the LSGDDN authors' "frame<TAB>loop_frame", -1 = none, one
@@ -93,12 +93,12 @@ void register_gt_format(const GtFormatType& format);
 // otherwise the first square 2-D numeric, logical or sparse variable whose name
 // contains "gt" or "truth" (any case), else the first square one. Any numeric
 // class, logical and sparse; lower-, upper-triangular or full (symmetric)
-// matrices alike: every nonzero GT(r, c), r != c, is the loop {r, c}; the
-// diagonal is ignored. A compressed dense matrix in a v5 file (every published
+// matrices alike: every GT(r, c) = 1, r != c, is the loop {r, c}; the
+// diagonal is ignored; entries hold 0 or 1 (any other value is refused). A compressed dense matrix in a v5 file (every published
 // one) is streamed through zlib, never held whole; other layouts are read whole
 // by matio (N^2 x the element size). FormatError naming the file for a
 // truncated or corrupt file, no suitable variable, a non-square or complex
-// matrix, a NaN entry, or N != frames (when frames >= 0); IoError when unreadable.
+// matrix, an entry other than 0 or 1 (NaN, -1, 0.5, 7), or N != frames (when frames >= 0); IoError when unreadable.
 GroundTruth read_mat(const std::string& path, std::int64_t frames = -1,
                      const std::string& variable = "");
 

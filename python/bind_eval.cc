@@ -308,10 +308,17 @@ void bind_eval(py::module_& m) {
         "AP, R@N.");
   m.def("evaluate_detections", [](const py::object& path, const lsgd::eval::GroundTruth& gt,
                                   std::int64_t min_gap) {
-          return lsgd::eval::evaluate(lsgd::eval::read_detections(path_of(path), gt.frames()), gt, min_gap);
+          const std::string file = path_of(path);
+          const auto records = lsgd::eval::read_detections(file, gt.frames());
+          const py::object warn = py::module_::import("warnings").attr("warn");
+          for (const std::string& w : lsgd::eval::detections_warnings(records, gt, min_gap, file)) {
+            warn(w, py::module_::import("builtins").attr("UserWarning"), 2);
+          }
+          return lsgd::eval::evaluate(records, gt, min_gap);
         }, py::arg("path"), py::arg("groundtruth"), py::arg("min_gap"),
         "Scores a detections CSV (query,match,score[,rank]: lsgd match, lsgd.match, another "
-        "system's output) as lsgd eval --detections does.");
+        "system's output) as lsgd eval --detections does, with its warnings as Python warnings "
+        "(revisits without a row, matches to the query itself or a later frame).");
   m.def("sweep", &run_sweep, py::arg("datasets"), py::arg("sets") = std::vector<std::string>(),
         py::arg("options") = py::none(), py::arg("jobs") = 1, py::arg("strict") = false,
         "Runs lsgd sweep's grid: every configuration of `sets` (\"KEY=VALUES\", as --set) on "

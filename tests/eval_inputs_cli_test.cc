@@ -111,6 +111,20 @@ TEST(EvalCli, ResultsAreWrittenAndInputsCheckedBeforeTheRun) {
             std::string::npos)
       << r.err;
   EXPECT_EQ(read_json(kTmp / "c.json")["warnings"].size(), 1u);
+  // A match to the query itself or a later frame (a system that stores a frame
+  // before it queries it, or columns given as match,query): a false loop under
+  // the strict protocol, and said, with the first such row.
+  write_text(kTmp / "d-self.csv", "query,match,score\n4,0,1\n5,5,1\n6,-1,\n7,9,1\n");
+  r = lsgd("eval --detections " + q(kTmp / "d-self.csv") + " --gt " + q(kTmp / "skipped-gt.txt") +
+           " --min-gap 1 --frames 12 --json " + q(kTmp / "c.json"));
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_NE(r.err.find("reports 2 matches to the query itself or a later frame (1 to itself; the first: "
+                       "query 5 -> 5)"),
+            std::string::npos)
+      << r.err;
+  const auto self = read_json(kTmp / "c.json");
+  EXPECT_EQ(self["warnings"].size(), 1u);
+  EXPECT_EQ(self["declared_false"], 2) << self.dump();
 
   // A folder whose name is not UTF-8: the JSON is written, the byte replaced.
   const fs::path odd = kTmp / "odd\xff\xfe";

@@ -387,6 +387,12 @@ def test_match_one_traverse_against_another(tmp_path):
     gt.write_text("".join(f"{places + p} {p}\n" for p in range(places)))
     metrics = lsgd.evaluate_detections(str(out), lsgd.load_groundtruth(str(gt), frames=2 * places), min_gap=0)
     assert metrics.recall_at_1 == 1.0
+    # A match to the query itself is a false loop, and said (lsgd eval's warning).
+    selfmatch = tmp_path / "self.csv"
+    selfmatch.write_text("query,match,score\n12,0,1\n13,13,1\n")
+    with pytest.warns(UserWarning, match=r"reports 1 match to the query itself or a later frame"):
+        m2 = lsgd.evaluate_detections(str(selfmatch), lsgd.load_groundtruth(str(gt), frames=2 * places), min_gap=0)
+    assert m2.declared_false == 1
     if CLI:  # lsgd match writes the same file from the images
         for name, frames in (("r", reference), ("q", query)):
             (tmp_path / name).mkdir()

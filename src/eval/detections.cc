@@ -394,4 +394,40 @@ std::vector<FrameRecord> read_detections(const std::string& path, std::int64_t f
   return records;
 }
 
+std::vector<std::string> detections_warnings(const std::vector<FrameRecord>& records,
+                                             const GroundTruth& gt, std::int64_t min_gap,
+                                             const std::string& name) {
+  std::vector<std::string> warnings;
+  std::int64_t revisits = 0, without_row = 0;
+  std::size_t r = 0;
+  for (std::int64_t q = 0; q < gt.frames(); ++q) {
+    while (r < records.size() && records[r].frame < q) ++r;
+    if (!gt.has_loop(q, min_gap)) continue;
+    ++revisits;
+    without_row += r < records.size() && records[r].frame == q ? 0 : 1;
+  }
+  if (without_row > 0) {
+    warnings.push_back(concat(name, " has no row for ", without_row, " of the ", revisits,
+                              " revisits the ground truth lists: they count as missed (score a CSV "
+                              "of lsgd run --first, --last or --every with the same flags)"));
+  }
+  std::int64_t forward = 0, itself = 0;
+  const FrameRecord* first = nullptr;
+  for (const FrameRecord& record : records) {
+    if (!record.loop || record.reported.frame < record.frame) continue;
+    ++forward;
+    itself += record.reported.frame == record.frame ? 1 : 0;
+    if (!first) first = &record;
+  }
+  if (forward > 0) {
+    warnings.push_back(concat(
+        name, " reports ", forward, " match", forward == 1 ? "" : "es", " to the query itself or a "
+        "later frame (", itself, " to itself; the first: query ", first->frame, " -> ",
+        first->reported.frame, "): a loop closes on an earlier frame, and the strict protocol counts "
+        "them as false loops (does the system store a frame before it queries it, or are the "
+        "columns match,query?)"));
+  }
+  return warnings;
+}
+
 }  // namespace lsgd::eval

@@ -239,23 +239,9 @@ void evaluate_detections(const EvalArgs& args, const io::SequenceOptions& option
   for (const std::string& file : compared_files(args)) eval::read_detections(file, gt.frames());
   const std::vector<eval::Pose> poses = report_poses(args, gt);
   const std::int64_t min_gap = *args.detector.min_gap;
-  // Revisits without a row count as missed: say so when some are (a CSV of
-  // lsgd run --every 2 scored without --every 2 has no row for half of them).
-  // Frames that are no revisit may lack rows (lsgd match's reference frames).
-  std::vector<std::string> warnings;
-  std::int64_t revisits = 0, without_row = 0;
-  std::size_t r = 0;
-  for (std::int64_t q = 0; q < gt.frames(); ++q) {
-    while (r < records.size() && records[r].frame < q) ++r;
-    if (!gt.has_loop(q, min_gap)) continue;
-    ++revisits;
-    without_row += r < records.size() && records[r].frame == q ? 0 : 1;
-  }
-  if (without_row > 0) {
-    warnings.push_back(args.detections + " has no row for " + std::to_string(without_row) + " of the " +
-                       std::to_string(revisits) + " revisits the ground truth lists: they count as "
-                       "missed (score a CSV of lsgd run --first, --last or --every with the same flags)");
-  }
+  // Revisits without a row count as missed, matches to the query itself or a
+  // later frame as false loops: say so when there are any.
+  const std::vector<std::string> warnings = eval::detections_warnings(records, gt, min_gap, args.detections);
   for (const std::string& w : warnings) std::cerr << "lsgd: warning: " << w << "\n";
   const eval::Metrics metrics = score(args, records, gt, min_gap);
   nlohmann::json json = metrics_json(metrics);

@@ -47,4 +47,17 @@ namespace lsgd::eval {
 // query without rank 1), or a file with no row.
 std::vector<FrameRecord> read_detections(const std::string& path, std::int64_t frames = -1);
 
+// What a reader of detections `records` (read from the file called `name`)
+// scored against `gt` with window `min_gap` should be told, empty when all is
+// well: revisits the ground truth lists that have no row (they count as
+// missed: a CSV of `lsgd run --every 2` scored without --every 2), and
+// reported matches that are the query itself or a later frame (a loop closes
+// on an earlier frame; the strict protocol counts them as false loops: a
+// system that stores a frame before it queries it, or columns given as
+// match,query). `lsgd eval --detections` prints, stores and shows them;
+// Python's evaluate_detections() raises them as warnings.
+std::vector<std::string> detections_warnings(const std::vector<FrameRecord>& records,
+                                             const GroundTruth& gt, std::int64_t min_gap,
+                                             const std::string& name);
+
 }  // namespace lsgd::eval

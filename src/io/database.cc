@@ -320,8 +320,13 @@ void publish_database(const std::string& tmp, const std::string& path) {
   if (::link(tmp.c_str(), path.c_str()) != 0) {
     const int error = errno;
     if (error == EEXIST || ::stat(path.c_str(), &st) == 0) {
+      // It did not exist when this creation began (check_new_database_path):
+      // another process created it meanwhile (two `lsgd run --database` at
+      // one new path). Nothing of this one is kept; the other's is whole.
       ::unlink(tmp.c_str());
-      io_error(path, "already exists");
+      io_error(path, "was created by another process while this one created it (two runs given "
+               "one new database?): nothing was stored here, the other's database is untouched; "
+               "run again to resume it once the other has finished");
     }
     if (::rename(tmp.c_str(), path.c_str()) != 0) {
       const int rename_error = errno;

@@ -239,9 +239,11 @@ std::string sweep_yaml(const std::vector<std::string>& keys,
   return out;
 }
 
-std::vector<SweepPoint> expand_sweep(const std::vector<SweepAxis>& axes,
-                                     const DetectorOptions& base) {
-  // The grid's size first: every value and point is parsed below.
+namespace {
+
+// The grid as a whole, before any value is parsed: its size, and no window
+// in the options it applies to.
+void check_grid(const std::vector<SweepAxis>& axes, const DetectorOptions& base) {
   double all = 1;  // up to 10,000^axes: a double
   for (const SweepAxis& a : axes) all *= static_cast<double>(a.values.size());
   if (all > static_cast<double>(kMaxPoints)) {
@@ -255,40 +257,45 @@ std::vector<SweepPoint> expand_sweep(const std::vector<SweepAxis>& axes,
     throw_invalid("the sweep's options set search.min_gap = ", base.search.min_gap,
                   ": the window is set per dataset, by its spec NAME=...,MIN_GAP, so it would be ignored");
   }
-  std::vector<std::string> keys;
-  std::size_t total = 1;
-  for (const SweepAxis& axis : axes) {
-    for (std::size_t k = 0; k < keys.size(); ++k) {
-      if (keys[k] == axis.key) {
-        throw_invalid("sweep '", shown_value(axis.spec), "': key '", axis.key, "' is already swept by '",
-                      shown_value(axes[k].spec), "'");
-      }
+}
+
+// One axis, given the keys of the axes before it: a key swept once, not the
+// window, each value parsed and given once.
+void check_axis(const SweepAxis& axis, const std::vector<SweepAxis>& axes, const std::vector<std::string>& keys,
+                const DetectorOptions& base) {
+  for (std::size_t k = 0; k < keys.size(); ++k) {
+    if (keys[k] == axis.key) {
+      throw_invalid("sweep '", shown_value(axis.spec), "': key '", axis.key, "' is already swept by '",
+                    shown_value(axes[k].spec), "'");
     }
-    if (axis.values.empty()) throw_invalid("sweep '", shown_value(axis.spec), "': no values");
-    // sweep_cells() gives each dataset its own window: a swept one would be
-    // dropped without a word.
-    if (axis.key == "search.min_gap") {
-      throw_invalid("sweep '", shown_value(axis.spec), "': the window is set per dataset, by its spec "
-                    "NAME=...,MIN_GAP (lsgd sweep --dataset), not swept");
-    }
-    // A value given twice, or twice spelt ("5,5.0"), ran the same
-    // configuration twice: identical rows, as if the grid had more points.
-    const OptionField<DetectorOptions>* field = find_option(DetectorOptions::fields(), axis.key);
-    std::map<std::string, std::string> seen;  // the option's text -> the value that set it
-    for (const std::string& value : axis.values) {
-      const DetectorOptions o = parse_as_argument(
-          sweep_yaml({axis.key}, {value}), concat("sweep '", shown_value(axis.spec), "' (value ", shown_value(value), ")"), base);
-      const std::string text = field != nullptr ? field->text(o) : value;
-      const auto [at, fresh] = seen.emplace(text, value);
-      if (!fresh) {
-        throw_invalid("sweep '", shown_value(axis.spec), "': the values '", shown_value(at->second), "' and '",
-                      shown_value(value), "' both set ", axis.key, " = ", shown_value(text),
-                      " (the same configuration twice, identical rows): give each value once");
-      }
-    }
-    keys.push_back(axis.key);
-    total *= axis.values.size();
   }
+  if (axis.values.empty()) throw_invalid("sweep '", shown_value(axis.spec), "': no values");
+  // sweep_cells() gives each dataset its own window: a swept one would be
+  // dropped without a word.
+  if (axis.key == "search.min_gap") {
+    throw_invalid("sweep '", shown_value(axis.spec), "': the window is set per dataset, by its spec "
+                  "NAME=...,MIN_GAP (lsgd sweep --dataset), not swept");
+  }
+  // A value given twice, or twice spelt ("5,5.0"), ran the same
+  // configuration twice: identical rows, as if the grid had more points.
+  const OptionField<DetectorOptions>* field = find_option(DetectorOptions::fields(), axis.key);
+  std::map<std::string, std::string> seen;  // the option's text -> the value that set it
+  for (const std::string& value : axis.values) {
+    const DetectorOptions o = parse_as_argument(
+        sweep_yaml({axis.key}, {value}), concat("sweep '", shown_value(axis.spec), "' (value ", shown_value(value), ")"), base);
+    const std::string text = field != nullptr ? field->text(o) : value;
+    const auto [at, fresh] = seen.emplace(text, value);
+    if (!fresh) {
+      throw_invalid("sweep '", shown_value(axis.spec), "': the values '", shown_value(at->second), "' and '",
+                    shown_value(value), "' both set ", axis.key, " = ", shown_value(text),
+                    " (the same configuration twice, identical rows): give each value once");
+    }
+  }
+}
+
+// Every point of the cross product, the last axis turning fastest.
+std::vector<SweepPoint> grid_points(const std::vector<SweepAxis>& axes, const std::vector<std::string>& keys,
+                                    std::size_t total, const DetectorOptions& base) {
   std::vector<SweepPoint> points;
   points.reserve(total);
   std::vector<std::size_t> index(axes.size(), 0);
@@ -307,10 +314,14 @@ std::vector<SweepPoint> expand_sweep(const std::vector<SweepAxis>& axes,
       index[k] = 0;
     }
   }
-  // An option that applies in no configuration (search.nodes.beta in
-  // exhaustive mode, another descriptor's option, a disabled stage's) gives
-  // identical rows that read as "it does not matter": refused, saying when
-  // it applies.
+  return points;
+}
+
+// An option that applies in no configuration (search.nodes.beta in
+// exhaustive mode, another descriptor's option, a disabled stage's) gives
+// identical rows that read as "it does not matter": refused, saying when it
+// applies.
+void check_every_axis_applies(const std::vector<SweepAxis>& axes, const std::vector<SweepPoint>& points) {
   for (const SweepAxis& axis : axes) {
     const OptionField<DetectorOptions>* field = find_option(DetectorOptions::fields(), axis.key);
     if (field == nullptr || !field->applies) continue;
@@ -322,6 +333,22 @@ std::vector<SweepPoint> expand_sweep(const std::vector<SweepAxis>& axes,
                     "): set or sweep what it depends on too");
     }
   }
+}
+
+}  // namespace
+
+std::vector<SweepPoint> expand_sweep(const std::vector<SweepAxis>& axes,
+                                     const DetectorOptions& base) {
+  check_grid(axes, base);  // the grid's size first: every value and point is parsed below
+  std::vector<std::string> keys;
+  std::size_t total = 1;
+  for (const SweepAxis& axis : axes) {
+    check_axis(axis, axes, keys, base);
+    keys.push_back(axis.key);
+    total *= axis.values.size();
+  }
+  std::vector<SweepPoint> points = grid_points(axes, keys, total, base);
+  check_every_axis_applies(axes, points);
   return points;
 }
 

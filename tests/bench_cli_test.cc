@@ -195,8 +195,12 @@ TEST(BenchCli, DistractorsCompareTheModesOnOneMap) {
   EXPECT_EQ(j["modes"][0]["index_bytes_per_frame"], 0.0);
   EXPECT_GT(j["index_bytes_per_frame"].get<double>(), 0.0);
   EXPECT_GT(j["index_restore_s"].get<double>(), 0.0);
-  // With the defaults a map of 420 frames is searched exhaustively: the same
-  // candidate for every query and the same loops, the graph built all the same.
+  EXPECT_EQ(j["distractor_run"], 1);  // one distractor at a time unless --distractor-run
+}
+
+// With the defaults a map of 420 frames is searched exhaustively: the same
+// candidate for every query and the same loops, the graph built all the same.
+TEST(BenchCli, ASmallMapWithDistractorsIsSearchedAsExhaustiveSearchDoes) {
   const fs::path small_json = kTmp / "distractors-default.json";
   const auto small = lsgd("bench --distractors 300 --frames 120 --width 160 --height 120 --min-gap 10 "
                           "--verify temporal --mode index --json '" + small_json.string() + "'");
@@ -206,6 +210,11 @@ TEST(BenchCli, DistractorsCompareTheModesOnOneMap) {
   EXPECT_EQ(d["modes"][1]["declared_vs_exhaustive"], 1.0);
   EXPECT_EQ(d["modes"][1]["declared"], d["modes"][0]["declared"]);
   EXPECT_GT(d["index_bytes_per_frame"].get<double>(), 0.0);
+}
+
+// What --distractors cannot take, said before anything runs; runs of
+// distractors, said in the JSON.
+TEST(BenchCli, DistractorArgumentsAreCheckedFirst) {
   const auto nodes = lsgd("bench --distractors 10 --frames 20 --width 160 --height 120 --mode nodes");
   EXPECT_EQ(nodes.code, 1);
   EXPECT_NE(nodes.err.find("nodes cannot take distractors"), std::string::npos) << nodes.err;
@@ -235,9 +244,14 @@ TEST(BenchCli, DistractorsCompareTheModesOnOneMap) {
                          "--min-gap 10 --verify none --mode index --json '" + runs_json.string() + "'");
   ASSERT_EQ(runs.code, 0) << runs.err;
   EXPECT_EQ(nlohmann::json::parse(slurp(runs_json))["distractor_run"], 20);
-  EXPECT_EQ(nlohmann::json::parse(slurp(json))["distractor_run"], 1);
-  // A map larger than the machine's memory fails at once, naming the
-  // storage that would fit more, before any map is built.
+  const auto street_gt = lsgd("bench --distractors 5 --frames 30 --gt x");
+  EXPECT_EQ(street_gt.code, 1);
+  EXPECT_NE(street_gt.err.find("the synthetic street has its own"), std::string::npos) << street_gt.err;
+}
+
+// A map larger than the machine's memory fails at once, naming the storage
+// that would fit more, before any map is built.
+TEST(BenchCli, AMapLargerThanTheMemoryIsRefusedAtOnce) {
   if (lsgd::cli::bench::available_memory_bytes() >= 0) {
     const auto huge = lsgd("bench --distractors 1000000000 --frames 30 --width 160 --height 120 --mode index");
     EXPECT_EQ(huge.code, 1);
@@ -261,9 +275,6 @@ TEST(BenchCli, DistractorsCompareTheModesOnOneMap) {
       EXPECT_TRUE(frames.out.empty()) << frames.out;
     }
   }
-  const auto street_gt = lsgd("bench --distractors 5 --frames 30 --gt x");
-  EXPECT_EQ(street_gt.code, 1);
-  EXPECT_NE(street_gt.err.find("the synthetic street has its own"), std::string::npos) << street_gt.err;
 }
 
 // --sequence is read as lsgd eval reads a dataset: its ground truth in the

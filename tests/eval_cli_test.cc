@@ -71,20 +71,27 @@ fs::path ShortStreet::dir_;
 std::int64_t ShortStreet::frames_ = 0;
 lsgd::eval::GroundTruth ShortStreet::gt_;
 
-// lsgd match: the street's revisits (frames 90 on) as a query traverse
-// against its first 90 frames; the top-k file scores with lsgd eval
-// --detections, its ranks giving R@N; another frame size is refused.
-TEST_F(ShortStreet, MatchOneTraverseAgainstAnother) {
-  std::ifstream all(dir_ / "sequence.txt");
+// The street as two traverses: its first 90 frames (ref.txt) and the rest
+// (query.txt), image paths absolute.
+void write_traverses(const fs::path& dir) {
+  std::ifstream all(dir / "sequence.txt");
   std::ofstream ref(kTmp / "ref.txt"), query(kTmp / "query.txt");
   std::string line;
   for (int i = 0; std::getline(all, line); ++i) {
     // Relative image paths are the list's own: written absolute here.
-    const std::string image = fs::path(line).is_absolute() ? line : (dir_ / line).string();
+    const std::string image = fs::path(line).is_absolute() ? line : (dir / line).string();
     (i < 90 ? ref : query) << image << "\n";
   }
   ref.close();
   query.close();
+}
+
+// lsgd match: the street's revisits (frames 90 on) as a query traverse
+// against its first 90 frames; the top-k file scores with lsgd eval
+// --detections, its ranks giving R@N; another frame size is refused.
+TEST_F(ShortStreet, MatchOneTraverseAgainstAnother) {
+  write_traverses(dir_);
+  std::string line;
   const CmdResult r = lsgd("match --reference " + q(kTmp / "ref.txt") + " --query " + q(kTmp / "query.txt") +
                            " --top-k 5 --output " + q(kTmp / "match.csv"));
   ASSERT_EQ(r.code, 0) << r.err;
@@ -123,8 +130,12 @@ TEST_F(ShortStreet, MatchOneTraverseAgainstAnother) {
     EXPECT_EQ(ignored.code, 1) << flag;
     EXPECT_NE(ignored.err.find("has no effect on lsgd match"), std::string::npos) << ignored.err;
   }
-  // An image of another size, or one that cannot be read, is skipped and
-  // reported, as lsgd run does; --strict stops there, naming it.
+}
+
+// lsgd match skips an image of another size, or one that cannot be read,
+// and reports it, as lsgd run does; --strict stops there, naming it.
+TEST_F(ShortStreet, MatchSkipsAnImageItCannotUseAndStrictStops) {
+  write_traverses(dir_);
   const fs::path small = kTmp / "small";
   fs::create_directories(small);
   write_image(small / "a.png", 1);
@@ -147,7 +158,12 @@ TEST_F(ShortStreet, MatchOneTraverseAgainstAnother) {
   EXPECT_EQ(strict.code, 1);
   EXPECT_NE(strict.err.find("--query image 0: ("), std::string::npos) << strict.err;
   EXPECT_EQ(strict.err.find("skipping"), std::string::npos) << strict.err;
-  // A reference that cannot be read keeps every other image's number.
+}
+
+// A reference image that cannot be read keeps every other image's number.
+TEST_F(ShortStreet, MatchKeepsTheNumbersOfTheImagesAfterAMissingReference) {
+  write_traverses(dir_);
+  std::string line;
   {
     std::ifstream in(kTmp / "ref.txt");
     std::ofstream out(kTmp / "ref-missing.txt");

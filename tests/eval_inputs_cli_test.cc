@@ -96,6 +96,25 @@ TEST(EvalCli, ResultsAreWrittenAndInputsCheckedBeforeTheRun) {
     EXPECT_TRUE(r.out.empty()) << extra << ": " << r.out;
     EXPECT_FALSE(fs::exists(kTmp / "c.json"));
   }
+  // A folder whose name is not UTF-8: the JSON is written, the byte replaced.
+  const fs::path odd = kTmp / "odd\xff\xfe";
+  fs::create_directories(odd);
+  for (int i = 0; i < 4; ++i) write_image(odd / (std::to_string(i) + ".png"), i);
+  write_text(kTmp / "odd-gt.txt", "3 0\n");
+  r = lsgd("eval --sequence " + q(odd) + " --gt " + q(kTmp / "odd-gt.txt") + " --min-gap 1 --json " +
+           q(kTmp / "odd.json"));
+  ASSERT_EQ(r.code, 0) << r.err;
+  const std::string sequence = read_json(kTmp / "odd.json")["sequence"];
+  EXPECT_NE(sequence.find("odd\xEF\xBF\xBD"), std::string::npos) << sequence;  // U+FFFD
+}
+
+// Rows that count as missed (a revisit without one) or as false loops (a
+// match to the query itself or a later frame) are said, on stderr and in the
+// JSON.
+TEST(EvalCli, DetectionsThatCountAsMissedOrFalseAreSaid) {
+  write_text(kTmp / "skipped-gt.txt", "4 0\n5 1\n7 3\n");
+  write_text(kTmp / "d8.csv", "query,match,score\n4,0,1\n5,1,1\n6,-1,\n7,3,1\n");
+  CmdResult r;
   // Detections without rows for some of the ground truth's revisits (a CSV
   // of lsgd run --every 2 scored without --every 2): a warning, in the JSON too.
   r = lsgd("eval --detections " + q(kTmp / "d8.csv") + " --gt " + q(kTmp / "skipped-gt.txt") +
@@ -125,17 +144,6 @@ TEST(EvalCli, ResultsAreWrittenAndInputsCheckedBeforeTheRun) {
   const auto self = read_json(kTmp / "c.json");
   EXPECT_EQ(self["warnings"].size(), 1u);
   EXPECT_EQ(self["declared_false"], 2) << self.dump();
-
-  // A folder whose name is not UTF-8: the JSON is written, the byte replaced.
-  const fs::path odd = kTmp / "odd\xff\xfe";
-  fs::create_directories(odd);
-  for (int i = 0; i < 4; ++i) write_image(odd / (std::to_string(i) + ".png"), i);
-  write_text(kTmp / "odd-gt.txt", "3 0\n");
-  r = lsgd("eval --sequence " + q(odd) + " --gt " + q(kTmp / "odd-gt.txt") + " --min-gap 1 --json " +
-           q(kTmp / "odd.json"));
-  ASSERT_EQ(r.code, 0) << r.err;
-  const std::string sequence = read_json(kTmp / "odd.json")["sequence"];
-  EXPECT_NE(sequence.find("odd\xEF\xBF\xBD"), std::string::npos) << sequence;  // U+FFFD
 }
 
 TEST(EvalCli, DetectionsErrorNamesFileAndLine) {

@@ -1,3 +1,8 @@
+// The synthetic street (synthetic.h): its world, route and rendering.
+// Over 600 lines: the renderer's shading helpers are shared by the world and
+// the rendering under one floating-point contraction setting (the pragmas
+// below), which keeps every frame bit-identical on every compiler; split over
+// two files, each would need the setting kept in step.
 #include "synthetic/synthetic.h"
 
 #include <algorithm>

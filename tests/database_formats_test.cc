@@ -72,27 +72,9 @@ TEST(Database, OptionsOfAnOlderVersionKeepTheirBehaviour) {
   EXPECT_EQ(resumed.size(), 12);
 }
 
-// A file of an older format: 1 (written before the loop decision kept its
-// state: no loop columns, a decision threshold that was a raw similarity) or
-// 2 (before frame ids: no frame column). Made from a current file with
-// append_all (whose rows but the last have no loop state): the newer columns
-// dropped, every row's checksum recomputed without them, the meta re-signed.
-std::string older_database(int format) {
-  const std::string path = temp_path("format" + std::to_string(format));
-  {
-    DetectorOptions o = options(kExhaustiveSearch, "temporal,geometric");
-    o.search.min_gap = 2;
-    o.verification.geometric_options.max_features = 32;
-    o.verification.temporal_options.place_cut = 0;  // formats 1 to 3 predate the places' records
-    Database db = Database::create(path, o);
-    Detector d(o);
-    run(d, 0, 12);
-    db.append_all(d, 0);
-  }
-  sqlite3* db = nullptr;
-  EXPECT_EQ(sqlite3_open(path.c_str(), &db), SQLITE_OK);
-  // Formats 1 to 3 kept the components' state in columns of their own: the
-  // version-1 records of the state column, moved there.
+// Formats 1 to 3 kept the components' state in columns of their own: the
+// version-1 records of the state column of `db`'s 12 rows, moved there.
+void move_state_into_columns(sqlite3* db) {
   for (int id = 0; id < 12; ++id) {
     sqlite3_stmt* st = nullptr;
     EXPECT_EQ(sqlite3_prepare_v2(db, ("SELECT state FROM frames WHERE id = " + std::to_string(id)).c_str(),
@@ -124,7 +106,11 @@ std::string older_database(int format) {
     EXPECT_EQ(sqlite3_step(st), SQLITE_DONE);
     sqlite3_finalize(st);
   }
-  // Each row's checksum as that format computed it (database.cc row_checksum).
+}
+
+// The SQL that sets each of the 12 rows' checksum as format `format`
+// computed it (database.cc row_checksum).
+std::string older_checksums(sqlite3* db, int format) {
   std::string sql;
   for (int id = 0; id < 12; ++id) {
     sqlite3_stmt* st = nullptr;
@@ -167,6 +153,30 @@ std::string older_database(int format) {
     sql += "UPDATE frames SET crc32 = " + std::to_string(crc) + " WHERE id = " +
            std::to_string(id) + ";";
   }
+  return sql;
+}
+
+// A file of an older format: 1 (written before the loop decision kept its
+// state: no loop columns, a decision threshold that was a raw similarity) or
+// 2 (before frame ids: no frame column). Made from a current file with
+// append_all (whose rows but the last have no loop state): the newer columns
+// dropped, every row's checksum recomputed without them, the meta re-signed.
+std::string older_database(int format) {
+  const std::string path = temp_path("format" + std::to_string(format));
+  {
+    DetectorOptions o = options(kExhaustiveSearch, "temporal,geometric");
+    o.search.min_gap = 2;
+    o.verification.geometric_options.max_features = 32;
+    o.verification.temporal_options.place_cut = 0;  // formats 1 to 3 predate the places' records
+    Database db = Database::create(path, o);
+    Detector d(o);
+    run(d, 0, 12);
+    db.append_all(d, 0);
+  }
+  sqlite3* db = nullptr;
+  EXPECT_EQ(sqlite3_open(path.c_str(), &db), SQLITE_OK);
+  move_state_into_columns(db);
+  std::string sql = older_checksums(db, format);
   sql += "ALTER TABLE frames DROP COLUMN state;";
   if (format < 3) sql += "ALTER TABLE frames DROP COLUMN frame;";
   if (format < 2) {

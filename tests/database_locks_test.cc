@@ -9,8 +9,10 @@
 #include <gtest/gtest.h>
 #include <dirent.h>
 #include <fcntl.h>
+#include <poll.h>
 #include <signal.h>
 #include <sqlite3.h>
+#include <sys/inotify.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -18,6 +20,7 @@
 #include <filesystem>
 #include <optional>
 #include <string>
+#include <thread>
 
 #include "lsgd/error.h"
 #include "database_test_support.h"
@@ -227,6 +230,65 @@ TEST(DatabaseLocks, AFileReplacedUnderTheWriterIsAnIoError) {
   Database fine = Database::create(kept, o);
   EXPECT_NO_THROW(fine.close());
   EXPECT_NO_THROW(Database::open(kept));
+}
+
+// Two creators of one new path (two `lsgd run --database NEW.db` started
+// together): the second to publish said "already exists" of a file that did
+// not exist when it began. It says another process created it, keeps nothing
+// of its own and leaves the other's file as it was. The other creator here is
+// a thread woken (inotify) when this creation's temporary file appears; when
+// it comes too late the creation wins and the race is tried again.
+TEST(Database, TheLoserOfTwoCreatorsOfOnePathSaysAnotherProcessCreatedIt) {
+  const std::string dir = temp_path("race");
+  fs::create_directories(dir);
+  const std::string path = dir + "/map.db";
+  const std::string tmp_name = "map.db.tmp-" + std::to_string(::getpid());
+  const DetectorOptions o = options(kExhaustiveSearch, "temporal");
+  bool raced = false;
+  for (int attempt = 0; attempt < 20 && !raced; ++attempt) {
+    for (const char* suffix : {"", "-wal", "-shm"}) fs::remove(path + suffix);
+    const int watch = ::inotify_init1(IN_CLOEXEC);
+    ASSERT_GE(watch, 0) << std::strerror(errno);
+    ASSERT_GE(::inotify_add_watch(watch, dir.c_str(), IN_CREATE), 0) << std::strerror(errno);
+    std::thread other([&] {
+      alignas(inotify_event) char buffer[4096];
+      for (;;) {
+        pollfd p{watch, POLLIN, 0};
+        if (::poll(&p, 1, 10000) <= 0) return;
+        const ssize_t n = ::read(watch, buffer, sizeof buffer);
+        for (ssize_t at = 0; at < n;) {
+          const auto* e = reinterpret_cast<const inotify_event*>(buffer + at);
+          if (e->len > 0 && tmp_name == e->name) {
+            const int fd = ::open(path.c_str(), O_WRONLY | O_CREAT | O_EXCL, 0644);
+            if (fd >= 0) {
+              EXPECT_EQ(::write(fd, "the other's", 11), 11);
+              ::close(fd);
+            }
+            return;
+          }
+          at += static_cast<ssize_t>(sizeof(inotify_event) + e->len);
+        }
+      }
+    });
+    std::string message;
+    try {
+      Database db = Database::create(path, o);  // the other thread came too late
+    } catch (const IoError& e) {
+      message = e.what();
+    }
+    other.join();
+    ::close(watch);
+    if (message.empty()) continue;
+    raced = true;
+    EXPECT_NE(message.find("was created by another process while this one created it"), std::string::npos)
+        << message;
+    EXPECT_NE(message.find(path), std::string::npos) << message;
+    EXPECT_EQ(database_test_support::read_bytes(path), "the other's");
+    for (const auto& entry : fs::directory_iterator(dir)) {
+      EXPECT_EQ(entry.path().string().find(".tmp-"), std::string::npos) << entry.path();
+    }
+  }
+  EXPECT_TRUE(raced) << "the other creator never came between the check and the publication in 20 tries";
 }
 
 }  // namespace

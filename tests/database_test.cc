@@ -10,11 +10,6 @@
 #include <gtest/gtest.h>
 #include <sqlite3.h>
 
-#include <fcntl.h>
-#include <poll.h>
-#include <sys/inotify.h>
-#include <unistd.h>
-
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
@@ -22,7 +17,6 @@
 #include <filesystem>
 #include <ostream>
 #include <string>
-#include <thread>
 #include <vector>
 
 #include "lsgd/error.h"
@@ -172,46 +166,72 @@ INSTANTIATE_TEST_SUITE_P(
       return name;
     });
 
-// The saved graph of index mode: damage is a FormatError naming the saved
-// index (kRebuild ignores it and resumes exactly); bytes that pass the
-// checksum but not the graph's own checks (links out of range, another map's
-// graph, cut short) are refused by Detector::restore_index, which leaves a
-// detector that rebuilds the graph and continues exactly.
-TEST(DatabaseIndex, DamagedSavedIndexIsRefusedAndRebuildIgnoresIt) {
-  DetectorOptions o = options(kIndexSearch, "temporal");
-  o.search.index.exhaustive_up_to = 0;  // the graph answers every query
-  constexpr std::int64_t kSplit = 140, kFrames = 220;
-  Detector reference(o);
-  const std::vector<Result> expected = run(reference, 0, kFrames);
-  const std::string path = temp_path("index_damage");
-  std::vector<std::uint8_t> graph;
-  {
-    Database db = Database::create(path, o);
-    Detector first(o);
+// The saved graph of index mode, saved after 140 of 220 frames, and what
+// resuming from it must give: the run of one detector over all 220.
+class DatabaseIndex : public ::testing::Test {
+ protected:
+  static constexpr std::int64_t kSplit = 140, kFrames = 220;
+
+  static DetectorOptions index_options() {
+    DetectorOptions o = options(kIndexSearch, "temporal");
+    o.search.index.exhaustive_up_to = 0;  // the graph answers every query
+    return o;
+  }
+  static void SetUpTestSuite() {
+    o_ = index_options();
+    Detector reference(o_);
+    expected_ = run(reference, 0, kFrames);
+    path_ = temp_path("index_damage");
+    Database db = Database::create(path_, o_);
+    Detector first(o_);
     run(first, 0, kSplit, &db);
     ASSERT_GT(db.save_index(first), 0);
-    ASSERT_GT(first.save_index(graph), 0);
+    ASSERT_GT(first.save_index(graph_), 0);
   }
-  const auto edit = [&](const char* sql) {
+  static void edit(const char* sql) {
     sqlite3* db = nullptr;
-    ASSERT_EQ(sqlite3_open(path.c_str(), &db), SQLITE_OK);
+    ASSERT_EQ(sqlite3_open(path_.c_str(), &db), SQLITE_OK);
     ASSERT_EQ(sqlite3_exec(db, sql, nullptr, nullptr, nullptr), SQLITE_OK) << sqlite3_errmsg(db);
     sqlite3_close(db);
-  };
-  const auto restore_error = [&](IndexUse use) {
-    Detector d(o);
+  }
+  static std::string restore_error(IndexUse use) {
+    Detector d(o_);
     try {
-      Database::open(path, Database::Mode::kReadOnly).restore(d, use);
+      Database::open(path_, Database::Mode::kReadOnly).restore(d, use);
     } catch (const FormatError& e) {
       return std::string(e.what());
     }
     return std::string();
-  };
-  const auto resumes_exactly = [&](Detector& d) {
+  }
+  static void resumes_exactly(Detector& d) {
     const std::vector<Result> tail = run(d, kSplit, kFrames);
-    for (std::size_t i = 0; i < tail.size(); ++i) expect_same(tail[i], expected[kSplit + i]);
-  };
+    for (std::size_t i = 0; i < tail.size(); ++i) expect_same(tail[i], expected_[kSplit + i]);
+  }
+  // Bytes with a valid checksum that are not this map's graph: refused by
+  // Detector::restore_index, which leaves a detector that rebuilds the graph
+  // and continues exactly.
+  static void refused(std::vector<std::uint8_t> bytes, const std::string& expected_message) {
+    SCOPED_TRACE(expected_message);
+    Detector d(o_);
+    Database::open(path_, Database::Mode::kReadOnly).restore(d, IndexUse::kRebuild);
+    const std::string e = message_of<InvalidArgument>([&] { d.restore_index(bytes.data(), bytes.size()); });
+    EXPECT_NE(e.find(expected_message), std::string::npos) << e;
+    std::vector<std::uint8_t> none;
+    EXPECT_EQ(d.save_index(none), 0);  // no half-restored graph
+    resumes_exactly(d);
+  }
 
+  inline static DetectorOptions o_;
+  inline static std::vector<Result> expected_;
+  inline static std::string path_;
+  inline static std::vector<std::uint8_t> graph_;
+};
+
+// Damage to the saved graph is a FormatError naming the saved index
+// (kRebuild ignores it and resumes exactly).
+TEST_F(DatabaseIndex, DamagedSavedIndexIsRefusedAndRebuildIgnoresIt) {
+  const std::string& path = path_;
+  const DetectorOptions& o = o_;
   // A flipped byte: the part's checksum.
   edit("UPDATE indexes SET data = CAST(substr(data, 1, 99) || x'5a' || substr(data, 101) AS BLOB) "
        "WHERE part = 0");
@@ -231,18 +251,15 @@ TEST(DatabaseIndex, DamagedSavedIndexIsRefusedAndRebuildIgnoresIt) {
   edit("UPDATE indexes SET part = 0, frames = 100000");
   m = restore_error(IndexUse::kSaved);
   EXPECT_NE(m.find("covers 100000 frames (140 stored"), std::string::npos) << m;
+}
 
-  // Bytes with a valid checksum that are not this map's graph.
-  const auto refused = [&](std::vector<std::uint8_t> bytes, const std::string& expected_message) {
-    SCOPED_TRACE(expected_message);
-    Detector d(o);
-    Database::open(path, Database::Mode::kReadOnly).restore(d, IndexUse::kRebuild);
-    const std::string e = message_of<InvalidArgument>([&] { d.restore_index(bytes.data(), bytes.size()); });
-    EXPECT_NE(e.find(expected_message), std::string::npos) << e;
-    std::vector<std::uint8_t> none;
-    EXPECT_EQ(d.save_index(none), 0);  // no half-restored graph
-    resumes_exactly(d);
-  };
+// Bytes that pass the checksum but not the graph's own checks (links out of
+// range, another map's graph, cut short) are refused by
+// Detector::restore_index, which leaves a detector that rebuilds the graph
+// and continues exactly.
+TEST_F(DatabaseIndex, AGraphThatIsNotThisMapsIsRefusedAndTheDetectorRebuildsIt) {
+  const DetectorOptions& o = o_;
+  const std::vector<std::uint8_t>& graph = graph_;
   // The first bottom-layer link (after the header: mark 8, version 8,
   // marker 4, seven integers, the generator text's size and text).
   std::int64_t text = 0;
@@ -392,65 +409,6 @@ TEST(Database, AFrameIsAppendedOnce) {
   db.append(d, r, 0);
   EXPECT_NE(message_of<InvalidArgument>([&] { db.append(d, r, 0); }).find("is stored already"), std::string::npos);
   EXPECT_EQ(db.frames(), 1);
-}
-
-// Two creators of one new path (two `lsgd run --database NEW.db` started
-// together): the second to publish said "already exists" of a file that did
-// not exist when it began. It says another process created it, keeps nothing
-// of its own and leaves the other's file as it was. The other creator here is
-// a thread woken (inotify) when this creation's temporary file appears; when
-// it comes too late the creation wins and the race is tried again.
-TEST(Database, TheLoserOfTwoCreatorsOfOnePathSaysAnotherProcessCreatedIt) {
-  const std::string dir = temp_path("race");
-  fs::create_directories(dir);
-  const std::string path = dir + "/map.db";
-  const std::string tmp_name = "map.db.tmp-" + std::to_string(::getpid());
-  const DetectorOptions o = options(kExhaustiveSearch, "temporal");
-  bool raced = false;
-  for (int attempt = 0; attempt < 20 && !raced; ++attempt) {
-    for (const char* suffix : {"", "-wal", "-shm"}) fs::remove(path + suffix);
-    const int watch = ::inotify_init1(IN_CLOEXEC);
-    ASSERT_GE(watch, 0) << std::strerror(errno);
-    ASSERT_GE(::inotify_add_watch(watch, dir.c_str(), IN_CREATE), 0) << std::strerror(errno);
-    std::thread other([&] {
-      alignas(inotify_event) char buffer[4096];
-      for (;;) {
-        pollfd p{watch, POLLIN, 0};
-        if (::poll(&p, 1, 10000) <= 0) return;
-        const ssize_t n = ::read(watch, buffer, sizeof buffer);
-        for (ssize_t at = 0; at < n;) {
-          const auto* e = reinterpret_cast<const inotify_event*>(buffer + at);
-          if (e->len > 0 && tmp_name == e->name) {
-            const int fd = ::open(path.c_str(), O_WRONLY | O_CREAT | O_EXCL, 0644);
-            if (fd >= 0) {
-              EXPECT_EQ(::write(fd, "the other's", 11), 11);
-              ::close(fd);
-            }
-            return;
-          }
-          at += static_cast<ssize_t>(sizeof(inotify_event) + e->len);
-        }
-      }
-    });
-    std::string message;
-    try {
-      Database db = Database::create(path, o);  // the other thread came too late
-    } catch (const IoError& e) {
-      message = e.what();
-    }
-    other.join();
-    ::close(watch);
-    if (message.empty()) continue;
-    raced = true;
-    EXPECT_NE(message.find("was created by another process while this one created it"), std::string::npos)
-        << message;
-    EXPECT_NE(message.find(path), std::string::npos) << message;
-    EXPECT_EQ(database_test_support::read_bytes(path), "the other's");
-    for (const auto& entry : fs::directory_iterator(dir)) {
-      EXPECT_EQ(entry.path().string().find(".tmp-"), std::string::npos) << entry.path();
-    }
-  }
-  EXPECT_TRUE(raced) << "the other creator never came between the check and the publication in 20 tries";
 }
 
 TEST(Database, CreateIsAtomicAndNeverOverwrites) {

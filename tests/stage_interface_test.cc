@@ -102,30 +102,42 @@ TEST(StageRegistry, ARegisteredStageRunsInTheDetectorThroughTheInterfaceAlone) {
   }
   EXPECT_GT(examined, 50);
   EXPECT_EQ(odd_reported, 0);
-  {
-    // With geometry the decision also examines the continuation of the
-    // previous frame's loop; the gate judges it too.
-    DetectorOptions g = o;
-    parse_verification_stages("temporal,geometric,test-even", g.verification);
-    DetectorOptions plain = g;
-    plain.verification.stages = {kTemporalStage, kGeometricStage};
-    Detector with(g), without(plain);
-    int odd_loops_without = 0, loops = 0;
-    for (int lap = 0; lap < 3; ++lap) {
-      for (int p = 0; p < kPlaces; ++p) {
-        const Result a = with.process(place(p, lap));
-        const Result b = without.process(place(p, lap));
-        EXPECT_FALSE(a.loop && a.best.frame % 2 != 0) << "query " << a.frame;
-        loops += a.loop ? 1 : 0;
-        odd_loops_without += b.loop && b.best.frame % 2 != 0 ? 1 : 0;
-      }
-    }
-    EXPECT_GT(loops, 10);
-    EXPECT_GT(odd_loops_without, 10);  // the gate had work to do
-  }
+}
 
-  // Its state travels in the frame's state blob: a detector restored from
-  // the blobs continues exactly as the original.
+// With geometry the decision also examines the continuation of the previous
+// frame's loop; a registered gate judges it too.
+TEST(StageRegistry, ARegisteredGateJudgesTheContinuationToo) {
+  register_test_stage();
+  DetectorOptions g = route_options("temporal");
+  parse_verification_stages("temporal,geometric,test-even", g.verification);
+  DetectorOptions plain = g;
+  plain.verification.stages = {kTemporalStage, kGeometricStage};
+  Detector with(g), without(plain);
+  int odd_loops_without = 0, loops = 0;
+  for (int lap = 0; lap < 3; ++lap) {
+    for (int p = 0; p < kPlaces; ++p) {
+      const Result a = with.process(place(p, lap));
+      const Result b = without.process(place(p, lap));
+      EXPECT_FALSE(a.loop && a.best.frame % 2 != 0) << "query " << a.frame;
+      loops += a.loop ? 1 : 0;
+      odd_loops_without += b.loop && b.best.frame % 2 != 0 ? 1 : 0;
+    }
+  }
+  EXPECT_GT(loops, 10);
+  EXPECT_GT(odd_loops_without, 10);  // the gate had work to do
+}
+
+// A registered stage's state travels in the frame's state blob: a detector
+// restored from the blobs continues exactly as the original, and one without
+// the stage refuses its records.
+TEST(StageRegistry, ARegisteredStagesStateIsRestoredAndRefusedWithoutIt) {
+  register_test_stage();
+  DetectorOptions o = route_options("temporal");
+  parse_verification_stages("test-even,temporal", o.verification);
+  Detector d(o);
+  for (int lap = 0; lap < 2; ++lap) {
+    for (int p = 0; p < kPlaces; ++p) d.process(place(p, lap));
+  }
   Detector restored(o);
   for (std::int64_t f = 0; f < d.size(); ++f) {
     Descriptor copy;

@@ -1,0 +1,1 @@
+"""The hostile-user campaign's classes and helpers (scripts/hostile_campaign.py)."""

@@ -240,6 +240,52 @@ TEST(Cli, IntegerFlagsBeyond64BitsOrBelowZeroAreRefusedAsTyped) {
   EXPECT_EQ(within.err.find("far beyond"), std::string::npos) << within.err;
 }
 
+// Numbers on the command line are decimal, read as --option and a config
+// read them: CLI11 took a leading 0 for octal (--first 010 kept frame 8
+// onwards, though frame 10 is the image 010.png), 0x10 for 16, ' 5' for 5
+// (and '5 ' as an error), and refused --threshold 1e400 as "inf".
+TEST(Cli, NumbersAreDecimalAsTypedWithLeadingZeros) {
+  const fs::path dir = kTmp / "padded";
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  cv::Mat image(48, 64, CV_8UC1);
+  for (int i = 0; i < 12; ++i) {
+    cv::randu(image, 0, 255);
+    std::ostringstream name;
+    name << std::setw(3) << std::setfill('0') << i << ".png";
+    ASSERT_TRUE(cv::imwrite((dir / name.str()).string(), image));
+  }
+  const CmdResult run = lsgd("run --sequence '" + dir.string() + "' --first 010 --last 011");
+  ASSERT_EQ(run.code, 0) << run.err;
+  EXPECT_EQ(run.out.find("008.png"), std::string::npos) << run.out;
+  EXPECT_NE(run.out.find("010.png"), std::string::npos) << run.out;
+  EXPECT_EQ(lines_of(run.out), 3) << run.out;
+  const CmdResult gap = lsgd("options --yaml --min-gap 010");
+  ASSERT_EQ(gap.code, 0) << gap.err;
+  EXPECT_NE(gap.out.find("min_gap: 10 "), std::string::npos) << gap.out;
+  const std::pair<const char*, const char*> refused[] = {
+      {"options --yaml --min-gap 0x10", "--min-gap: '0x10' is not a decimal integer"},
+      {"options --yaml --min-gap ' 5'", "--min-gap: ' 5' is not a decimal integer"},
+      {"options --yaml --min-gap 08", nullptr},
+      {"options --yaml --threshold 0x10", "--threshold: '0x10' is not a number"},
+      {"options --yaml --threshold ' 5'", "--threshold: ' 5' is not a number"},
+      {"options --yaml --threshold 1e400",
+       "--threshold: value 1e400 is out of range: beyond what a double holds"},
+      {"demo --seed 0X1F", "--seed: '0X1F' is not a decimal integer"},
+  };
+  for (const auto& [args, expected] : refused) {
+    const CmdResult r = lsgd(args);
+    if (expected == nullptr) {  // 08 is 8, not an octal digit too many
+      EXPECT_EQ(r.code, 0) << args << ": " << r.err;
+      EXPECT_NE(r.out.find("min_gap: 8 "), std::string::npos) << r.out;
+      continue;
+    }
+    EXPECT_EQ(r.code, 1) << args;
+    EXPECT_NE(r.err.find(expected), std::string::npos) << args << ": " << r.err;
+    EXPECT_EQ(lines_of(r.err), 1) << r.err;
+  }
+}
+
 // An empty value (an unset shell variable) names nothing: refused, naming
 // the flag, where it was read as 0 (eval's required --min-gap) or the default.
 TEST(Cli, EmptyValuesAreRefusedNamingTheFlag) {

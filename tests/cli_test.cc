@@ -286,6 +286,26 @@ TEST(Cli, NumbersAreDecimalAsTypedWithLeadingZeros) {
   }
 }
 
+// lsgd db forget --frames is read as typed, before the database is opened
+// for writing: a newline or spaces before an id were skipped (' 5:' forgot
+// from frame 5; '5: ' was refused), and the message echoed a long value
+// whole, twice.
+TEST(Cli, DbForgetFramesAreReadAsTypedBeforeTheDatabaseIsOpened) {
+  const std::pair<std::string, std::string> cases[] = {
+      {"' 5:'", "--frames ' 5:': ' 5' is not a frame id in [0, 9007199254740991]"},
+      {"\"$(printf '1:\\n2')\"", "--frames '1:\\x0a2': '\\x0a2' is not a frame id"},
+      {"1:" + std::string(1000, '9'), "... (1002 bytes)': '999"},
+  };
+  for (const auto& [frames, expected] : cases) {
+    const CmdResult r = lsgd("db forget no-such.db --frames " + frames);
+    EXPECT_EQ(r.code, 1) << frames;
+    EXPECT_NE(r.err.find(expected), std::string::npos) << frames << ": " << r.err;
+    EXPECT_EQ(r.err.find("does not exist"), std::string::npos) << r.err;
+    EXPECT_LT(r.err.size(), 400u) << r.err;
+    EXPECT_EQ(lines_of(r.err), 1) << r.err;
+  }
+}
+
 // An empty value (an unset shell variable) names nothing: refused, naming
 // the flag, where it was read as 0 (eval's required --min-gap) or the default.
 TEST(Cli, EmptyValuesAreRefusedNamingTheFlag) {

@@ -306,6 +306,22 @@ TEST(Cli, DbForgetFramesAreReadAsTypedBeforeTheDatabaseIsOpened) {
   }
 }
 
+// A flag given twice is said to be, with its values (CLI11 said "At Most 1
+// required but received 2").
+TEST(Cli, AFlagGivenTwiceIsSaidToBe) {
+  const std::pair<const char*, const char*> cases[] = {
+      {"options --min-gap 5 --min-gap 6", "--min-gap is given more than once ('5', '6'): give it once"},
+      {"run --sequence a.txt --sequence b.txt", "--sequence is given more than once ('a.txt', 'b.txt')"},
+  };
+  for (const auto& [args, expected] : cases) {
+    const CmdResult r = lsgd(args);
+    EXPECT_EQ(r.code, 1) << args;
+    EXPECT_NE(r.err.find(expected), std::string::npos) << args << ": " << r.err;
+    EXPECT_EQ(r.err.find("At Most"), std::string::npos) << r.err;
+    EXPECT_EQ(lines_of(r.err), 1) << r.err;
+  }
+}
+
 // An empty value (an unset shell variable) names nothing: refused, naming
 // the flag, where it was read as 0 (eval's required --min-gap) or the default.
 TEST(Cli, EmptyValuesAreRefusedNamingTheFlag) {

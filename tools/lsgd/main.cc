@@ -164,6 +164,17 @@ std::string usage_message(CLI::App& app, const CLI::ParseError& e, int argc, cha
     }
   }
   std::string what = e.what();
+  // A flag given twice: CLI11 said "--min-gap: At Most 1 required but received 2".
+  const std::size_t twice = what.find(": At Most 1 required but received ");
+  if (dynamic_cast<const CLI::ArgumentMismatch*>(&e) != nullptr && twice != std::string::npos) {
+    const std::string flag = what.substr(0, twice);
+    std::string values;
+    if (const CLI::Option* o = cmd->get_option_no_throw(flag)) {
+      for (const std::string& v : o->results()) values += (values.empty() ? "'" : ", '") + shown_value(v) + "'";
+    }
+    return flag + " is given more than once" + (values.empty() ? "" : " (" + values + ")") +
+           ": give it once (" + path_of(cmd) + " --help for the usage)";
+  }
   // CLI11's "Could not convert: --threshold = VALUE" echoes the value whole.
   const std::size_t at = what.find(" = ");
   if (dynamic_cast<const CLI::ConversionError*>(&e) != nullptr && at != std::string::npos) {

@@ -256,8 +256,10 @@ bool jpeg_reaches_eoi(const std::vector<unsigned char>& b) {
 // told from a real image (docs/reliability.md).
 struct JpegCheck {
   jpeg_error_mgr pub;
+  jpeg_progress_mgr progress;
   std::jmp_buf jump;
-  std::string damage;  // the first warning that means lost data
+  std::string damage;   // the first warning that means lost data
+  std::string refused;  // more scans than kMaxJpegScans
 };
 
 void jpeg_fail(j_common_ptr info) {
@@ -283,6 +285,22 @@ void jpeg_message(j_common_ptr info, int level) {
     char text[JMSG_LENGTH_MAX];
     (*info->err->format_message)(info, text);
     check->damage = text;
+    // The file is refused: decoding on (libjpeg would) only costs time; a
+    // 396 KB file repeating one progressive scan 10,000 times took 118 s.
+    std::longjmp(check->jump, 1);
+  }
+}
+
+// Called by libjpeg as it reads; stops a JPEG of more than kMaxJpegScans
+// scans (libjpeg-turbo's djpeg -maxscans does the same).
+void jpeg_progress(j_common_ptr info) {
+  JpegCheck* check = reinterpret_cast<JpegCheck*>(info->err);
+  const int scan = reinterpret_cast<j_decompress_ptr>(info)->input_scan_number;
+  if (scan > kMaxJpegScans) {
+    check->refused = concat("a progressive JPEG of more than ", kMaxJpegScans,
+                            " scans (encoders write up to a few dozen), each a pass over every "
+                            "coefficient: refused at scan ", scan);
+    std::longjmp(check->jump, 1);
   }
 }
 
@@ -301,12 +319,15 @@ std::string decode_jpeg(const std::vector<unsigned char>& bytes, cv::Mat& out, s
   info.err = jpeg_std_error(&check.pub);
   check.pub.error_exit = jpeg_fail;
   check.pub.emit_message = jpeg_message;
+  check.progress.progress_monitor = jpeg_progress;
   if (setjmp(check.jump) != 0) {
     jpeg_destroy_decompress(&info);
     out.release();
-    return check.damage;
+    refused = check.refused;
+    return check.refused.empty() ? check.damage : "";
   }
   jpeg_create_decompress(&info);
+  info.progress = &check.progress;
   jpeg_mem_src(&info, bytes.data(), static_cast<unsigned long>(bytes.size()));
   jpeg_read_header(&info, TRUE);
   if (jpeg_has_multiple_scans(&info)) {  // every coefficient is kept until the last scan

@@ -428,6 +428,7 @@ CLASS_NAMES = {
     13: 'MAT cells, match sizes, missing lists, bare __new__',
     14: 'links, old logs, special names, newlines, empty flags',
     15: 'lists inside folders, one writer per output, cut pairs, sweep values',
+    16: 'decimal numbers, demo folders, deep and tiled images, configs',
 }
 
 
@@ -3478,9 +3479,115 @@ def class15():
     c.check(r.rc != 0 and "the values '5' and '5.0'" in r.stderr, 'not refused', r)
     c.done()
 
+def tiff_tiled(tile_w, tile_h, side=64):
+    """A little-endian 8-bit gray TIFF of SIDE x SIDE pixels in tiles of TILE_W x TILE_H, 64 bytes of data."""
+    data = bytes(64)
+    entries = [(256, 4, side), (257, 4, side), (258, 3, 8), (259, 3, 1), (262, 3, 1), (277, 3, 1),
+               (322, 4, tile_w), (323, 4, tile_h), (324, 4, 8), (325, 4, len(data))]
+    ifd = struct.pack('<H', len(entries))
+    for tag, typ, val in entries:
+        ifd += struct.pack('<HHIHH', tag, typ, 1, val, 0) if typ == 3 else struct.pack('<HHII', tag, typ, 1, val)
+    return b'II*\0' + struct.pack('<I', 8 + len(data)) + data + ifd + struct.pack('<I', 0)
+
+
+def class16():
+    """Issue 35, the eighth pass (2026-12-07): numbers with leading zeros,
+    lsgd demo --output through a folder that does not exist yet, 16-bit,
+    large-tile and many-scan images under 1 MB, db forget --frames as typed,
+    a NUL byte in a config, a flag given twice."""
+    print('\n=== class 16: decimal numbers, demo folders, deep and tiled images, configs', flush=True)
+    root = fresh(os.path.join(WORK, 'c16'))
+    corr = copy_corridor(os.path.join(root, 'corr'))
+    names = corr_list(corr)
+
+    cwd = fresh(os.path.join(root, 'padded'))
+    c = Case(16, 'lsgd run --first 010 --last 011 on images 000.jpg .. 011.jpg',
+             'frames 10 and 11, images 010.jpg and 011.jpg (CLI11 read 010 as octal 8)')
+    for i in range(12):
+        shutil.copy(os.path.join(corr, names[i]), os.path.join(cwd, '%03d.jpg' % i))
+    r = c.run(['run', '--sequence', '.', '--first', '010', '--last', '011', '--output', os.path.join(root, 'p.csv')], cwd)
+    rows = read_csv_rows(os.path.join(root, 'p.csv')) or []
+    c.check(r.rc == 0 and [os.path.basename(row[1]) for row in rows] == ['010.jpg', '011.jpg'],
+            'rows name %s' % [row[1] for row in rows], r)
+    c.done()
+
+    cwd = fresh(os.path.join(root, 'demo'))
+    c = Case(16, 'lsgd demo --output new/.. where the folder holds notes.txt and a sequence.txt',
+             'refused as the folder itself is (it wrote its files there, replacing sequence.txt)')
+    write(os.path.join(cwd, 'sequence.txt'), b'mine.png\n')
+    write(os.path.join(cwd, 'notes.txt'), b'mine\n')
+    r = c.run(['demo', '--mode', 'exhaustive', '--output', 'new/..'], cwd, timeout=120,
+              extra_inputs=['sequence.txt', 'notes.txt'])
+    msg(16, c.name, r)
+    c.check(r.rc != 0 and "it holds 'notes.txt'" in r.stderr, 'not refused', r)
+    c.check(not os.path.exists(os.path.join(cwd, 'images')), 'images were written')
+    c.done()
+
+    big16 = b'\x89PNG\r\n\x1a\n' + png_chunk(b'IHDR', struct.pack('>IIBBBBB', 8192, 6144, 16, 6, 0, 0, 0))
+    big16 += png_chunk(b'IDAT', zlib.compress(b''.join(b'\0' + bytes(8192 * 8) for _ in range(6144)), 9))
+    big16 += png_chunk(b'IEND', b'')
+    for label, ext, data, needle in (('a 16-bit RGBA PNG of 8192 x 6144 pixels (391 KB)', '.png', big16, '16-bit samples'),
+                                     ('a TIFF of 64 x 64 pixels in tiles of 32768 x 32752 (180 bytes)', '.tiff',
+                                      tiff_tiled(32768, 32752), 'declares tiles of 32768 x 32752')):
+        cwd = fresh(os.path.join(root, 'deep' + ext[1:]))
+        c = Case(16, '%s among good frames' % label,
+                 'skipped from its header naming it; under 256 MB and 1 s (458 MB and 2.3 s; 4.3 GB and 12 s)')
+        for i, n in enumerate(names[:6]):
+            shutil.copy(os.path.join(corr, n), os.path.join(cwd, '%02d.jpg' % (2 * i)))
+        write(os.path.join(cwd, '05' + ext), data)
+        r = c.run(['run', '--sequence', cwd, '--output', os.path.join(root, ext[1:] + '.csv')], root)
+        msg(16, c.name, r)
+        c.check(r.rc == 0 and needle in r.stderr and 'nothing was decoded' in r.stderr, 'not skipped from its header', r)
+        c.check(r.maxrss_kb < 256 * 1024 and r.elapsed < 1, 'used %d MB, %.1f s' % (r.maxrss_kb // 1024, r.elapsed), r)
+        c.done()
+
+    cwd = fresh(os.path.join(root, 'scans'))
+    c = Case(16, 'a progressive JPEG of 4096 x 4096 pixels repeating its last scan 1000 times (99 KB)',
+             'skipped naming the damage; under 256 MB and 1 s (14 s before)')
+    try:
+        from PIL import Image   # the progressive encoder; the case is skipped without it
+        buf = io.BytesIO()
+        Image.new('L', (4096, 4096), 128).save(buf, 'JPEG', progressive=True, quality=90)
+        jpeg = buf.getvalue()
+        eoi, last = jpeg.rindex(b'\xff\xd9'), jpeg.rindex(b'\xff\xda')
+        write(os.path.join(cwd, 'scans.jpg'), jpeg[:eoi] + jpeg[last:eoi] * 1000 + jpeg[eoi:])
+        write(os.path.join(cwd, 'list.txt'), b'scans.jpg\n')
+        r = c.run(['run', '--sequence', 'list.txt', '--output', 's.csv'], cwd)
+        msg(16, c.name, r)
+        c.check('damaged JPEG' in r.stderr and 'scans.jpg' in r.stderr, 'not refused as damaged', r)
+        c.check(r.maxrss_kb < 256 * 1024 and r.elapsed < 1, 'used %d MB, %.1f s' % (r.maxrss_kb // 1024, r.elapsed), r)
+    except ImportError:
+        info(16, c.name, 'skipped: no PIL to write a progressive JPEG')
+    c.done()
+
+    cwd = fresh(os.path.join(root, 'forget'))
+    c = Case(16, "lsgd db forget --frames ' 5:' (a space before the id)",
+             'refused naming the value before the database is opened; the database unchanged')
+    r = c.run(['run', '--sequence', os.path.join(corr, 'sequence.txt'), '--last', '20', '--database', 'd.db'], cwd)
+    before = db_dump(os.path.join(cwd, 'd.db'))
+    r = c.run(['db', 'forget', 'd.db', '--frames', ' 5:'], cwd)
+    msg(16, c.name, r)
+    c.check(r.rc != 0 and "' 5' is not a frame id" in r.stderr, 'not refused', r)
+    c.check(db_dump(os.path.join(cwd, 'd.db')) == before, 'the database changed')
+    c.done()
+
+    cwd = fresh(os.path.join(root, 'config'))
+    c = Case(16, 'a config with a NUL byte; a flag given twice',
+             "'a NUL byte on line 2'; '--min-gap is given more than once' (yaml-cpp: 'unknown escape "
+             "character'; CLI11: 'At Most 1 required')")
+    write(os.path.join(cwd, 'nul.yaml'), b'search:\n  mode: nodes\0\n')
+    r = c.run(['options', '--config', 'nul.yaml'], cwd)
+    msg(16, c.name, r)
+    c.check(r.rc != 0 and 'a NUL byte on line 2' in r.stderr, 'the NUL byte not said', r)
+    r = c.run(['options', '--min-gap', '5', '--min-gap', '6'], cwd)
+    msg(16, c.name, r)
+    c.check(r.rc != 0 and '--min-gap is given more than once' in r.stderr, 'the flag given twice not said', r)
+    c.done()
+
+
 CLASSES = {1: 'class1', 2: 'class2', 3: 'class3', 4: 'class4', 5: 'class5', 6: 'class6',
            7: 'class7', 8: 'class8', 10: 'class10', 11: 'class11', 12: 'class12', 13: 'class13', 14: 'class14',
-           15: 'class15'}
+           15: 'class15', 16: 'class16'}
 
 
 def main():

@@ -3494,7 +3494,8 @@ def class16():
     """Issue 35, the eighth pass (2026-12-07): numbers with leading zeros,
     lsgd demo --output through a folder that does not exist yet, 16-bit,
     large-tile and many-scan images under 1 MB, db forget --frames as typed,
-    a NUL byte in a config, a flag given twice."""
+    scores and poses whose span overflows, a NUL byte in a config, a flag
+    given twice."""
     print('\n=== class 16: decimal numbers, demo folders, deep and tiled images, configs', flush=True)
     root = fresh(os.path.join(WORK, 'c16'))
     corr = copy_corridor(os.path.join(root, 'corr'))
@@ -3569,6 +3570,27 @@ def class16():
     msg(16, c.name, r)
     c.check(r.rc != 0 and "' 5' is not a frame id" in r.stderr, 'not refused', r)
     c.check(db_dump(os.path.join(cwd, 'd.db')) == before, 'the database changed')
+    c.done()
+
+    cwd = fresh(os.path.join(root, 'span'))
+    c = Case(16, 'detections scored +-1e308, and --poses at x = +-1e308, under eval --report',
+             "refused naming the line or the file (the report's charts were '-nan', exit 0)")
+    write(os.path.join(cwd, 'g.txt'), b'4 0\n5 1\n7 3\n')
+    write(os.path.join(cwd, 'd.csv'), b'query,match,score\n4,0,1e308\n5,1,-1e308\n7,3,1\n')
+    r = c.run(['eval', '--detections', 'd.csv', '--gt', 'g.txt', '--min-gap', '1', '--frames', '8',
+               '--json', 'd.json', '--report', 'd.html'], cwd)
+    msg(16, c.name, r)
+    c.check(r.rc != 0 and 'd.csv:2: score 1e308 is beyond' in r.stderr, 'the scores were not refused', r)
+    seq = os.path.join(BASE, 'corr', 'sequence.txt')
+    n = len(corr_list(os.path.join(BASE, 'corr')))
+    write(os.path.join(cwd, 'poses.txt'), ''.join('1 0 0 %s 0 1 0 0 0 0 1 0\n' % ('1e308' if i % 2 else '-1e308')
+                                                  for i in range(n)).encode())
+    r = c.run(['eval', '--sequence', seq, '--gt', os.path.join(BASE, 'corr', 'groundtruth.txt'), '--min-gap', '20',
+               '--json', 'p.json', '--report', 'p.html', '--poses', 'poses.txt'], cwd)
+    msg(16, c.name, r)
+    c.check(r.rc != 0 and 'more than a double holds' in r.stderr and 'poses.txt' in r.stderr,
+            'the poses were not refused', r)
+    c.check(not os.path.exists(os.path.join(cwd, 'p.json')), 'the run went on')
     c.done()
 
     cwd = fresh(os.path.join(root, 'config'))

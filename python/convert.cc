@@ -142,8 +142,15 @@ lsgd::DetectorOptions make_options(const py::object& options, const py::kwargs& 
   if (!options.is_none()) {
     if (py::isinstance<py::dict>(options)) {
       set_options(o, options.cast<py::dict>());
-    } else {
+    } else if (py::isinstance<py::str>(options) || py::isinstance<py::bytes>(options) ||
+               py::hasattr(options, "__fspath__")) {
       o = lsgd::io::load_config(path_of(options, "options"));  // a YAML file
+    } else {
+      // Not "is not a path": a dict of options is what most callers give
+      // (lsgd.options(detector) was told only of paths).
+      throw lsgd::InvalidArgument("options: " + std::string(py::str(py::type::of(options).attr("__name__"))) +
+                                  " is neither a dict of options ({'search.mode': 'nodes'}) nor the path of a "
+                                  "YAML config (str, bytes or os.PathLike)");
     }
   }
   set_options(o, kwargs);

@@ -46,7 +46,7 @@ from hostile.files import fresh, setup_base
 
 CLASSES = {1: 'class1', 2: 'class2', 3: 'class3', 4: 'class4', 5: 'class5', 6: 'class6',
            7: 'class7', 8: 'class8', 10: 'class10', 11: 'class11', 12: 'class12', 13: 'class13', 14: 'class14',
-           15: 'class15'}
+           15: 'class15', 16: 'class16'}
 
 
 def main():

@@ -214,51 +214,6 @@ TEST(Cli, VersionSuggestionsExitCodesAndDefaults) {
   }
 }
 
-// An integer flag given a number beyond 64 bits, or a negative one where only
-// 0 and up make sense, is refused naming it: CLI11 alone read
-// --seed 99999999999999999999999 as seed 18446744073709551615 and --seed -5
-// as 18446744073709551611.
-TEST(Cli, IntegerFlagsBeyond64BitsOrBelowZeroAreRefusedAsTyped) {
-  const std::pair<const char*, const char*> cases[] = {
-      {"demo --seed 99999999999999999999999",
-       "--seed: value 99999999999999999999999 is out of range: far beyond the values it takes"},
-      {"demo --seed -5", "--seed: value -5 is out of range: must be 0 or more"},
-      {"demo --min-gap 99999999999999999999999",
-       "--min-gap: value 99999999999999999999999 is out of range"},
-      {"demo --min-gap -99999999999999999999999",
-       "--min-gap: value -99999999999999999999999 is out of range"},
-  };
-  for (const auto& [args, expected] : cases) {
-    const CmdResult r = lsgd(args);
-    EXPECT_EQ(r.code, 1) << args;
-    EXPECT_NE(r.err.find(expected), std::string::npos) << args << ": " << r.err;
-    EXPECT_EQ(lines_of(r.err), 1) << r.err;
-  }
-  // Within 64 bits the flag's own checks still speak (the window's range).
-  const CmdResult within = lsgd("demo --min-gap 9223372036854775807");
-  EXPECT_EQ(within.code, 1);
-  EXPECT_EQ(within.err.find("far beyond"), std::string::npos) << within.err;
-}
-
-// An empty value (an unset shell variable) names nothing: refused, naming
-// the flag, where it was read as 0 (eval's required --min-gap) or the default.
-TEST(Cli, EmptyValuesAreRefusedNamingTheFlag) {
-  const std::pair<const char*, const char*> cases[] = {
-      {"eval --detections /dev/null --gt /dev/null --min-gap ''", "--min-gap: an empty value"},
-      {"run --sequence s.txt --last ''", "--last: an empty value"},
-      {"run --sequence s.txt --every ''", "--every: an empty value"},
-      {"options --threshold ''", "--threshold: an empty value"},
-      {"options --verify ''", "--verify: an empty value"},
-      {"demo --output ''", "--output: an empty"},
-  };
-  for (const auto& [args, expected] : cases) {
-    const CmdResult r = lsgd(args);
-    EXPECT_EQ(r.code, 1) << args;
-    EXPECT_NE(r.err.find(expected), std::string::npos) << args << ": " << r.err;
-    EXPECT_EQ(lines_of(r.err), 1) << r.err;
-  }
-}
-
 // Values and keys the user typed are shown cut, on one line, in every
 // message that echoes them (internal::shown_value), and an input file that
 // cannot be reached says why rather than CLI11's "File does not exist"

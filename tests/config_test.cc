@@ -315,6 +315,18 @@ TEST(ParseConfig, MoreNodesThanAConfigCanHaveAreRefusedFirst) {
   EXPECT_NO_THROW(parse_config(to_yaml(DetectorOptions{}), kSource));
 }
 
+// A NUL byte (a binary file, UTF-16 without a byte-order mark) is said to
+// be one, on its line: yaml-cpp's message was "unknown escape character:
+// \x0a" of a config holding no escape.
+TEST(ParseConfig, ANulByteIsSaidToBeOne) {
+  expect_error<FormatError>(std::string("search:\n  mode: nodes\0\n", 23),
+                            {kSource, "invalid YAML: a NUL byte on line 2", "UTF-8 text"});
+  expect_error<FormatError>(std::string("\0\0", 2), {kSource, "a NUL byte on line 1"});
+  // UTF-16 with its byte-order mark is YAML, and read.
+  const std::string utf16("\xff\xfes\0e\0a\0r\0c\0h\0:\0 \0{\0}\0\n\0", 24);
+  EXPECT_NO_THROW(parse_config(utf16, kSource));
+}
+
 // Nesting deeper than a config can be is refused from the parser's events
 // too: 500 levels got yaml-cpp's "bad file", and with a small stack its
 // recursion overflowed first.

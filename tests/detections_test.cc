@@ -305,6 +305,7 @@ TEST_F(DetectionsTest, LsgdRunRankingColumnsAreReadAndChecked) {
   EXPECT_EQ(at(records, 0).ranking->best.frame, -1);
   expect_line_error(header + "1,b.png,-1,0,5,1,5,12,x,2.5,1\n", 2, "ranked_frame 'x'");
   expect_line_error(header + "1,b.png,-1,0,5,1,5,12,0,inf,1\n", 2, "ranked_score 'inf'");
+  expect_line_error(header + "1,b.png,-1,0,5,1,5,12,0,1e300,1\n", 2, "ranked_score 1e300 is beyond");
   expect_line_error(header + "1,b.png,-1,0,5,1,5,12,0,2.5,yes\n", 2, "ranked_confirmed 'yes'");
   expect_line_error(header + "1,b.png,-1,0,5,1,5,12,10,2.5,1\n", 2, "ranked_frame 10 is outside");
 }
@@ -371,6 +372,10 @@ TEST_F(DetectionsTest, MalformedRowsNameFileAndLine) {
   expect_line_error("# c\n\n1,0\n", 3, "at least 3 fields");
   expect_line_error("query,match,score\n1,0,abc\n", 2, "score 'abc'");
   expect_line_error("1,0,nan\n", 1, "score 'nan'");
+  // Finite, but spanning more than a double holds: the report's charts
+  // were '-nan' (and a histogram bin was cast from NaN).
+  expect_line_error("1,0,1e308\n2,0,-1e308\n", 1, "score 1e308 is beyond the +-1e+15 lsgd reads");
+  expect_line_error("1,0,0.5\n2,0,-1e16\n", 2, "score -1e16 is beyond");
   expect_line_error("-2,0,0.5\n", 1, "query '-2'");
   expect_line_error("1,-5,0.5\n", 1, "match '-5'");
   expect_line_error("1,0,0.5\n12,0,0.5\n", 2, "query 12 is outside the 10 frames");

@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "lsgd/error.h"
+#include "lsgd/similarity.h"
 
 namespace {
 
@@ -80,3 +81,19 @@ TEST(Distractor, ABaseThatIsNotAnExactDescriptorIsRefused) {
 }
 
 }  // namespace
+
+// A distractor counts what its base counts: one of a gradient descriptor
+// had no type ("") and was scored against intensity descriptors.
+TEST(Distractor, KeepsWhatItsBaseCounts) {
+  lsgd::Descriptor base = spiked_base(), intensity = spiked_base();
+  base.type = "gradient (threshold 1.5, orientations 32)";
+  intensity.type = "intensity";
+  for (const auto storage : {lsgd::HistogramStorage::kExact, lsgd::HistogramStorage::kCompact}) {
+    lsgd::Descriptor exact, out;
+    lsgd::eval::make_distractor(base, 3, 1, storage, exact, out);
+    EXPECT_EQ(exact.type, base.type);
+    EXPECT_EQ(out.type, base.type);
+    EXPECT_THROW(lsgd::similarity(out.view(), intensity.view(), lsgd::SimilarityMetric::kReference),
+                 lsgd::InvalidArgument);
+  }
+}

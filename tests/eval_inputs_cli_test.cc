@@ -77,7 +77,11 @@ TEST(EvalCli, ResultsAreWrittenAndInputsCheckedBeforeTheRun) {
   // before the run, as --compare.
   write_text(kTmp / "poses-3.txt", "1 0 0 0 0 1 0 0 0 0 1 0\n1 0 0 0 0 1 0 0 0 0 1 0\n1 0 0 0 0 1 0 0 0 0 1 0\n");
   write_text(kTmp / "poses-nan.txt", "1 0 0 nan 0 1 0 0 0 0 1 0\n");
-  for (const char* poses : {"poses-3.txt", "poses-nan.txt"}) {
+  // Finite positions whose span is not (+-1e308): the map was all '-nan'.
+  std::string wide;
+  for (int i = 0; i < 8; ++i) wide += std::string("1 0 0 ") + (i % 2 ? "1e308" : "-1e308") + " 0 1 0 0 0 0 1 0\n";
+  write_text(kTmp / "poses-wide.txt", wide);
+  for (const char* poses : {"poses-3.txt", "poses-nan.txt", "poses-wide.txt"}) {
     r = lsgd("eval --sequence " + q(dir) + " --gt " + q(kTmp / "skipped-gt.txt") + " --min-gap 1 --json " +
              q(kTmp / "c.json") + " --output " + q(csv) + " --report " + q(kTmp / "p.html") + " --poses " +
              q(kTmp / poses));
@@ -86,6 +90,8 @@ TEST(EvalCli, ResultsAreWrittenAndInputsCheckedBeforeTheRun) {
     EXPECT_EQ(r.err.find("skipped frame 3"), std::string::npos) << poses << ": the run started: " << r.err;
     EXPECT_FALSE(fs::exists(csv));
   }
+  EXPECT_NE(r.err.find("positions span x from -1e+308 to 1e+308, more than a double holds"), std::string::npos)
+      << r.err;
   // The same with --detections: --compare and --poses are read before anything is scored.
   write_text(kTmp / "d8.csv", "query,match,score\n4,0,1\n5,1,1\n6,-1,\n7,3,1\n");
   for (const std::string& extra : {" --compare " + q(kTmp / "nowhere.csv"),

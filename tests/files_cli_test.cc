@@ -481,6 +481,23 @@ TEST_F(Files, DemoNeverWritesIntoAForeignFolder) {
                  {foreign / "notes.txt"});
 }
 
+// A folder spelt through one that does not exist yet (`new/..`) is the
+// folder it lands in once that is created: lsgd demo wrote its files into a
+// foreign folder, replacing its sequence.txt. A dangling link said "cannot
+// create 'link/images': File exists" after printing the route.
+TEST_F(Files, DemoOutputSpeltThroughANewFolderIsTheFolderItLandsIn) {
+  const fs::path foreign = kTmp / "foreign-up";
+  fs::create_directories(foreign);
+  std::ofstream(foreign / "sequence.txt") << "images/a.png\n";
+  std::ofstream(foreign / "notes.txt") << "mine\n";
+  expect_refused("demo --mode exhaustive --output " + q(foreign / "new" / ".."), "it holds '",
+                 {foreign / "sequence.txt", foreign / "notes.txt"});
+  EXPECT_FALSE(fs::exists(foreign / "images"));
+  fs::create_symlink(kTmp / "nowhere" / "x", kTmp / "dangling");
+  expect_refused("demo --mode exhaustive --output " + q(kTmp / "dangling"),
+                 "is a symbolic link to '" + (kTmp / "nowhere" / "x").string() + "', which does not exist", {});
+}
+
 // A folder an earlier demo wrote is its own, whatever mode wrote it (index
 // mode's results-index.csv was missing from the demo's list of its files).
 TEST_F(Files, DemoWritesAgainIntoTheFolderAnEarlierDemoWrote) {

@@ -121,6 +121,17 @@ TEST(GtCli, StatsPrintsAndWritesJson) {
   EXPECT_EQ(j["window_positives"], 1);
 }
 
+// The median gap is printed whole: the stream's 6 digits wrote the gap
+// 9999997 as "median 1e+07" beside "max 9999997".
+TEST(GtCli, StatsPrintsTheMedianGapWhole) {
+  const fs::path src = write_file("far.txt", "9999999 2\n");
+  const CmdResult r = lsgd("gt stats '" + src.string() + "'");
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_TRUE(contains(r.out, "gap (frames): min 9999997, median 9999997, max 9999997")) << r.out;
+  const CmdResult half = lsgd("gt stats '" + write_file("half.txt", "1234570 0\n1234571 0\n").string() + "'");
+  EXPECT_TRUE(contains(half.out, "median 1234570.5, max 1234571")) << half.out;
+}
+
 TEST(GtCli, BadInputExitsNonZeroNamingTheFile) {
   const fs::path corrupt =
       write_file("corrupt.mat", std::string("MATLAB 5.0 MAT-file") + std::string(200, '\x07'));

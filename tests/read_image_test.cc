@@ -7,6 +7,7 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <array>
 #include <filesystem>
 #include <fstream>
 #include <iterator>
@@ -258,6 +259,72 @@ TEST_F(SequenceTest, FloatTiffIsFormatError) {
   }
   if (!written) GTEST_SKIP() << "this OpenCV cannot write float TIFF";
   expect_error<FormatError>([&] { read_image(p); }, {p, "float"});
+}
+
+// Samples of more than 8 bits, which lsgd does not read, are refused from
+// the header, before any decoding: a 391 KB 16-bit RGBA PNG of 8192 x 6144
+// pixels cost 458 MB and 2.3 s decoded before its depth was refused.
+TEST_F(SequenceTest, SamplesOfMoreThan8BitsAreRefusedFromTheHeader) {
+  const cv::Mat deep(8, 8, CV_16UC4, cv::Scalar(1000, 2000, 3000, 4000));
+  for (const char* ext : {".png", ".tiff"}) {
+    SCOPED_TRACE(ext);
+    std::vector<uchar> b;
+    ASSERT_TRUE(cv::imencode(ext, deep, b));
+    const std::string p = write(std::string("deep") + ext, std::string(b.begin(), b.end()));
+    expect_error<FormatError>([&] { read_image(p); }, {p, "16-bit samples", "8-bit", "nothing was decoded"});
+  }
+  const std::string pgm = write("deep.pgm", "P5 2 2 65535\n" + std::string(8, 'x'));
+  expect_error<FormatError>([&] { read_image(pgm); }, {pgm, "16-bit samples", "nothing was decoded"});
+  // The bomb: an RGBA 16-bit PNG's header claiming 8192 x 6144 pixels.
+  std::vector<uchar> b;
+  ASSERT_TRUE(cv::imencode(".png", deep, b));
+  std::string bomb(b.begin(), b.end());
+  for (const auto& [at, v] : {std::pair<std::size_t, std::uint32_t>{16, 8192}, {20, 6144}}) {
+    for (int k = 0; k < 4; ++k) bomb[at + k] = static_cast<char>(v >> (24 - 8 * k));
+  }
+  const std::string p = write("deep-bomb.png", bomb);
+  expect_error<FormatError>([&] { read_image(p); }, {p, "16-bit samples", "nothing was decoded"});
+}
+
+// A TIFF's tile is decoded whole, whatever the image's size: a 180-byte
+// file of 64 x 64 pixels in tiles of 32768 x 32752 cost 4.3 GB and 12 s
+// before it was refused as not decodable. Tiles larger than an image lsgd
+// reads are refused from the header; 64 x 64 pixels in one 256 x 256 tile
+// (the usual tile, larger than the image) are read.
+TEST_F(SequenceTest, TiffTilesLargerThanAnImageLsgdReadsAreRefusedFromTheHeader) {
+  // A little-endian TIFF of 64 x 64 pixels, 8-bit gray, uncompressed, in
+  // one tile of the given size.
+  const auto tiff = [](std::uint32_t tile_width, std::uint32_t tile_height, const std::string& pixels) {
+    std::string b = std::string("II*\0", 4);
+    const auto u16 = [&](std::uint32_t v) { b += static_cast<char>(v & 0xFF), b += static_cast<char>(v >> 8); };
+    const auto u32 = [&](std::uint32_t v) { u16(v & 0xFFFF), u16(v >> 16); };
+    u32(8 + static_cast<std::uint32_t>(pixels.size()));
+    b += pixels;
+    const std::vector<std::array<std::uint32_t, 3>> entries = {  // tag, type, value
+        {256, 4, 64}, {257, 4, 64}, {258, 3, 8}, {259, 3, 1}, {262, 3, 1}, {277, 3, 1},
+        {322, 4, tile_width}, {323, 4, tile_height}, {324, 4, 8},
+        {325, 4, static_cast<std::uint32_t>(pixels.size())}};
+    u16(static_cast<std::uint32_t>(entries.size()));
+    for (const auto& [tag, type, value] : entries) {
+      u16(tag), u16(type), u32(1);
+      if (type == 3) {
+        u16(value), u16(0);
+      } else {
+        u32(value);
+      }
+    }
+    u32(0);
+    return b;
+  };
+  for (const auto& [w, h] : {std::pair<std::uint32_t, std::uint32_t>{32768, 32752}, {16384, 16384}, {8192, 8192}}) {
+    const std::string p = write("tiles.tiff", tiff(w, h, std::string(64, '\0')));
+    expect_error<FormatError>([&] { read_image(p); },
+                              {p, "declares tiles of " + std::to_string(w) + " x " + std::to_string(h),
+                               "nothing was decoded"});
+  }
+  const cv::Mat image = read_image(write("tile.tiff", tiff(256, 256, std::string(256 * 256, '\x7f'))));
+  EXPECT_EQ(image.cols, 64);
+  EXPECT_EQ(image.at<unsigned char>(63, 63), 0x7f);
 }
 
 // The size a header declares is checked before anything is decoded: a few

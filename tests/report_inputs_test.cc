@@ -188,6 +188,15 @@ TEST(Report, InvalidInputThrows) {
   in = valid();
   in.trajectory.assign(10, {0.0, std::nan("")});
   EXPECT_THROW(render_report(in), InvalidArgument);
+  // Finite positions whose span is not: the map's scale was NaN, every
+  // point '-nan'. A span just below a double's range is drawn.
+  in = valid();
+  for (int i = 0; i < 10; ++i) in.trajectory.push_back({0.0, i % 2 ? 1e308 : -1e308});
+  EXPECT_NE(test::message_of<InvalidArgument>([&] { render_report(in); })
+                .find("trajectory's positions span z from -1e+308 to 1e+308, more than a double holds"),
+            std::string::npos);
+  for (auto& p : in.trajectory) p[1] *= 0.8;
+  EXPECT_EQ(render_report(in).find("'-nan'"), std::string::npos);
   in = valid();
   in.max_matrix_frames = 1;
   EXPECT_NE(test::message_of<InvalidArgument>([&] { render_report(in); }).find("max_matrix_frames"),

@@ -29,6 +29,14 @@ constexpr std::int64_t kMaxImagePixels = std::int64_t{8192} * 6144;
 // Memory a JPEG decoder may need besides the image (a progressive JPEG keeps
 // every coefficient): io::read_image refuses more from the header.
 constexpr std::int64_t kMaxJpegCoefficientBytes = std::int64_t{256} << 20;
+// Scans of a progressive JPEG: each is a pass over every coefficient (a
+// 99 KB file repeating one scan 1000 times took 14 s). Encoders write 10
+// (libjpeg's progression) to a few dozen; io::read_image refuses more.
+constexpr int kMaxJpegScans = 100;
+// A score in a detections file (another system's similarity, distance or
+// log-likelihood): at most 10^15 either side of 0. Scores of +-1e308 are
+// finite, but their span is not (the report's charts were '-nan').
+constexpr double kMaxDetectionScore = 1e15;
 // A temporal window, tolerance or frame step: 10^9 frames.
 constexpr std::int64_t kMaxWindowFrames = 1'000'000'000;
 // A YAML configuration file: 64 KiB (a detector config with every option and

@@ -312,6 +312,12 @@ def test_paths_shapes_and_options_a_hostile_user_tries(tmp_path):
         lsgd.read_image(str(tmp_path / "0.pgm") + "\0.txt")
     with pytest.raises(lsgd.InvalidArgument, match="int is not a path"):
         lsgd.open_sequence(5)
+    # Options are a dict or a config's path: anything else is told both.
+    for call in (lambda: lsgd.options(lsgd.Detector()), lambda: lsgd.Detector([("a", 1)]),
+                 lambda: lsgd.Database.create(tmp_path / "o.db", 5)):
+        with pytest.raises(lsgd.InvalidArgument, match=r"options: \w+ is neither a dict of options .* nor the path"):
+            call()
+    assert not os.path.exists(tmp_path / "o.db")
     # (H, W, 1) is gray; an empty image or a side above 16384 is refused before any copy.
     a, b = lsgd.Detector(), lsgd.Detector()
     for f in frames:

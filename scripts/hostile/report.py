@@ -40,6 +40,7 @@ CLASS_NAMES = {
     13: 'MAT cells, match sizes, missing lists, bare __new__',
     14: 'links, old logs, special names, newlines, empty flags',
     15: 'lists inside folders, one writer per output, cut pairs, sweep values',
+    16: 'decimal numbers, demo folders, deep and tiled images, configs',
 }
 
 

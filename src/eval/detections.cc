@@ -62,6 +62,19 @@ std::optional<double> parse_double(const std::string& s) {
   return v;
 }
 
+// A score field: a finite number within kMaxDetectionScore of 0.
+double score_of(const std::string& where, const char* column, const std::string& text) {
+  const auto v = parse_double(text);
+  if (!v || !std::isfinite(*v)) {
+    throw FormatError(concat(where, ": ", column, " '", internal::shown_value(text), "' is not a finite number"));
+  }
+  if (std::abs(*v) > kMaxDetectionScore) {
+    throw FormatError(concat(where, ": ", column, " ", internal::shown_value(text), " is beyond the +-", kMaxDetectionScore,
+                             " lsgd reads (the report draws scores to scale)"));
+  }
+  return *v;
+}
+
 // Which field holds what; -1: absent.
 // `loop`: lsgd run's loop_frame (the loop it declared, -1 for none); other
 // systems' files have none and every reported match counts as declared.
@@ -192,13 +205,7 @@ Row parse_row(const std::vector<std::string>& f, const Columns& c, const std::st
   row.query = *query;
   row.match = *match;
   const std::string& score = f[static_cast<std::size_t>(c.score)];
-  if (row.match >= 0) {
-    const auto s = parse_double(score);
-    if (!s || !std::isfinite(*s)) {
-      throw FormatError(concat(where, ": score '", score, "' is not a finite number"));
-    }
-    row.score = *s;
-  }
+  if (row.match >= 0) row.score = score_of(where, "score", score);
   row.declared = row.match >= 0;
   if (c.loop >= 0) {
     const auto loop = parse_int(f[static_cast<std::size_t>(c.loop)]);
@@ -235,14 +242,11 @@ Row parse_row(const std::vector<std::string>& f, const Columns& c, const std::st
     if (!j || *j < -1 || *j >= kMaxFrames) {
       throw FormatError(concat(where, ": ranked_frame '", frame, "' is not a frame id or -1"));
     }
-    const auto v = parse_double(ranked_score);
-    if (!v || !std::isfinite(*v)) {
-      throw FormatError(concat(where, ": ranked_score '", ranked_score, "' is not a finite number"));
-    }
+    const double v = score_of(where, "ranked_score", ranked_score);
     if (confirmed != "0" && confirmed != "1") {
       throw FormatError(concat(where, ": ranked_confirmed '", confirmed, "' is neither 0 nor 1"));
     }
-    row.ranking = Ranking{Candidate{*j, *v}, confirmed == "1"};
+    row.ranking = Ranking{Candidate{*j, v}, confirmed == "1"};
   }
   return row;
 }

@@ -36,6 +36,9 @@ void make_distractor(const Descriptor& base, std::int64_t k, std::int64_t run, H
   for (int c = cells - 1; c > 0; --c) std::swap(order[static_cast<std::size_t>(c)], order[next(s) % (c + 1)]);
   exact.grid = base.grid;
   exact.storage = HistogramStorage::kExact;
+  // What its bins count is its base's: a distractor of a gradient
+  // descriptor had none ("") and was scored against intensity descriptors.
+  exact.type = base.type;
   exact.hist.assign(base.hist.size(), 0);
   exact.pixels = base.pixels;
   for (int c = 0; c < cells; ++c) {
@@ -50,7 +53,7 @@ void make_distractor(const Descriptor& base, std::int64_t k, std::int64_t run, H
     }
   }
   if (storage == HistogramStorage::kCompact) {
-    compact(exact, out);
+    compact(exact, out);  // keeps the type
   } else {
     out = exact;
   }

@@ -531,6 +531,11 @@ void ReportInput::check() const {
       internal::throw_invalid("report: trajectory position (", p[0], ", ", p[1], ") is not finite");
     }
   }
+  // Positions of +-1e308 are finite, but their span is not: the map's
+  // scale was NaN and every point '-nan'.
+  if (const std::string span = trajectory_span_beyond_doubles(trajectory); !span.empty()) {
+    internal::throw_invalid("report: the trajectory's ", span);
+  }
   internal::check_range("report: max_examples", max_examples, 0, 50);
   if (width < 0 || height < 0 || grid_rows < 0 || grid_cols < 0) {
     internal::throw_invalid("report: image size ", width, "x", height, " or grid ", grid_rows, "x",

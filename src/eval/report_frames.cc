@@ -1,6 +1,8 @@
 // The report's sections about single frames: example loops as thumbnails
-// and the score of every frame over time.
+// and the score of every frame over time; whether a trajectory's positions
+// can be drawn to scale.
 #include <algorithm>
+#include <cmath>
 #include <opencv2/core.hpp>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
@@ -10,6 +12,7 @@
 #include <vector>
 
 #include "eval/report_svg.h"
+#include "internal/check.h"
 #include "lsgd/error.h"
 
 namespace lsgd::eval::report {
@@ -177,3 +180,22 @@ void timeline_section(std::ostream& html, const ReportInput& in, const Operating
 }
 
 }  // namespace lsgd::eval::report
+
+namespace lsgd::eval {
+
+std::string trajectory_span_beyond_doubles(const std::vector<std::array<double, 2>>& positions) {
+  for (const int axis : {0, 1}) {
+    double lo = 0, hi = 0;
+    for (std::size_t k = 0; k < positions.size(); ++k) {
+      lo = k == 0 ? positions[k][axis] : std::min(lo, positions[k][axis]);
+      hi = k == 0 ? positions[k][axis] : std::max(hi, positions[k][axis]);
+    }
+    if (!std::isfinite(hi - lo)) {
+      return internal::concat("positions span ", axis == 0 ? "x" : "z", " from ", lo, " to ", hi,
+                              ", more than a double holds");
+    }
+  }
+  return "";
+}
+
+}  // namespace lsgd::eval

@@ -1,5 +1,6 @@
 #include "lsgd/io/config.h"
 
+#include <algorithm>
 #include <yaml-cpp/eventhandler.h>
 #include <yaml-cpp/yaml.h>
 
@@ -302,6 +303,13 @@ std::vector<YAML::Node> load_documents(const std::string& text, const std::strin
     }
     return YAML::LoadAll(text);
   } catch (const YAML::Exception& e) {
+    // A NUL byte is no YAML text: yaml-cpp said "unknown escape character:
+    // \x0a" of a file that holds no escape.
+    if (const std::size_t nul = text.find('\0'); nul != std::string::npos) {
+      throw FormatError(concat(source, ": invalid YAML: a NUL byte on line ",
+                               1 + std::count(text.begin(), text.begin() + static_cast<std::ptrdiff_t>(nul), '\n'),
+                               " (a binary file, or UTF-16 without a byte-order mark?): a config is UTF-8 text"));
+    }
     const std::string line = e.mark.is_null() ? "" : concat(" (line ", e.mark.line + 1, ")");
     throw FormatError(concat(source, ": invalid YAML: ", e.msg, line));
   }

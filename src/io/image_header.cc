@@ -66,6 +66,7 @@ void read_png(const Bytes& b, ImageHeader& h) {
   if (!starts_with(b, "IHDR", 4, 12)) return;
   h.width = be(b, 16, 4), h.height = be(b, 20, 4);
   const std::int64_t depth = be(b, 24, 1), colour = be(b, 25, 1), interlace = be(b, 28, 1);
+  h.sample_bits = static_cast<int>(std::max<std::int64_t>(depth, 0));
   const int channels = colour == 0 || colour == 3 ? 1 : colour == 2 ? 3 : colour == 4 ? 2 : colour == 6 ? 4 : 0;
   std::int64_t idat = 0;
   std::size_t at = 8;
@@ -188,6 +189,7 @@ void read_pnm(const Bytes& b, ImageHeader& h) {
       h.pnm_maxval = static_cast<int>(std::min<std::int64_t>(number(token()), 1 << 20));
     }
   }
+  if (h.pnm_maxval > 255) h.sample_bits = 16;
   if (h.width <= 0 || h.height <= 0 || depth <= 0 || depth > 4 || h.width > (1 << 20) || h.height > (1 << 20)) {
     return;
   }
@@ -208,7 +210,9 @@ void read_pnm(const Bytes& b, ImageHeader& h) {
   }
 }
 
-// TIFF and BigTIFF: ImageWidth (256) and ImageLength (257) of the first IFD.
+// TIFF and BigTIFF: ImageWidth (256), ImageLength (257), BitsPerSample
+// (258: its first value, inline or at its offset), TileWidth (322),
+// TileLength (323) and SampleFormat (339) of the first IFD.
 void read_tiff(const Bytes& b, ImageHeader& h) {
   const bool little = b[0] == 'I';
   const auto u = [&](std::size_t at, std::size_t n) { return little ? le(b, at, n) : be(b, at, n); };
@@ -223,10 +227,18 @@ void read_tiff(const Bytes& b, ImageHeader& h) {
     const std::size_t e = first + static_cast<std::size_t>(k) * entry;
     const std::int64_t tag = u(e, 2), type = u(e + 2, 2);
     if (tag < 0 || type < 0) return;
-    if (tag != 256 && tag != 257) continue;
     const std::size_t value = e + (big ? 12 : 8);
     const std::int64_t v = type == 3 ? u(value, 2) : type == 4 ? u(value, 4) : type == 16 ? u(value, 8) : -1;
-    (tag == 256 ? h.width : h.height) = v;
+    if (tag == 256 || tag == 257) (tag == 256 ? h.width : h.height) = v;
+    if (tag == 322 || tag == 323) (tag == 322 ? h.tile_width : h.tile_height) = v;
+    if (tag == 339) h.float_samples = v == 3;
+    if (tag == 258 && type == 3) {
+      const std::int64_t n = big ? u(e + 4, 8) : u(e + 4, 4);
+      const std::int64_t offset = n * 2 <= (big ? 8 : 4) ? static_cast<std::int64_t>(value)
+                                                         : (big ? u(value, 8) : u(value, 4));
+      const std::int64_t bits = offset < 0 ? -1 : u(static_cast<std::size_t>(offset), 2);
+      h.sample_bits = static_cast<int>(std::clamp<std::int64_t>(bits, 0, 1 << 16));
+    }
   }
 }
 

@@ -10,6 +10,8 @@
 
 #include "commands.h"
 #include "common.h"
+#include "internal/check.h"
+#include "internal/numbers.h"
 #include "lsgd/error.h"
 #include "lsgd/io/database.h"
 #include "lsgd/limits.h"
@@ -98,7 +100,7 @@ struct DbForgetArgs {
 std::pair<std::int64_t, std::int64_t> parse_id_range(const std::string& text) {
   const auto colon = text.find(':');
   const auto bad = [&](const std::string& why) {
-    return InvalidArgument("--frames '" + text + "': " + why +
+    return InvalidArgument("--frames '" + internal::shown_value(text) + "': " + why +
                            " (FIRST:LAST, frame ids as lsgd run numbered them; FIRST: or :LAST for "
                            "an open end)");
   };
@@ -107,17 +109,14 @@ std::pair<std::int64_t, std::int64_t> parse_id_range(const std::string& text) {
   }
   const auto number = [&](const std::string& part, std::int64_t open) {
     if (part.empty()) return open;
-    std::size_t used = 0;
-    long long v = 0;
-    try {
-      v = std::stoll(part, &used);
-    } catch (const std::exception&) {
-      used = 0;
+    // Decimal as typed: stoll skipped leading spaces and newlines (' 5:'
+    // was 5, '5: ' an error).
+    std::int64_t v = 0;
+    if (!internal::parses_as(part, v) || v < 0 || v > kMaxFrameId) {
+      throw bad("'" + internal::shown_value(part) + "' is not a frame id in [0, " +
+                std::to_string(kMaxFrameId) + "]");
     }
-    if (used != part.size() || v < 0 || v > kMaxFrameId) {
-      throw bad("'" + part + "' is not a frame id in [0, " + std::to_string(kMaxFrameId) + "]");
-    }
-    return static_cast<std::int64_t>(v);
+    return v;
   };
   const std::int64_t first = number(text.substr(0, colon), 0);
   const std::int64_t last = number(text.substr(colon + 1), kMaxFrameId);
@@ -129,6 +128,9 @@ void db_forget(const DbForgetArgs& args) {
   if (args.session.has_value() == !args.frames.empty()) {
     throw InvalidArgument("lsgd db forget: give --session S or --frames FIRST:LAST (one of them)");
   }
+  // The range is read before the database is opened for writing.
+  const auto [first, last] =
+      args.session ? std::pair<std::int64_t, std::int64_t>() : parse_id_range(args.frames);
   io::Database db = io::Database::open(args.path);
   const bool had_index = db.info().index_frames > 0;
   std::int64_t forgotten = 0;
@@ -137,7 +139,6 @@ void db_forget(const DbForgetArgs& args) {
     forgotten = db.forget_session(*args.session);
     what = "session " + std::to_string(*args.session);
   } else {
-    const auto [first, last] = parse_id_range(args.frames);
     forgotten = db.forget(first, last);
     what = last == kMaxFrameId ? "ids from " + std::to_string(first)
            : first == 0       ? "ids up to " + std::to_string(last)

@@ -4,6 +4,7 @@
 // scores them against ground truth moved onto the evaluated frames.
 #include <CLI/CLI.hpp>
 #include <opencv2/core.hpp>
+#include <array>
 #include <fstream>
 #include <filesystem>
 #include <iostream>
@@ -182,6 +183,11 @@ std::vector<eval::Pose> report_poses(const EvalArgs& args, const eval::GroundTru
     throw FormatError("--poses " + args.poses + " has " + std::to_string(poses.size()) +
                       " poses but " + std::to_string(gt.frames()) +
                       " frames are evaluated (subsampled sequences: subsample the poses too)");
+  }
+  std::vector<std::array<double, 2>> positions;
+  for (const eval::Pose& p : poses) positions.push_back({p.x, p.z});
+  if (const std::string span = eval::trajectory_span_beyond_doubles(positions); !span.empty()) {
+    throw FormatError("--poses " + args.poses + ": its " + span + " (the report could not draw them)");
   }
   return poses;
 }

@@ -1,7 +1,9 @@
 // lsgd gt convert SOURCE --output FILE [--format F] [--frames N] [--distance D] [--min-gap G]
 // lsgd gt stats SOURCE [--format F] [--frames N] [--distance D] [--min-gap W] [--json FILE]
 #include <CLI/CLI.hpp>
+#include <iomanip>
 #include <iostream>
+#include <sstream>
 #include <memory>
 #include <optional>
 
@@ -93,12 +95,16 @@ void stats(const GtArgs& a) {
   files.check();
   const eval::GroundTruth gt = eval::load_groundtruth(a.source, o);
   const eval::GtStats s = eval::gt_stats(gt, a.min_gap.value_or(0));
+  // The median gap is a whole or a half frame count: written whole (the
+  // stream's 6 digits printed 9999997 as "1e+07").
+  std::ostringstream median;
+  median << std::setprecision(17) << s.gap_median;
   std::cout << "ground truth: " << a.source << " (" << o.format << ")\n"
             << "frames: " << s.frames << "\n"
             << "pairs: " << s.pairs << "\n"
             << "positive queries: " << s.positives << "\n"
             << "frames in loops: " << s.frames_in_loops << "\n"
-            << "gap (frames): min " << s.gap_min << ", median " << s.gap_median << ", max "
+            << "gap (frames): min " << s.gap_min << ", median " << median.str() << ", max "
             << s.gap_max << "\n";
   if (a.min_gap) {
     std::cout << "with min gap " << s.min_gap << ": positive queries " << s.window_positives

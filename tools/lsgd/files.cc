@@ -79,19 +79,16 @@ void check_folder(const std::string& flag, const std::string& path, const std::s
   }
 }
 
-// An output folder: missing (created below a writable folder) or holding only
-// what the command writes there itself (the names `own`, `marker` among them).
-void check_output_folder(const std::string& flag, const std::string& path,
-                         const std::vector<std::string>& own, const std::string& marker) {
-  struct stat st {};
-  if (::stat(path.c_str(), &st) != 0) {
-    check_folder(flag, path, folder_of(fs::path(path).lexically_normal().string()));
-    return;
-  }
+// An output folder that exists (`where`: `path`, or the folder it lands in)
+// holds only what the command writes there itself (the names `own`,
+// `marker` among them).
+void check_existing_output_folder(const std::string& flag, const std::string& path,
+                                  const std::string& where, const struct stat& st,
+                                  const std::vector<std::string>& own, const std::string& marker) {
   if (!S_ISDIR(st.st_mode)) unwritable(flag, path, "it exists and is not a folder");
   std::error_code ec;
   bool empty = true, marked = false;
-  for (const auto& entry : fs::directory_iterator(path, ec)) {
+  for (const auto& entry : fs::directory_iterator(where, ec)) {
     const std::string name = entry.path().filename().string();
     empty = false;
     marked = marked || name == marker;
@@ -107,10 +104,35 @@ void check_output_folder(const std::string& flag, const std::string& path,
                                  "did not write it; give a new or empty folder (nothing was "
                                  "run)"));
   }
-  if (::access(path.c_str(), W_OK | X_OK) != 0) {
+  if (::access(where.c_str(), W_OK | X_OK) != 0) {
     unwritable(flag, path, concat("the folder is not writable (", std::strerror(errno), ")"));
   }
   if (!internal::mode_allows_writing(st.st_mode)) unwritable(flag, path, "the folder is read-only (no write permission at all)");
+}
+
+// An output folder: missing (created below a writable folder) or holding only
+// what the command writes there itself.
+void check_output_folder(const std::string& flag, const std::string& path,
+                         const std::vector<std::string>& own, const std::string& marker) {
+  struct stat st {};
+  if (::stat(path.c_str(), &st) == 0) {
+    check_existing_output_folder(flag, path, path, st, own, marker);
+    return;
+  }
+  std::error_code ec;
+  if (fs::is_symlink(fs::symlink_status(path, ec))) {
+    unwritable(flag, path, concat("it is a symbolic link to '", fs::read_symlink(path, ec).string(),
+                                  "', which does not exist"));
+  }
+  // `new/..` names no folder yet, but the one it lands in once `new` is
+  // created (`lsgd demo --output new/..` wrote into a folder holding other
+  // files): that folder is the output.
+  const fs::path lands = fs::weakly_canonical(path, ec);
+  if (!ec && ::stat(lands.c_str(), &st) == 0) {
+    check_existing_output_folder(flag, path, lands.string(), st, own, marker);
+    return;
+  }
+  check_folder(flag, path, folder_of(fs::path(path).lexically_normal().string()));
 }
 
 // An output already checked: the flag that names it and its path.

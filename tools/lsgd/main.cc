@@ -22,6 +22,7 @@
 #include "common.h"
 #include "internal/check.h"
 #include "internal/names.h"
+#include "internal/numbers.h"
 #include "lsgd/error.h"
 #include "lsgd/io/files.h"
 
@@ -55,40 +56,66 @@ void hide_sentinel_defaults(CLI::App& app) {
   for (CLI::App* sub : app.get_subcommands({})) hide_sentinel_defaults(*sub);
 }
 
-// CLI11 reads an integer beyond 64 bits as the largest one (strtoll
-// saturates): --seed 99999999999999999999999 ran seed 18446744073709551615
-// and --min-gap's message named a value nobody typed. Every integer option
-// refuses such text, naming it, before it is converted.
-void refuse_integer_overflow(CLI::App& app) {
-  // `unsigned_type`: a negative value would wrap around (--seed -5 ran
-  // seed 18446744073709551611).
-  const auto fits = [](bool unsigned_type) {
-    return CLI::Validator(
-        [unsigned_type](std::string& text) -> std::string {
-          const std::size_t sign = !text.empty() && (text[0] == '-' || text[0] == '+') ? 1 : 0;
-          if (text.size() == sign || text.find_first_not_of("0123456789", sign) != std::string::npos) {
-            return {};  // not digits: CLI11's own conversion error
+// CLI11 converts an integer with strtoll(text, base 0) and a real with
+// strtod: an integer beyond 64 bits was read as the largest one (--seed
+// 99999999999999999999999 ran seed 18446744073709551615, and --min-gap's
+// message named a value nobody typed), a leading 0 made the number octal
+// (--first 010 kept frame 8 onwards, the frame 000010.png names; 08 was
+// "not in range"), 0x10 was 16, ' 5' was 5 but '5 ' an error, and
+// --threshold 1e400 was refused as "inf". Every number flag is read as
+// --option and a config read it (internal::parse_number: decimal, one
+// optional '+', nothing around it) before CLI11 converts it, and handed
+// on in its plain decimal spelling.
+CLI::Validator number_as_typed(const std::string& type) {
+  return CLI::Validator(
+      [type](std::string& text) -> std::string {
+        if (text.empty()) return {};  // refuse_empty_values says so
+        if (type == "FLOAT") {
+          double v = 0;
+          const std::errc ec = lsgd::internal::parse_number(text, v);
+          if (ec == std::errc::result_out_of_range) {
+            return "value " + shown_value(text) + " is out of range: beyond what a double holds";
           }
-          if (unsigned_type && text[0] == '-' && text.find_first_not_of('0', 1) != std::string::npos) {
-            return "value " + text + " is out of range: must be 0 or more";
+          return ec == std::errc() ? std::string()
+                                   : "'" + shown_value(text) + "' is not a number (decimal, as 7, 2.5 or 1e-3)";
+        }
+        const std::size_t sign = text[0] == '-' || text[0] == '+' ? 1 : 0;
+        if (text.size() == sign || text.find_first_not_of("0123456789", sign) != std::string::npos) {
+          // What strtoll would read, but not as decimal digits: refused here.
+          // Any other text is left to the flag's own check or to CLI11's
+          // conversion error ("'1e3' is not a frame count from 1 to ...").
+          const bool hex = text.size() > sign + 1 && text[sign] == '0' && (text[sign + 1] | 0x20) == 'x';
+          if (hex || text.find_first_of(" \t\n\v\f\r") != std::string::npos) {
+            return "'" + shown_value(text) + "' is not a decimal integer (digits, as 12 or -3)";
           }
-          const char* first = text.data() + (text[0] == '+' ? 1 : 0);
-          const char* last = text.data() + text.size();
-          std::int64_t i = 0;
-          std::uint64_t u = 0;
-          if (std::from_chars(first, last, i).ec == std::errc() ||
-              (text[0] != '-' && std::from_chars(first, last, u).ec == std::errc())) {
-            return {};
-          }
+          return {};
+        }
+        // `UINT`: a negative value would wrap around (--seed -5 ran seed
+        // 18446744073709551611).
+        if (type == "UINT" && text[0] == '-' && text.find_first_not_of('0', 1) != std::string::npos) {
+          return "value " + text + " is out of range: must be 0 or more";
+        }
+        std::int64_t i = 0;
+        std::uint64_t u = 0;
+        if (lsgd::internal::parses_as(text, i)) {
+          text = std::to_string(i);  // no leading zeros: CLI11 would read them as octal
+        } else if (text[0] != '-' && lsgd::internal::parses_as(text, u)) {
+          text = std::to_string(u);
+        } else {
           return "value " + text + " is out of range: far beyond the values it takes";
-        },
-        "", "fits in 64 bits");
-  };
+        }
+        return {};
+      },
+      "", "a decimal number");
+}
+
+// Every number flag gets number_as_typed first, before the flag's own checks.
+void read_numbers_as_typed(CLI::App& app) {
   for (CLI::Option* o : app.get_options()) {
     const std::string type = o->get_type_name();
-    if (type == "INT" || type == "UINT") o->check(fits(type == "UINT"));
+    if (type == "INT" || type == "UINT" || type == "FLOAT") o->transform(number_as_typed(type));
   }
-  for (CLI::App* sub : app.get_subcommands({})) refuse_integer_overflow(*sub);
+  for (CLI::App* sub : app.get_subcommands({})) read_numbers_as_typed(*sub);
 }
 
 // An empty value ('' in a shell, often an unset variable) names no file and
@@ -137,6 +164,17 @@ std::string usage_message(CLI::App& app, const CLI::ParseError& e, int argc, cha
     }
   }
   std::string what = e.what();
+  // A flag given twice: CLI11 said "--min-gap: At Most 1 required but received 2".
+  const std::size_t twice = what.find(": At Most 1 required but received ");
+  if (dynamic_cast<const CLI::ArgumentMismatch*>(&e) != nullptr && twice != std::string::npos) {
+    const std::string flag = what.substr(0, twice);
+    std::string values;
+    if (const CLI::Option* o = cmd->get_option_no_throw(flag)) {
+      for (const std::string& v : o->results()) values += (values.empty() ? "'" : ", '") + shown_value(v) + "'";
+    }
+    return flag + " is given more than once" + (values.empty() ? "" : " (" + values + ")") +
+           ": give it once (" + path_of(cmd) + " --help for the usage)";
+  }
   // CLI11's "Could not convert: --threshold = VALUE" echoes the value whole.
   const std::size_t at = what.find(" = ");
   if (dynamic_cast<const CLI::ConversionError*>(&e) != nullptr && at != std::string::npos) {
@@ -195,7 +233,7 @@ int main(int argc, char** argv) {
   lsgd::cli::register_db(app);
   lsgd::cli::register_options(app);
   hide_sentinel_defaults(app);
-  refuse_integer_overflow(app);
+  read_numbers_as_typed(app);
   refuse_empty_values(app);
   // The detector runs on the calling thread; OpenCV's own thread pool (ORB,
   // RANSAC and resizing in the geometric stage) is off too, so that every

@@ -94,6 +94,12 @@ struct ReportInput {
   void check() const;
 };
 
+// Why a trajectory's positions cannot be drawn to scale: "positions span x
+// from LO to HI, more than a double holds" when an axis's span overflows
+// (finite positions of +-1e308), "" otherwise. ReportInput::check() refuses
+// such a trajectory; lsgd eval --poses checks it before the run.
+std::string trajectory_span_beyond_doubles(const std::vector<std::array<double, 2>>& positions);
+
 // The HTML text of the report. Validates the input (InvalidArgument) and
 // calls input.similarity for the sampled pairs.
 std::string render_report(const ReportInput& input);

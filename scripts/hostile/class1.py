@@ -20,6 +20,7 @@ import zlib
 from hostile.run import *  # noqa: F401,F403
 from hostile.report import *  # noqa: F401,F403
 from hostile.files import *  # noqa: F401,F403
+from hostile import run as _run  # DEMO_SRC as main() sets it (a star import holds the value at import)
 
 
 def c1_expect_refused(c, r, new_outputs, cwd):
@@ -320,7 +321,7 @@ def class1():
     fakedemo = os.path.join(cwd, 'earlier')
     os.makedirs(fakedemo)
     for f in ('metrics.json', 'sequence.txt', 'groundtruth.txt', 'results-exhaustive.csv', 'results-nodes.csv'):
-        shutil.copyfile(os.path.join(DEMO_SRC, f), os.path.join(fakedemo, f))
+        shutil.copyfile(os.path.join(_run.DEMO_SRC, f), os.path.join(fakedemo, f))
     shutil.copyfile(cfg, os.path.join(fakedemo, 'cfg.yaml'))
     os.symlink(cwd, os.path.join(cwd, 'selflink'))
     for label, cfgp, outp in (('DIR = the config file', 'cfg.yaml', 'cfg.yaml'),

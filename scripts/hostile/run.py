@@ -39,7 +39,7 @@ BAD_STDERR = ['std::bad_alloc', 'std::out_of_range', 'terminate called',
               'what():', 'Sanitizer', 'Segmentation']
 
 
-DEMO_SRC = os.environ.get('DEMO', '')
+DEMO_SRC = os.environ.get('DEMO', '')  # set by main() when unset: read it as run.DEMO_SRC, never through a star import
 
 
 def find_shared():

@@ -10,6 +10,8 @@
 #include <sstream>
 #include <string>
 
+#include "synthetic/synthetic.h"
+
 namespace lsgd::test {
 
 struct CmdResult {
@@ -37,6 +39,20 @@ inline CmdResult run_command(const std::string& binary, const std::string& args,
                           err.string() + "' </dev/null";
   const int status = std::system(cmd.c_str());
   return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, slurp(out), slurp(err)};
+}
+
+// The synthetic street at 160 x 120 (its length: route_scale) written as a
+// dataset folder at `dir`, emptied first (write_synthetic_dataset); its world,
+// for its frames and ground truth.
+inline lsgd::eval::SyntheticWorld write_street(const std::filesystem::path& dir, double route_scale) {
+  std::filesystem::remove_all(dir);
+  lsgd::eval::SyntheticOptions options;
+  options.width = 160;
+  options.height = 120;
+  options.route_scale = route_scale;
+  lsgd::eval::SyntheticWorld world(options);
+  lsgd::eval::write_synthetic_dataset(world, dir.string());
+  return world;
 }
 
 }  // namespace lsgd::test

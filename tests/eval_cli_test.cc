@@ -44,15 +44,9 @@ class ShortStreet : public ::testing::Test {
  protected:
   static void SetUpTestSuite() {
     dir_ = kTmp / "street";
-    fs::remove_all(dir_);
-    lsgd::eval::SyntheticOptions options;
-    options.width = 160;
-    options.height = 120;
-    options.route_scale = 0.3;
-    const lsgd::eval::SyntheticWorld world(options);
+    const lsgd::eval::SyntheticWorld world = lsgd::test::write_street(dir_, 0.3);
     frames_ = world.frames();
     gt_ = world.ground_truth();
-    lsgd::eval::write_synthetic_dataset(world, dir_.string());
     const CmdResult r =
         lsgd("run --sequence " + q(dir_ / "sequence.txt") + " --output " + q(dir_ / "run.csv"));
     ASSERT_EQ(r.code, 0) << r.err;

@@ -52,14 +52,7 @@ class SweepCli : public ::testing::Test {
 
   static void SetUpTestSuite() {
     dir_ = kTmp / "street";
-    fs::remove_all(dir_);
-    lsgd::eval::SyntheticOptions options;
-    options.width = 160;
-    options.height = 120;
-    options.route_scale = 0.2;
-    const lsgd::eval::SyntheticWorld world(options);
-    frames_ = world.frames();
-    lsgd::eval::write_synthetic_dataset(world, dir_.string());
+    frames_ = lsgd::test::write_street(dir_, 0.2).frames();
   }
   static void TearDownTestSuite() { fs::remove_all(kTmp); }
 
